@@ -1,0 +1,380 @@
+"""Demonstrations: a sampled trajectory ``Y[L, d]`` on an even time grid ``t[L]``, file I/O, and
+synthetic composed-periodic wiping demonstrations (the four styles of Ernesti et al. 2012, Fig. 7).
+
+The synthetic signals live in a table frame (metres): x, y in the table plane, z the height above
+the table surface. A demonstration starts at rest at ``start`` and blends into a periodic pattern
+around ``anchor`` with a 7th-order smoothstep, so it is C^3 at the transient length ``T`` and
+exactly periodic (z = anchor z) from ``T`` on.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rdmp_gym.validation import as_finite_array, check_positive, check_time_grid
+
+__all__ = [
+    "Demonstration",
+    "SyntheticTruth",
+    "multi_transient_demonstrations",
+    "wiping_demonstration",
+]
+
+_DEFAULT_START = (-0.15, 0.20, 0.12)
+_CIRCLE_RADIUS = 0.05
+_EIGHT_HALF_SIZE = (0.06, 0.03)  # figure-eight of 0.12 m x 0.06 m
+_LOOP = (0.10, -0.08, 0.08)  # complex approach: x loop, sideways swing and lift (m)
+# style: (pattern, complex approach, period s, transient length s)
+_STYLES = {
+    1: ("circle", False, 1.50, 2.0),
+    2: ("circle", True, 1.45, 2.5),
+    3: ("eight", False, 1.60, 2.0),
+    4: ("eight", True, 1.55, 2.5),
+}
+
+
+def _readonly(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, dtype=np.float64)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticTruth:
+    """The true values behind a synthetic demonstration.
+
+    Attributes:
+        period: period of the periodic part (s).
+        transient_length: the signal is exactly periodic for ``t - t[0] >= transient_length`` (s).
+        anchor: ``[d]`` mean of the periodic pattern over a whole period.
+        clean: ``[L, d]`` the noiseless signal.
+        entrance_time: pattern time in ``[0, period)`` at which the demonstration enters the shared
+            periodic pattern (at ``t - t[0] = transient_length``).
+    """
+
+    period: float
+    transient_length: float
+    anchor: np.ndarray
+    clean: np.ndarray
+    entrance_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        period = check_positive(self.period, "period")
+        transient = float(as_finite_array(self.transient_length, "transient_length", ndim=0))
+        if transient < 0.0:
+            raise ValueError(f"transient_length: expected >= 0, got {transient!r}")
+        entrance = float(as_finite_array(self.entrance_time, "entrance_time", ndim=0))
+        if not 0.0 <= entrance < period:
+            raise ValueError(f"entrance_time: expected a value in [0, period={period}), "
+                             f"got {entrance!r}")
+        anchor = as_finite_array(self.anchor, "anchor", ndim=1)
+        clean = as_finite_array(self.clean, "clean", ndim=2)
+        if clean.shape[1] != anchor.size:
+            raise ValueError(f"clean: expected {anchor.size} columns (the size of anchor), "
+                             f"got shape {clean.shape}")
+        object.__setattr__(self, "period", period)
+        object.__setattr__(self, "transient_length", transient)
+        object.__setattr__(self, "entrance_time", entrance)
+        object.__setattr__(self, "anchor", _readonly(anchor))
+        object.__setattr__(self, "clean", _readonly(clean))
+
+
+@dataclass(frozen=True, eq=False)
+class Demonstration:
+    """A demonstrated trajectory.
+
+    Attributes:
+        t: ``[L]`` time stamps (s), strictly increasing and evenly spaced (relative tolerance 1e-3).
+        Y: ``[L, d]`` samples (a 1-D input ``[L]`` is stored as ``[L, 1]``), finite.
+        name: a label.
+        truth: the true values of a synthetic demonstration, else ``None``.
+
+    ``t`` and ``Y`` are stored as read-only float64 copies.
+    """
+
+    t: np.ndarray
+    Y: np.ndarray
+    name: str = ""
+    truth: SyntheticTruth | None = None
+
+    def __post_init__(self) -> None:
+        t = check_time_grid(self.t, "t")
+        Y = as_finite_array(self.Y, "Y", ndim=(1, 2))
+        if Y.ndim == 1:
+            Y = Y[:, None]
+        if Y.shape[0] != t.size:
+            raise ValueError(f"Y: expected {t.size} rows (one per time stamp in t), "
+                             f"got shape {Y.shape}")
+        if Y.shape[1] == 0:
+            raise ValueError("Y: expected at least one column (dimension), got 0")
+        if not isinstance(self.name, str):
+            raise TypeError(f"name: expected a str, got {type(self.name).__name__}")
+        if self.truth is not None:
+            if not isinstance(self.truth, SyntheticTruth):
+                raise TypeError(f"truth: expected SyntheticTruth or None, "
+                                f"got {type(self.truth).__name__}")
+            if self.truth.clean.shape != Y.shape:
+                raise ValueError(f"truth: clean has shape {self.truth.clean.shape}, "
+                                 f"Y has {Y.shape}")
+        object.__setattr__(self, "t", _readonly(t))
+        object.__setattr__(self, "Y", _readonly(Y))
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples ``L``."""
+        return int(self.t.size)
+
+    @property
+    def n_dims(self) -> int:
+        """Number of dimensions ``d``."""
+        return int(self.Y.shape[1])
+
+    @property
+    def dt(self) -> float:
+        """Mean sampling step (s)."""
+        return float((self.t[-1] - self.t[0]) / (self.t.size - 1))
+
+    @property
+    def duration(self) -> float:
+        """``t[-1] - t[0]`` (s)."""
+        return float(self.t[-1] - self.t[0])
+
+    def to_csv(self, path: str | Path, *, columns: Sequence[str] | None = None,
+               time_column: str = "t") -> None:
+        """Write a CSV file: a header row, then one row per sample.
+
+        Columns: ``time_column`` (s), then one column per dimension named ``columns`` (default
+        ``y0, y1, ...``). Values are written with 17 significant digits: a round trip is lossless.
+        """
+        if columns is None:
+            names = [f"y{i}" for i in range(self.n_dims)]
+        else:
+            names = [str(column) for column in columns]
+        if len(names) != self.n_dims:
+            raise ValueError(f"columns: expected {self.n_dims} names, got {len(names)}")
+        for label in [time_column, *names]:
+            if not label or any(ch in label for ch in ',"\n\r'):
+                raise ValueError(f"columns: invalid column name {label!r}")
+        if len(set([time_column, *names])) != self.n_dims + 1:
+            raise ValueError(f"columns: column names must be distinct, got {[time_column, *names]}")
+        data = np.column_stack([self.t, self.Y])
+        np.savetxt(path, data, fmt="%.17g", delimiter=",", header=",".join([time_column, *names]),
+                   comments="")
+
+    @classmethod
+    def from_csv(cls, path: str | Path, time_column: str = "t") -> Demonstration:
+        """Read a CSV file written by :meth:`to_csv` (or any file with that layout).
+
+        The first row names the columns; the column ``time_column`` holds the time (s), every other
+        column, in file order, is one dimension of ``Y``. The demonstration is named after the file.
+        """
+        path = Path(path)
+        with path.open(newline="") as handle:
+            header = next(csv.reader(handle), None)
+            if not header:
+                raise ValueError(f"path: {path} has no header row")
+            header = [name.strip() for name in header]
+            if time_column not in header:
+                raise ValueError(f"time_column: {time_column!r} is not a column of {path} "
+                                 f"(columns: {header})")
+            if len(header) < 2:
+                raise ValueError(f"path: {path} needs a time column and at least one data column")
+            try:
+                data = np.loadtxt(handle, delimiter=",", ndmin=2, dtype=np.float64)
+            except ValueError as error:
+                raise ValueError(f"path: {path} holds a non-numeric value: {error}") from error
+        if data.shape[1] != len(header):
+            raise ValueError(f"path: {path} has {len(header)} header names "
+                             f"but {data.shape[1]} columns")
+        column = header.index(time_column)
+        return cls(t=data[:, column], Y=np.delete(data, column, axis=1), name=path.stem)
+
+    def to_npz(self, path: str | Path) -> None:
+        """Write an ``.npz`` archive: arrays ``t`` ``[L]``, ``Y`` ``[L, d]``, ``name`` (0-d str).
+
+        As with ``numpy.savez``, ``.npz`` is appended to a path without that suffix.
+        """
+        np.savez(path, t=self.t, Y=self.Y, name=np.array(self.name))
+
+    @classmethod
+    def from_npz(cls, path: str | Path) -> Demonstration:
+        """Read an ``.npz`` archive: arrays ``t`` ``[L]``, ``Y`` ``[L, d]`` (``name`` optional)."""
+        path = Path(path)
+        with np.load(path, allow_pickle=False) as data:
+            missing = [key for key in ("t", "Y") if key not in data.files]
+            if missing:
+                raise ValueError(f"path: {path} lacks the array(s) {missing} (has {data.files})")
+            name = str(data["name"]) if "name" in data.files else path.stem
+            return cls(t=data["t"], Y=data["Y"], name=name)
+
+
+def _as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None or (isinstance(rng, (int, np.integer)) and not isinstance(rng, bool)):
+        return np.random.default_rng(rng)
+    raise TypeError(f"rng: expected a numpy.random.Generator, an int seed or None, "
+                    f"got {type(rng).__name__}")
+
+
+def _check_style(style: int) -> tuple[str, bool, float, float]:
+    if isinstance(style, bool) or not isinstance(style, (int, np.integer)) or style not in _STYLES:
+        raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
+    return _STYLES[int(style)]
+
+
+def _smoothstep7(u: np.ndarray) -> np.ndarray:
+    """7th-order smoothstep: 0 at u <= 0, 1 at u >= 1, derivatives 1..3 zero at both ends."""
+    u = np.clip(u, 0.0, 1.0)
+    return u**4 * (35.0 - 84.0 * u + 70.0 * u**2 - 20.0 * u**3)
+
+
+def _pattern(kind: str, tau: np.ndarray, period: float) -> np.ndarray:
+    """Zero-mean periodic pattern ``[n, 3]`` at pattern times ``tau`` ``[n]``."""
+    angle = 2.0 * np.pi * tau / period
+    if kind == "circle":
+        xy = _CIRCLE_RADIUS * np.column_stack([np.cos(angle), np.sin(angle)])
+    else:
+        xy = np.column_stack([_EIGHT_HALF_SIZE[0] * np.sin(angle),
+                              _EIGHT_HALF_SIZE[1] * np.sin(2.0 * angle)])
+    return np.column_stack([xy, np.zeros_like(angle)])
+
+
+def _composed(t_rel: np.ndarray, *, kind: str, complex_approach: bool, start: np.ndarray,
+              anchor: np.ndarray, period: float, transient_length: float,
+              entrance_time: float) -> np.ndarray:
+    """Noiseless composed-periodic signal ``[L, 3]`` at times ``t_rel`` ``[L]`` (from the start)."""
+    periodic = anchor + _pattern(kind, entrance_time + t_rel - transient_length, period)
+    u = t_rel / transient_length
+    blend = start + _smoothstep7(u)[:, None] * (periodic - start)
+    if complex_approach:
+        v = np.clip(u, 0.0, 1.0)
+        window = 256.0 * (v * (1.0 - v)) ** 4  # 1 at u = 1/2, derivatives 0..3 zero at both ends
+        loop = np.column_stack([np.sin(2.0 * np.pi * v), np.sin(np.pi * v), np.sin(np.pi * v)])
+        blend = blend + window[:, None] * loop * np.asarray(_LOOP)
+    return np.where((u >= 1.0)[:, None], periodic, blend)
+
+
+def _vector3(value: object, default: Sequence[float], name: str) -> np.ndarray:
+    array = as_finite_array(default if value is None else value, name, ndim=1)
+    if array.shape != (3,):
+        raise ValueError(f"{name}: expected 3 values (x, y, z), got shape {array.shape}")
+    return array
+
+
+def _time_grid(duration: float, rate: float) -> np.ndarray:
+    duration = check_positive(duration, "duration")
+    rate = check_positive(rate, "rate")
+    n_samples = int(np.floor(duration * rate + 1e-9)) + 1
+    if n_samples < 2:
+        raise ValueError(f"duration: {duration} s at rate {rate} Hz gives fewer than 2 samples")
+    return np.arange(n_samples, dtype=np.float64) / rate
+
+
+def _check_noise(noise: float) -> float:
+    value = float(as_finite_array(noise, "noise", ndim=0))
+    if value < 0.0:
+        raise ValueError(f"noise: expected a standard deviation >= 0, got {noise!r}")
+    return value
+
+
+def _synthesize(t: np.ndarray, generator: np.random.Generator, noise: float, *, kind: str,
+                complex_approach: bool, start: np.ndarray, anchor: np.ndarray, period: float,
+                transient_length: float, entrance_time: float, name: str) -> Demonstration:
+    entrance = float(np.mod(entrance_time, period))
+    if entrance >= period:  # np.mod can round up to period itself
+        entrance = 0.0
+    clean = _composed(t, kind=kind, complex_approach=complex_approach, start=start, anchor=anchor,
+                      period=period, transient_length=transient_length, entrance_time=entrance)
+    noisy = clean + noise * generator.standard_normal(clean.shape)
+    truth = SyntheticTruth(period=period, transient_length=transient_length, anchor=anchor,
+                           clean=clean, entrance_time=entrance)
+    return Demonstration(t=t, Y=noisy, name=name, truth=truth)
+
+
+def wiping_demonstration(style: int = 1, *, rng: np.random.Generator | int | None = 0,
+                         duration: float = 10.0, rate: float = 100.0, noise: float = 3e-4,
+                         start: Sequence[float] | np.ndarray | None = None,
+                         anchor: Sequence[float] | np.ndarray | None = None,
+                         period: float | None = None, transient_length: float | None = None,
+                         entrance_time: float = 0.0) -> Demonstration:
+    """A synthetic wiping demonstration ``Y[L, 3]`` (table frame, m) in one of the paper's styles.
+
+    Styles: 1 simple approach + circle, 2 complex approach + circle, 3 simple approach +
+    figure-eight, 4 complex approach + figure-eight. The motion starts at rest at ``start``
+    (default (-0.15, 0.20, 0.12)), is exactly periodic around ``anchor`` (default the origin) with
+    z = anchor z from ``transient_length`` on (style default 2 s simple, 2.5 s complex), with period
+    ``period`` (style default about 1.5 s), entering the pattern at pattern time ``entrance_time``.
+    Sampled at ``rate`` Hz over ``[0, duration]``, plus white Gaussian noise of std ``noise`` (m)
+    drawn from ``rng`` (a Generator or a seed). ``truth`` holds the clean signal and true values.
+    """
+    kind, complex_approach, default_period, default_transient = _check_style(style)
+    t = _time_grid(duration, rate)
+    period = check_positive(default_period if period is None else period, "period")
+    transient = check_positive(default_transient if transient_length is None else transient_length,
+                               "transient_length")
+    if transient >= t[-1]:
+        raise ValueError(f"duration: {duration} s must exceed transient_length = {transient} s")
+    entrance = float(as_finite_array(entrance_time, "entrance_time", ndim=0))
+    return _synthesize(t, _as_generator(rng), _check_noise(noise), kind=kind,
+                       complex_approach=complex_approach,
+                       start=_vector3(start, _DEFAULT_START, "start"),
+                       anchor=_vector3(anchor, (0.0, 0.0, 0.0), "anchor"), period=period,
+                       transient_length=transient, entrance_time=entrance,
+                       name=f"wiping style {int(style)}")
+
+
+def _per_demo(value: object, default: np.ndarray, n: int, name: str) -> np.ndarray:
+    array = as_finite_array(default if value is None else value, name, ndim=1)
+    if array.size != n:
+        raise ValueError(f"{name}: expected {n} values (one per demonstration), got {array.size}")
+    return array
+
+
+def multi_transient_demonstrations(n: int = 3, *, rng: np.random.Generator | int | None = 0,
+                                   style: int = 1, duration: float = 10.0, rate: float = 100.0,
+                                   noise: float = 3e-4, period: float | None = None,
+                                   anchor: Sequence[float] | np.ndarray | None = None,
+                                   starts: Sequence[Sequence[float]] | np.ndarray | None = None,
+                                   transient_lengths: Sequence[float] | np.ndarray | None = None,
+                                   entrance_times: Sequence[float] | np.ndarray | None = None,
+                                   ) -> list[Demonstration]:
+    """``n`` synthetic demonstrations ``Y[L, 3]`` sharing ONE periodic pattern (that of ``style``).
+
+    Each has its own start (``starts`` ``[n, 3]``, default on an arc 0.25 m from the anchor, 0.12 m
+    up), transient length (``transient_lengths`` ``[n]``, default evenly from 1.5 s to 2.6 s) and
+    entrance time into the pattern (``entrance_times`` ``[n]``, default ``k * period / n``). Noise
+    is drawn from the one generator ``rng`` in demonstration order. Other arguments as in
+    :func:`wiping_demonstration`.
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n: expected a positive int, got {n!r}")
+    kind, complex_approach, default_period, _ = _check_style(style)
+    t = _time_grid(duration, rate)
+    period = check_positive(default_period if period is None else period, "period")
+    index = np.arange(n)
+    lengths = _per_demo(transient_lengths, 1.5 + 1.1 * index / max(n - 1, 1), n,
+                        "transient_lengths")
+    if np.any(lengths <= 0.0) or np.any(lengths >= t[-1]):
+        raise ValueError(f"transient_lengths: expected values in (0, duration={t[-1]}), "
+                         f"got {lengths}")
+    entrances = _per_demo(entrance_times, index * period / n, n, "entrance_times")
+    anchor_vector = _vector3(anchor, (0.0, 0.0, 0.0), "anchor")
+    angles = 0.75 * np.pi + 2.0 * np.pi * index / n
+    default_starts = anchor_vector + np.column_stack([0.25 * np.cos(angles), 0.25 * np.sin(angles),
+                                                      np.full(n, 0.12)])
+    start_array = as_finite_array(default_starts if starts is None else starts, "starts", ndim=2)
+    if start_array.shape != (n, 3):
+        raise ValueError(f"starts: expected shape ({n}, 3), got {start_array.shape}")
+    generator = _as_generator(rng)
+    noise = _check_noise(noise)
+    return [_synthesize(t, generator, noise, kind=kind, complex_approach=complex_approach,
+                        start=start_array[k], anchor=anchor_vector, period=period,
+                        transient_length=float(lengths[k]), entrance_time=float(entrances[k]),
+                        name=f"wiping style {int(style)}, transient {k + 1} of {n}")
+            for k in range(n)]
