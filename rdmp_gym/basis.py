@@ -1,0 +1,157 @@
+"""Periodic and transient basis functions on the phase plane, with fading (paper eqs. (5)-(9)).
+
+Periodic (on the limit cycle):  ``phi_i(phi, r) = g(r) exp(v_i (cos(phi - c_i) - 1))``
+Transient (along a canonical path): ``psi_j(phi, r) = a(r) exp(-vbar_j |pol(phi, r) - q_j|^2)``
+
+``g`` is 1 up to ``mu1`` and fades to ``delta`` at ``mu2``; ``a`` is 1 from ``mu2`` and fades to
+``delta`` at ``mu1``; both use ``exp(-v_tilde (r - mu_x)**k)``.
+
+The forcing term (5) is the normalised mixture ``sum_b Psi_b w_b / sum_b Psi_b``. Where a perturbed
+canonical path leaves every support, the raw sum underflows; we divide by ``sum_b Psi_b + epsilon``
+instead, so the forcing term fades smoothly to zero there rather than becoming 0/0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .canonical import CanonicalSystem
+from .validation import check_positive
+
+__all__ = ["BasisSet", "Fading", "periodic_width", "transient_basis_along_path", "von_mises"]
+
+NORMALISATION_EPSILON = 1e-10
+"""Added to the sum of activations in the normalised mixture (5); keeps it finite off every support."""
+
+
+@dataclass(frozen=True)
+class Fading:
+    """The fading functions ``g`` (periodic gate) and ``a`` (transient gate) of eqs. (8)-(9).
+
+    Args:
+        mu1: radius below which only the periodic basis is active (the paper uses 1.2 mu).
+        mu2: radius above which only the transient basis is active (> mu1).
+        k: exponent of the fade (k = 4 makes the forcing term smooth).
+        delta: value of ``g(mu2)`` and ``a(mu1)`` (the support threshold, about 1e-3).
+    """
+
+    mu1: float
+    mu2: float
+    k: int = 4
+    delta: float = 1e-3
+
+    def __post_init__(self) -> None:
+        check_positive(self.mu1, "mu1")
+        check_positive(self.delta, "delta")
+        if not self.mu2 > self.mu1:
+            raise ValueError(f"mu2: must exceed mu1 = {self.mu1:g}, got {self.mu2!r}")
+        if not 0.0 < self.delta < 1.0:
+            raise ValueError(f"delta: must lie in (0, 1), got {self.delta!r}")
+
+    @property
+    def v_tilde(self) -> float:
+        """Fading steepness chosen so that ``g(mu2) = a(mu1) = delta``."""
+        return -np.log(self.delta) / (self.mu2 - self.mu1) ** self.k
+
+    def periodic_gate(self, r: np.ndarray) -> np.ndarray:
+        """``g(r)``: 1 for r <= mu1, fading above; same shape as ``r``."""
+        excess = np.maximum(r - self.mu1, 0.0)
+        return np.exp(-self.v_tilde * excess**self.k)
+
+    def transient_gate(self, r: np.ndarray) -> np.ndarray:
+        """``a(r)``: 1 for r >= mu2, fading below; same shape as ``r``."""
+        deficit = np.maximum(self.mu2 - r, 0.0)
+        return np.exp(-self.v_tilde * deficit**self.k)
+
+
+def von_mises(phi: np.ndarray, centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """Periodic bumps ``h_i(phi) = exp(v_i (cos(phi - c_i) - 1))``: ``phi [..., T]`` -> ``[..., T, N]``."""
+    phi = phi[..., None]
+    return np.exp(widths * (np.cos(phi) * np.cos(centres) + np.sin(phi) * np.sin(centres) - 1.0))
+
+
+def periodic_width(n_periodic: int, overlap: float = 0.5) -> float:
+    """Width ``v`` that makes neighbouring periodic basis functions cross at height ``overlap``."""
+    if not 0.0 < overlap < 1.0:
+        raise ValueError(f"periodic_overlap: must lie in (0, 1), got {overlap!r}")
+    return float(np.log(1.0 / overlap) / (1.0 - np.cos(np.pi / n_periodic)))
+
+
+def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: float, span: float,
+                               n_basis: int, overlap: float = 0.5, delta: float = 1e-3
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """Centres and widths of ``n_basis`` transient basis functions on the path from ``(phi0, r0)``.
+
+    Centres sit on the canonical path at times spaced uniformly in ``[0, span]``. Each width makes a
+    basis function cross its neighbours at height ``overlap`` (midway to them), but is narrowed where
+    needed so that the support (level ``delta``) does not reach the next turn of the spiral.
+
+    Returns:
+        ``(centres [M, 2], widths [M])``.
+    """
+    if n_basis < 1:
+        raise ValueError(f"n_transient: expected at least 1 basis function, got {n_basis}")
+    times = np.linspace(0.0, span, n_basis) if n_basis > 1 else np.array([0.0])
+    phi, r = canonical.state(times, phi0, r0)
+    centres = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+    if n_basis > 1:
+        gaps = np.linalg.norm(np.diff(centres, axis=0), axis=1)
+        spacing = np.empty(n_basis)
+        spacing[0], spacing[-1] = gaps[0], gaps[-1]
+        spacing[1:-1] = 0.5 * (gaps[1:] + gaps[:-1])
+    else:
+        spacing = np.array([max(r0 - canonical.mu, 1e-3)])
+    widths = np.log(1.0 / overlap) / (0.5 * spacing) ** 2
+    next_turn = r - canonical.radius(times + canonical.period / canonical.tempo, r0)
+    turn_limit = np.log(1.0 / delta) / np.maximum(np.abs(next_turn), 1e-12) ** 2
+    return centres, np.maximum(widths, turn_limit)
+
+
+@dataclass(frozen=True)
+class BasisSet:
+    """All basis functions of a rhythmic DMP: N periodic ones and the transient sets of K transients.
+
+    Attributes:
+        periodic_centres: ``[N]`` phases ``c_i``.
+        periodic_widths: ``[N]`` widths ``v_i``.
+        transient_centres: ``[M, 2]`` phase-plane centres ``q_j`` of all transients, stacked.
+        transient_widths: ``[M]`` widths ``vbar_j``.
+        transient_sizes: ``(M_1, ..., M_K)`` how many of the stacked transient functions belong to each transient.
+        fading: the gates ``g`` and ``a``.
+    """
+
+    periodic_centres: np.ndarray
+    periodic_widths: np.ndarray
+    transient_centres: np.ndarray
+    transient_widths: np.ndarray
+    transient_sizes: tuple[int, ...]
+    fading: Fading
+
+    @property
+    def n_periodic(self) -> int:
+        return int(self.periodic_centres.size)
+
+    @property
+    def n_basis(self) -> int:
+        """Total number of basis functions D = N + sum_k M_k."""
+        return self.n_periodic + int(self.transient_widths.size)
+
+    def activations(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Raw activations ``Psi`` (6) at canonical states: ``phi, r`` of shape ``[..., T]`` -> ``[..., T, D]``."""
+        periodic = von_mises(phi, self.periodic_centres, self.periodic_widths)
+        periodic *= self.fading.periodic_gate(r)[..., None]
+        cos_phi, sin_phi = np.cos(phi)[..., None], np.sin(phi)[..., None]
+        radius = r[..., None]
+        q = self.transient_centres
+        distance_sq = (radius**2 + np.sum(q**2, axis=1)
+                       - 2.0 * radius * (cos_phi * q[:, 0] + sin_phi * q[:, 1]))
+        transient = np.exp(-self.transient_widths * np.maximum(distance_sq, 0.0))
+        transient *= self.fading.transient_gate(r)[..., None]
+        return np.concatenate([periodic, transient], axis=-1)
+
+    def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""
+        raw = self.activations(phi, r)
+        return raw / (np.sum(raw, axis=-1, keepdims=True) + NORMALISATION_EPSILON)
