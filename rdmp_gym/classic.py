@@ -1,0 +1,91 @@
+"""The classic periodic DMP (Ijspeert et al. 2002; Gams et al. 2009), the baseline of the paper.
+
+One phase variable ``phi = phi0 + Omega t`` and periodic basis functions only; the same
+transformation system (4) and integrator as :class:`~rdmp_gym.RhythmicDMP`. It is fitted to the
+periodic part of a demonstration (a classic rhythmic DMP cannot encode a transient), with the phase
+aligned so that the pattern is entered at the demonstrated time; its transient is whatever the
+spring produces on the way from the start into the cycle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .basis import NORMALISATION_EPSILON, periodic_width, von_mises
+from .demonstrations import Demonstration
+from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
+from .segmentation import Segmentation, segment
+from .transformation import TransformationSystem
+from .validation import check_positive, check_time_grid
+
+__all__ = ["PeriodicDMP"]
+
+
+class PeriodicDMP:
+    """Periodic DMP with one phase variable.
+
+    Args:
+        period: period (s).
+        weights: ``[d, N]`` weights.
+        anchor: ``[d]`` anchor g.
+        phi0: phase at the start of the movement.
+        start, start_velocity: ``[d]`` default initial state.
+        alpha_z: transformation-system gain.
+        width: width ``v`` of the von Mises basis functions.
+    """
+
+    def __init__(self, period: float, weights: np.ndarray, anchor: np.ndarray, phi0: float, start: np.ndarray,
+                 start_velocity: np.ndarray, alpha_z: float = 25.0, width: float | None = None) -> None:
+        self.period = check_positive(period, "period")
+        self.weights = np.asarray(weights, dtype=float)
+        self.anchor, self.phi0 = np.asarray(anchor, dtype=float), float(phi0)
+        self.start, self.start_velocity = np.asarray(start, dtype=float), np.asarray(start_velocity, dtype=float)
+        self.alpha_z = check_positive(alpha_z, "alpha_z")
+        n = self.weights.shape[1]
+        self.centres = 2.0 * np.pi * np.arange(n) / n
+        self.width = periodic_width(n) if width is None else check_positive(width, "width")
+
+    @property
+    def omega(self) -> float:
+        return 2.0 * np.pi / self.period
+
+    def _normalized(self, phi: np.ndarray) -> np.ndarray:
+        raw = von_mises(phi, self.centres, np.full(self.centres.size, self.width))
+        return raw / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+
+    @classmethod
+    def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40, method: str = "ridge", *,
+            segmentation: Segmentation | None = None, alpha_z: float = 25.0, smoothing: float = 0.15,
+            regularization: float = 1e-6) -> PeriodicDMP:
+        """Fit the periodic part of one demonstration (the first if several are given)."""
+        demo = demos if isinstance(demos, Demonstration) else list(demos)[0]
+        if method not in FIT_METHODS:
+            raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
+        if int(n_periodic) < 2:
+            raise ValueError(f"n_periodic: expected at least 2, got {n_periodic}")
+        seg = segment(demo) if segmentation is None else segmentation
+        omega = 2.0 * np.pi / seg.period
+        elapsed = demo.t - demo.t[0]
+        Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
+        periodic = elapsed >= seg.transient_length
+        phi0 = -omega * seg.transient_length
+        width = periodic_width(int(n_periodic))
+        centres = 2.0 * np.pi * np.arange(n_periodic) / n_periodic
+        raw = von_mises(phi0 + omega * elapsed[periodic], centres, np.full(int(n_periodic), width))
+        target = forcing_target(Y[periodic], Yd[periodic], Ydd[periodic], seg.anchor, omega, alpha_z)
+        weights = fit_weights(raw, target, method, regularization)
+        return cls(seg.period, weights.T, seg.anchor, phi0, Y[0], Yd[0], alpha_z, width)
+
+    def rollout(self, t: np.ndarray, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
+                anchor: np.ndarray | None = None) -> np.ndarray:
+        """Positions ``[T, d]`` at evenly spaced times ``t [T]`` from the start state (default: the demo's)."""
+        t = check_time_grid(t, "t")
+        elapsed = t - t[0]
+        system = TransformationSystem(self.omega, float(elapsed[-1] / (t.size - 1)), self.alpha_z)
+        forcing = self._normalized(self.phi0 + self.omega * elapsed) @ self.weights.T
+        g = self.anchor if anchor is None else np.asarray(anchor, dtype=float)
+        y0 = self.start if y0 is None else np.asarray(y0, dtype=float)
+        yd0 = self.start_velocity if yd0 is None else np.asarray(yd0, dtype=float)
+        return system.rollout(system.input(g, forcing), y0, yd0 / self.omega)[0]

@@ -1,0 +1,61 @@
+"""Named, selectable groups of a flat parameter vector (what a learner sees of a DMP).
+
+Groups, in this order: ``periodic`` (``[d, N]`` weights), ``transient:k`` (``[d, M_k]`` weights of
+transient k), ``initial:k`` (``(phi0, r0)`` of transient k) and ``anchor`` (``[d]``). The short names
+``transient`` and ``initial`` select every transient's group.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+__all__ = ["GROUPS", "ParameterLayout"]
+
+GROUPS = ("periodic", "transient", "initial", "anchor")
+
+
+class ParameterLayout:
+    """Sizes of every parameter group of one DMP; resolves group selections to slices.
+
+    Args:
+        n_dims: degrees of freedom d.
+        n_periodic: periodic basis functions N.
+        transient_sizes: transient basis functions per transient ``(M_1, ..., M_K)``.
+    """
+
+    def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int]) -> None:
+        self.sizes: dict[str, int] = {"periodic": n_dims * n_periodic}
+        self.sizes.update({f"transient:{k}": n_dims * m for k, m in enumerate(transient_sizes)})
+        self.sizes.update({f"initial:{k}": 2 for k in range(len(transient_sizes))})
+        self.sizes["anchor"] = n_dims
+        self.n_transients = len(transient_sizes)
+
+    def resolve(self, groups: str | Iterable[str] | None) -> list[str]:
+        """Expand a selection (``None`` = all groups) into full group names in canonical order."""
+        if groups is None:
+            return list(self.sizes)
+        requested = [groups] if isinstance(groups, str) else list(groups)
+        chosen: set[str] = set()
+        for name in requested:
+            if name in self.sizes:
+                chosen.add(name)
+            elif name in ("transient", "initial"):
+                chosen.update(f"{name}:{k}" for k in range(self.n_transients))
+            else:
+                raise ValueError(f"groups: unknown parameter group {name!r}; expected one of "
+                                 f"{list(GROUPS)} or one of {list(self.sizes)}")
+        if not chosen:
+            raise ValueError("groups: select at least one parameter group")
+        return [name for name in self.sizes if name in chosen]
+
+    def slices(self, groups: str | Iterable[str] | None = None) -> dict[str, slice]:
+        """Slices of each selected group inside the vector made of just the selected groups."""
+        out, start = {}, 0
+        for name in self.resolve(groups):
+            out[name] = slice(start, start + self.sizes[name])
+            start += self.sizes[name]
+        return out
+
+    def size(self, groups: str | Iterable[str] | None = None) -> int:
+        """Length of the vector made of the selected groups."""
+        return sum(self.sizes[name] for name in self.resolve(groups))
