@@ -1,0 +1,213 @@
+"""Fitting and reproducing rhythmic DMPs with transients: fidelity, generalisation, batching, errors."""
+
+import numpy as np
+import pytest
+
+from rdmp_gym import (
+    Demonstration,
+    PeriodicDMP,
+    RhythmicDMP,
+    multi_transient_demonstrations,
+    segment,
+    wiping_demonstration,
+)
+
+
+def relative_rmse(Y, reference, mask):
+    return float(np.sqrt(np.mean(np.sum((Y - reference) ** 2, axis=1)[mask])) / np.ptp(reference, axis=0).max())
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return {style: wiping_demonstration(style, rng=style) for style in (1, 2, 3, 4)}
+
+
+@pytest.fixture(scope="module")
+def segs(demos):
+    return {style: segment(demo) for style, demo in demos.items()}
+
+
+@pytest.fixture(scope="module")
+def dmp(demos, segs):
+    return RhythmicDMP.fit(demos[1], segmentations=[segs[1]])
+
+
+@pytest.mark.parametrize("style", [1, 2, 3, 4])
+@pytest.mark.parametrize(("method", "transient_bound", "periodic_bound"), [("ridge", 0.02, 0.01), ("lwr", 0.02, 0.01)])
+def test_reproduces_four_styles(demos, segs, style, method, transient_bound, periodic_bound):
+    """Benchmark targets (N = M = 40): periodic < 1 %, transient < 2 % of the signal's range."""
+    demo = demos[style]
+    dmp = RhythmicDMP.fit(demo, method=method, segmentations=[segs[style]])
+    Y = dmp.rollout(demo.t)
+    transient = demo.t - demo.t[0] < demo.truth.transient_length
+    assert relative_rmse(Y, demo.truth.clean, transient) < transient_bound
+    assert relative_rmse(Y, demo.truth.clean, ~transient) < periodic_bound
+
+
+def test_beats_the_classic_periodic_dmp_on_the_transient(demos, segs):
+    demo = demos[2]
+    transient = demo.t - demo.t[0] < demo.truth.transient_length
+    ours = RhythmicDMP.fit(demo, segmentations=[segs[2]]).rollout(demo.t)
+    classic = PeriodicDMP.fit(demo, segmentation=segs[2]).rollout(demo.t)
+    assert relative_rmse(ours, demo.truth.clean, transient) < 0.1 * relative_rmse(classic, demo.truth.clean, transient)
+    assert relative_rmse(classic, demo.truth.clean, ~transient) < 0.02     # the baseline does learn the cycle
+
+
+def test_more_basis_functions_fit_better(demos, segs):
+    demo = demos[4]
+    errors = [relative_rmse(RhythmicDMP.fit(demo, n, n, segmentations=[segs[4]]).rollout(demo.t),
+                            demo.truth.clean, np.ones(demo.n_samples, bool)) for n in (10, 20, 40)]
+    assert errors[0] > errors[1] > errors[2]
+
+
+def test_multiple_transients_each_from_its_own_start():
+    demos = multi_transient_demonstrations(3, rng=0)
+    dmp = RhythmicDMP.fit(demos, n_periodic=40, n_transient=30)
+    assert dmp.n_transients == 3
+    for k, demo in enumerate(demos):
+        Y = dmp.rollout(demo.t, transient=k)
+        np.testing.assert_allclose(Y[0], demo.Y[0], atol=2e-3)
+        transient = demo.t - demo.t[0] < demo.truth.transient_length
+        assert relative_rmse(Y, demo.truth.clean, transient) < 0.03
+        assert relative_rmse(Y, demo.truth.clean, ~transient) < 0.02
+
+
+def test_multi_dimensional_output_is_synchronised(dmp, demos):
+    """All dimensions share one canonical system: the periodic parts repeat with one period."""
+    t = np.arange(0, 12.0, 0.01)
+    Y = dmp.rollout(t)
+    lag = int(round(dmp.period / 0.01))
+    tail = t > 6.0
+    shifted = np.roll(Y, -lag, axis=0)
+    valid = tail & (np.arange(t.size) < t.size - lag)
+    assert np.max(np.abs(shifted[valid] - Y[valid])) < 2e-3
+
+
+def test_shifted_anchor_shifts_periodic_part_exactly(dmp, demos):
+    t = demos[1].t
+    shift = np.array([0.1, -0.05, 0.02])
+    base = dmp.rollout(t)
+    moved = dmp.rollout(t, anchor=dmp.anchor + shift)
+    periodic = t - t[0] > dmp.transients[0].length
+    np.testing.assert_allclose(moved[periodic] - base[periodic], np.broadcast_to(shift, base[periodic].shape),
+                               atol=1e-9)
+    np.testing.assert_allclose(moved[0], base[0])                  # same start
+
+
+def test_new_start_still_converges_to_the_pattern(dmp, demos):
+    t = demos[1].t
+    base = dmp.rollout(t)
+    other = dmp.rollout(t, y0=dmp.starts[0] + np.array([0.05, -0.1, 0.05]))
+    periodic = t - t[0] > dmp.transients[0].length
+    assert np.max(np.abs(other[periodic] - base[periodic])) < 1e-9
+    assert np.max(np.abs(other[:10] - base[:10])) > 0.01
+
+
+def test_scaling_and_rotation_exact_on_periodic_part(dmp, demos):
+    t = demos[1].t
+    g = dmp.anchor
+    base = dmp.rollout(t)
+    angle, scale = 0.6, np.array([1.5, 0.7, 1.0])
+    transformed = dmp.rollout(t, scale=scale, rotation=angle)
+    R = np.eye(3)
+    R[:2, :2] = [[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
+    periodic = t - t[0] > dmp.transients[0].length
+    expected = g + (base - g) @ (R @ np.diag(scale)).T
+    np.testing.assert_allclose(transformed[periodic], expected[periodic], atol=1e-9)
+
+
+def test_tempo_change_is_exact(dmp):
+    t = np.arange(0, 6.0, 0.01)
+    normal = dmp.rollout(t)
+    slow = dmp.rollout(2 * t, tempo=0.5)
+    np.testing.assert_allclose(slow, normal, atol=1e-10)
+
+
+def test_batched_rollout_equals_single_rollouts(dmp, demos):
+    t = demos[1].t[:600]
+    groups = ("periodic", "transient", "initial")
+    theta = dmp.get_params(groups)
+    rng = np.random.default_rng(0)
+    thetas = theta + rng.normal(0, 1.0, (5, theta.size)) * (np.abs(theta) * 0.05 + 1e-3)
+    batch = dmp.rollout_batch(thetas, t, groups=groups)
+    assert batch.shape == (5, t.size, 3)
+    for row, params in zip(batch, thetas, strict=True):
+        np.testing.assert_allclose(row, dmp.with_params(params, groups).rollout(t), atol=1e-12)
+
+
+def test_stepper_equals_rollout_and_accepts_coupling(dmp):
+    t = np.arange(0, 4.0, 0.01)
+    stepper = dmp.start(0.01)
+    path = [stepper.state[0]] + [stepper.step()[0] for _ in range(t.size - 1)]
+    np.testing.assert_allclose(np.array(path), dmp.rollout(t), atol=1e-10)
+    pushed = dmp.start(0.01)
+    for _ in range(50):
+        y, _ = pushed.step(coupling=np.array([0.0, 0.0, 50.0]))
+    assert y[2] > path[50][2] + 1e-3                              # a positive push on z lifts z
+
+
+def test_params_round_trip_and_groups(dmp):
+    theta = dmp.get_params()
+    np.testing.assert_array_equal(dmp.with_params(theta).get_params(), theta)
+    slices = dmp.param_slices(["transient", "anchor"])
+    assert list(slices) == ["transient:0", "anchor"]
+    assert slices["transient:0"].stop - slices["transient:0"].start == 3 * 40
+    weights = dmp.param_time_weights(np.arange(0, 5, 0.01), groups=["periodic", "transient", "initial"])
+    assert weights.shape == (500, dmp.layout.size(["periodic", "transient", "initial"]))
+    assert weights.min() >= 0 and weights.max() <= 1
+    periodic = weights[:, : 3 * 40]
+    assert periodic[:100].max() < 1e-3 < periodic[-100:].max()     # periodic weights act only later
+
+
+def test_save_load_round_trip(tmp_path, dmp):
+    path = tmp_path / "dmp.json"
+    dmp.save(path)
+    loaded = RhythmicDMP.load(path)
+    np.testing.assert_array_equal(loaded.get_params(), dmp.get_params())
+    t = np.arange(0, 3, 0.01)
+    np.testing.assert_array_equal(loaded.rollout(t), dmp.rollout(t))
+
+
+def test_load_rejects_other_files(tmp_path):
+    path = tmp_path / "x.json"
+    path.write_text('{"format": "something-else"}')
+    with pytest.raises(ValueError, match="path"):
+        RhythmicDMP.load(path)
+
+
+def test_bad_inputs(dmp, demos):
+    t = np.arange(0, 2, 0.01)
+    with pytest.raises(ValueError, match="transient"):
+        dmp.rollout(t, transient=3)
+    with pytest.raises(ValueError, match="t"):
+        dmp.rollout(np.array([0.0, 0.01, 0.005]))
+    with pytest.raises(ValueError, match="t"):
+        dmp.rollout(np.array([0.0, 0.01, 0.03, 0.04]))
+    with pytest.raises(ValueError, match="y0"):
+        dmp.rollout(t, y0=np.zeros(2))
+    with pytest.raises(ValueError, match="anchor"):
+        dmp.rollout(t, anchor=np.array([0.0, np.nan, 0.0]))
+    with pytest.raises(ValueError, match="theta"):
+        dmp.with_params(np.zeros(5))
+    with pytest.raises(ValueError, match="groups"):
+        dmp.get_params("periodc")
+    with pytest.raises(ValueError, match="rotation"):
+        dmp.rollout(t, rotation=np.ones((3, 3)))
+    with pytest.raises(ValueError, match="method"):
+        RhythmicDMP.fit(demos[1], method="gpr")
+    with pytest.raises(ValueError, match="n_transient"):
+        RhythmicDMP.fit(demos[1], n_transient=[10, 10])
+    with pytest.raises(ValueError, match="period"):
+        RhythmicDMP.fit(demos[1], period=-1.0)
+    with pytest.raises(TypeError, match="demos"):
+        RhythmicDMP.fit([demos[1], "not a demo"])
+    theta = dmp.get_params("initial")
+    with pytest.raises(ValueError, match="r0"):
+        dmp.with_params(np.array([theta[0], -1.0]), "initial")
+
+
+def test_too_short_demo_is_rejected():
+    demo = wiping_demonstration(1, rng=0)
+    short = Demonstration(demo.t[:300], demo.Y[:300])           # 3 s: fewer than two periods after the transient
+    with pytest.raises(ValueError, match="period"):
+        RhythmicDMP.fit(short)
