@@ -60,7 +60,7 @@ class PeriodicDMP:
             segmentation: Segmentation | None = None, alpha_z: float = 25.0, smoothing: float = 0.15,
             regularization: float = 1e-6) -> PeriodicDMP:
         """Fit the periodic part of one demonstration (the first if several are given)."""
-        demo = demos if isinstance(demos, Demonstration) else list(demos)[0]
+        demo = demos if isinstance(demos, Demonstration) else next(iter(demos))
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
         if int(n_periodic) < 2:

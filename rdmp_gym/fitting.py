@@ -25,7 +25,7 @@ def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int =
     ``window`` is the filter length in seconds (rounded to an odd number of samples, at least
     ``polyorder + 2``). Returns three ``[L, d]`` arrays.
     """
-    length = max(int(round(window / dt)) | 1, polyorder + 2 + (polyorder % 2))
+    length = max(round(window / dt) | 1, polyorder + 2 + (polyorder % 2))
     length = min(length, Y.shape[0] - (1 - Y.shape[0] % 2))
     if length <= polyorder:
         raise ValueError(f"demos: too few samples ({Y.shape[0]}) to estimate derivatives")

@@ -58,7 +58,7 @@ def test_init_T_reaches_target_and_matches_design_figures(length, expected):
 
 def test_init_T_from_inside_the_cycle():
     cs = CanonicalSystem(period=1.0)
-    phi0, r0 = cs.init_T(0.3, 0.0, 0.9)
+    _, r0 = cs.init_T(0.3, 0.0, 0.9)
     assert r0 < 0.9
     assert cs.radius(np.array([0.3]), r0)[0] == pytest.approx(0.9, abs=1e-9)
 

@@ -76,7 +76,7 @@ def test_multi_dimensional_output_is_synchronised(dmp, demos):
     """All dimensions share one canonical system: the periodic parts repeat with one period."""
     t = np.arange(0, 12.0, 0.01)
     Y = dmp.rollout(t)
-    lag = int(round(dmp.period / 0.01))
+    lag = round(dmp.period / 0.01)
     tail = t > 6.0
     shifted = np.roll(Y, -lag, axis=0)
     valid = tail & (np.arange(t.size) < t.size - lag)
