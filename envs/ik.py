@@ -1,0 +1,183 @@
+"""Batched differential inverse kinematics for a whole task-space path of the sponge.
+
+Task (5 rows per configuration): the sponge face centre (3 position rows) and the sponge's face normal
+kept anti-parallel to the table normal (2 rotation rows about the table's tangent axes; the yaw about
+the normal is left free). Redundancy (10 joints) is resolved by a weighted damped least-squares step
+with a posture task in its null space; joint limits are enforced by projection after every step.
+
+All configurations of a path are solved together (vectorised), first on a coarse subsample of the
+path, then refined on every point from the interpolated coarse solution; the result also carries the
+joint direction that moves the sponge along the table normal at fixed orientation, which the force
+controller uses to shift the pressing depth online without another IK solve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import ChainKinematics
+
+__all__ = ["IKResult", "PathIK"]
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Joint solution of a path of ``T`` points.
+
+    Attributes:
+        q: joint positions, [T, n] (radians).
+        normal_dq: joint motion per metre of sponge motion along the table normal, [T, n].
+        pos_error: remaining position error norm per point, [T] (metres).
+        rot_error: remaining angle between the sponge normal and the target normal per point, [T] (rad).
+    """
+
+    q: np.ndarray
+    normal_dq: np.ndarray
+    pos_error: np.ndarray
+    rot_error: np.ndarray
+
+
+def _tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors [3] orthogonal to ``normal`` and to each other."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    t1 = helper - normal * (helper @ normal)
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(normal, t1)
+
+
+class PathIK:
+    """Damped least-squares IK of the sponge site along a path, vectorised over the path.
+
+    Args:
+        kinematics: the arm chain; its site is the (uncompressed) sponge face centre and the site's
+            +x axis is the sponge's outward "up" axis (the face normal is -x).
+        posture: joint configuration [n] preferred in the null space of the task.
+        joint_weights: per-joint mobility [n] in (0, 1] (a small value makes a joint move less).
+        damping: damping factor lambda of the least-squares step.
+        limit_margin: distance kept from every joint limit (radians).
+        nullspace_gain: fraction of the posture error corrected per iteration.
+        limit_zone: width (rad) of the band inside each limit from which the null-space task pushes
+            joints back towards the interior.
+        limit_gain: fraction of the intrusion into that band corrected per iteration.
+        tolerance: after ``min_iterations``, the coarse pass stops when the task errors (m, rad) or the
+            joint updates (rad) of all its points are below this.
+    """
+
+    def __init__(self, kinematics: ChainKinematics, posture: np.ndarray, joint_weights: np.ndarray,
+                 damping: float = 0.01, limit_margin: float = 0.01, nullspace_gain: float = 0.1,
+                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4):
+        n = kinematics.n
+        posture = np.asarray(posture, dtype=np.float64)
+        joint_weights = np.asarray(joint_weights, dtype=np.float64)
+        if posture.shape != (n,):
+            raise ValueError(f"posture: expected shape ({n},), got {posture.shape}")
+        if joint_weights.shape != (n,) or np.any(joint_weights <= 0):
+            raise ValueError(f"joint_weights: expected {n} positive numbers")
+        if damping <= 0:
+            raise ValueError("damping: expected a positive number")
+        self.kin = kinematics
+        self.lower = kinematics.lower + limit_margin
+        self.upper = kinematics.upper - limit_margin
+        self.posture = np.clip(posture, self.lower, self.upper)
+        self.inv_weight = joint_weights
+        self.damping2 = damping**2
+        self.nullspace_gain = nullspace_gain
+        self.tolerance = tolerance
+        self.zone_lower = kinematics.lower + limit_zone
+        self.zone_upper = kinematics.upper - limit_zone
+        self.limit_gain = limit_gain
+
+    def _step(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
+              rot_weight: np.ndarray, nullspace: bool, blocked: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One DLS update of ``q`` [B, n].
+
+        ``blocked`` [B, n] marks joints held at a limit (they get almost no mobility). Returns
+        (q_new, pos_err [B], rot_err [B], jw [B, n, 5], A [B, 5, 5], blocked_new [B, n]).
+        """
+        state = self.kin.forward(q)
+        jac_pos, jac_rot = state.jacobian()
+        up = state.rot[:, :, 0]
+        e_pos = targets - state.pos
+        r = np.cross(up, normal)
+        error = np.concatenate([e_pos, (r @ basis.T) * rot_weight[:, None]], axis=1)      # [B, 5]
+        jac_r = np.einsum("kj,bjn->bkn", basis, jac_rot) * rot_weight[:, None, None]
+        jac = np.concatenate([jac_pos, jac_r], axis=1)                                   # [B, 5, n]
+        inv_weight = np.broadcast_to(self.inv_weight, q.shape)
+        if blocked is not None:
+            inv_weight = np.where(blocked, 1e-4 * inv_weight, inv_weight)
+        jw = np.swapaxes(jac, 1, 2) * inv_weight[:, :, None]                    # W^-1 J^T [B, n, 5]
+        a = jac @ jw
+        a[:, range(5), range(5)] += self.damping2
+        rhs = error
+        if nullspace:
+            v = self.nullspace_gain * (self.posture - q)                           # [B, n]
+            v += self.limit_gain * (np.maximum(0.0, self.zone_lower - q) - np.maximum(0.0, q - self.zone_upper))
+            if blocked is not None:
+                v = np.where(blocked, 0.0, v)
+            rhs = error - np.einsum("bkn,bn->bk", jac, v)
+        step = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, rhs[..., None])[..., 0])
+        if nullspace:
+            step = step + v
+        step = np.clip(step, -0.5, 0.5)
+        q_free = q + step
+        q_new = np.clip(q_free, self.lower, self.upper)
+        blocked_new = (q_free < self.lower) | (q_free > self.upper)
+        if blocked is not None:
+            blocked_new |= blocked & (q_new != q_free)
+        cos_angle = np.clip(up @ normal, -1.0, 1.0)
+        return q_new, np.linalg.norm(e_pos, axis=1), np.arccos(cos_angle), jw, a, blocked_new
+
+    def solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None = None,
+              q_init: np.ndarray | None = None,
+              stride: int = 10, coarse_iterations: int = 60, fine_iterations: int = 1,
+              min_iterations: int = 10) -> IKResult:
+        """Solve the IK for a path.
+
+        Args:
+            targets: sponge face centre positions in the world frame, [T, 3].
+            normal: table normal in the world frame, [3] (the sponge face is pressed against it).
+            rot_weight: weight in (0, 1] of the orientation rows per point, [T] (default ones); a
+                small weight lets the sponge tilt where flatness matters less (high above the table).
+            q_init: start configuration [n] for every point (default: the posture).
+            stride: subsampling of the coarse pass.
+            coarse_iterations: maximum DLS iterations on the subsampled path.
+            fine_iterations: DLS iterations on the full path (from the interpolated coarse solution).
+            min_iterations: DLS iterations on the subsampled path before the stopping test.
+        """
+        targets = np.asarray(targets, dtype=np.float64)
+        if targets.ndim != 2 or targets.shape[1] != 3 or len(targets) == 0:
+            raise ValueError(f"targets: expected shape [T, 3], got {targets.shape}")
+        normal = np.asarray(normal, dtype=np.float64)
+        normal = normal / np.linalg.norm(normal)
+        basis = np.stack(_tangent_basis(normal))
+        count = len(targets)
+        rot_weight = np.ones(count) if rot_weight is None else np.asarray(rot_weight, dtype=np.float64)
+        if rot_weight.shape != (count,) or np.any(rot_weight <= 0):
+            raise ValueError(f"rot_weight: expected {count} positive numbers")
+        start = self.posture if q_init is None else np.clip(np.asarray(q_init, np.float64), self.lower, self.upper)
+        knots = np.unique(np.r_[np.arange(0, count, max(1, stride)), count - 1])
+        q = np.broadcast_to(start, (len(knots), self.kin.n)).copy()
+        blocked = None
+        for iteration in range(coarse_iterations):
+            q_old = q
+            q, pos_err, rot_err, _, _, blocked = self._step(q, targets[knots], normal, basis,
+                                                            rot_weight[knots], True, blocked)
+            if iteration + 1 >= min_iterations and (
+                    (pos_err.max() < self.tolerance and rot_err.max() < self.tolerance)
+                    or np.max(np.abs(q - q_old)) < self.tolerance):
+                break
+        if len(knots) < count:
+            index = np.arange(count)
+            q = np.stack([np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
+            blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
+                               axis=1) > 0.5
+        for _ in range(fine_iterations):
+            q, *_, blocked = self._step(q, targets, normal, basis, rot_weight, True, blocked)
+        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, blocked)
+        unit = np.zeros((count, 5, 1))
+        unit[:, :3, 0] = normal
+        normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])
+        return IKResult(q=q, normal_dq=normal_dq, pos_error=pos_err, rot_error=rot_err)

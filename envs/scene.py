@@ -1,0 +1,203 @@
+"""The wiping scene: model loading, named indices, table pose (height offset, tilt) and the dirt grid.
+
+Frames: the *table frame* has its origin on the table's top surface, x forward, y left, z along the
+surface normal. The *nominal* table frame is the one the demonstration and the controller assume
+(the table body's pose in the XML); the *actual* frame includes the episode's height offset and tilt.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+__all__ = [
+    "ARM_JOINTS",
+    "DEFAULT_XML",
+    "TablePose",
+    "WipeScene",
+    "dirt_grid",
+    "rotation_from_tilt",
+]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_XML = Path(__file__).resolve().parent / "assets" / "armar3_wipe.xml"
+
+#: Controlled joints in chain order: torso (3) then the right arm (7).
+ARM_JOINTS = (
+    "hip_pitch", "hip_roll", "hip_yaw",
+    "r_shoulder1", "r_shoulder2", "r_upperarm", "r_elbow", "r_underarm", "r_wrist1", "r_wrist2",
+)
+
+_REQUIRED = {
+    mujoco.mjtObj.mjOBJ_BODY: ("table", "hand", "sponge"),
+    mujoco.mjtObj.mjOBJ_GEOM: ("sponge", "table_top"),
+    mujoco.mjtObj.mjOBJ_SITE: ("ft_site", "sponge_tcp", "tcp"),
+    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch"),
+    mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide"),
+}
+
+
+@dataclass(frozen=True)
+class TablePose:
+    """Deviation of the actual table from the nominal one.
+
+    Attributes:
+        height: offset of the surface along the world z axis (metres, + = higher).
+        tilt_x: rotation about the table frame's x axis (radians, + raises the right side, -y).
+        tilt_y: rotation about the table frame's y axis (radians, + lowers the far side, +x).
+    """
+
+    height: float = 0.0
+    tilt_x: float = 0.0
+    tilt_y: float = 0.0
+
+
+def rotation_from_tilt(tilt_x: float, tilt_y: float) -> np.ndarray:
+    """Rotation [3, 3] = R_y(tilt_y) @ R_x(tilt_x)."""
+    cx, sx, cy, sy = np.cos(tilt_x), np.sin(tilt_x), np.cos(tilt_y), np.sin(tilt_y)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    return ry @ rx
+
+
+def dirt_grid(centre: np.ndarray, size: np.ndarray, cell: float) -> np.ndarray:
+    """Centres [N, 2] (table frame, metres) of a grid of square cells of side ``cell`` over a patch.
+
+    The patch is ``size`` = (sx, sy) around ``centre`` = (cx, cy); the number of cells per side is
+    ``max(1, round(s / cell))``, so the cells tile the patch exactly (their side may differ slightly
+    from ``cell``).
+    """
+    centre = np.asarray(centre, dtype=np.float64)
+    size = np.asarray(size, dtype=np.float64)
+    if centre.shape != (2,) or size.shape != (2,):
+        raise ValueError("centre, size: expected two numbers each")
+    if cell <= 0 or np.any(size <= 0):
+        raise ValueError("cell, size: expected positive numbers")
+    counts = np.maximum(1, np.round(size / cell).astype(int))
+    axes = [centre[i] - size[i] / 2 + (np.arange(counts[i]) + 0.5) * size[i] / counts[i] for i in range(2)]
+    gx, gy = np.meshgrid(axes[0], axes[1], indexing="ij")
+    return np.stack([gx.ravel(), gy.ravel()], axis=1)
+
+
+class WipeScene:
+    """The MuJoCo model and data of the wiping scene, with the indices the controller needs.
+
+    Args:
+        xml_file: MJCF path; ``None`` loads the packaged ``armar3_wipe.xml``. A custom file must
+            define the names of the packaged one (table, hand, sponge, sites, sensors, joints).
+    """
+
+    def __init__(self, xml_file: str | Path | None = None):
+        path = Path(DEFAULT_XML if xml_file is None else xml_file)
+        if not path.is_file():
+            raise ValueError(f"xml_file: no such file: {path}")
+        self.xml_file = path
+        self.model = mujoco.MjModel.from_xml_path(str(path))
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        for obj, names in _REQUIRED.items():
+            missing = [n for n in names if mujoco.mj_name2id(m, obj, n) < 0]
+            if missing:
+                raise ValueError(f"xml_file: {path.name} lacks the required {obj.name[6:].lower()}(s) {missing}")
+
+        def idx(obj: mujoco.mjtObj, name: str) -> int:
+            return mujoco.mj_name2id(m, obj, name)
+
+        self.joint_ids = np.array([idx(mujoco.mjtObj.mjOBJ_JOINT, n) for n in ARM_JOINTS])
+        self.qpos_adr = m.jnt_qposadr[self.joint_ids].copy()
+        self.dof_adr = m.jnt_dofadr[self.joint_ids].copy()
+        self.joint_lower = m.jnt_range[self.joint_ids, 0].copy()
+        self.joint_upper = m.jnt_range[self.joint_ids, 1].copy()
+        actuator_of_joint = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)
+                             if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
+        missing = [n for n, j in zip(ARM_JOINTS, self.joint_ids, strict=True) if int(j) not in actuator_of_joint]
+        if missing:
+            raise ValueError(f"xml_file: no joint actuator for {missing}")
+        self.actuator_ids = np.array([actuator_of_joint[int(j)] for j in self.joint_ids])
+        self.table_body = idx(mujoco.mjtObj.mjOBJ_BODY, "table")
+        self.sponge_body = idx(mujoco.mjtObj.mjOBJ_BODY, "sponge")
+        self.sponge_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "sponge")
+        self.table_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "table_top")
+        self.sponge_half = m.geom_size[self.sponge_geom].copy()
+        self.ft_site = idx(mujoco.mjtObj.mjOBJ_SITE, "ft_site")
+        self.sponge_site = idx(mujoco.mjtObj.mjOBJ_SITE, "sponge_tcp")
+        self.tcp_site = idx(mujoco.mjtObj.mjOBJ_SITE, "tcp")
+        self.slide_qpos = m.jnt_qposadr[idx(mujoco.mjtObj.mjOBJ_JOINT, "sponge_slide")]
+        sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_force")
+        self.force_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
+        sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_torque")
+        self.torque_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
+        self.touch_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_touch")])
+        # Robot = every body on the platform's subtree; arm-collision geoms = robot geoms but the sponge.
+        root = idx(mujoco.mjtObj.mjOBJ_BODY, "platform")
+        robot_bodies = {b for b in range(m.nbody) if self._descends(b, root)} if root >= 0 else set()
+        robot_geom = np.array([int(m.geom_bodyid[g]) in robot_bodies for g in range(m.ngeom)])
+        self.is_arm_geom = robot_geom.copy()
+        self.is_arm_geom[self.sponge_geom] = False
+        self.nominal_table_pos = m.body_pos[self.table_body].copy()
+        self.nominal_table_rot = np.zeros(9)
+        mujoco.mju_quat2Mat(self.nominal_table_rot, m.body_quat[self.table_body])
+        self.nominal_table_rot = self.nominal_table_rot.reshape(3, 3)
+        self.nominal_table_quat = m.body_quat[self.table_body].copy()
+        self.table_pose = TablePose()
+
+    def _descends(self, body: int, root: int) -> bool:
+        while body > 0:
+            if body == root:
+                return True
+            body = int(self.model.body_parentid[body])
+        return False
+
+    @property
+    def nominal_normal(self) -> np.ndarray:
+        """Nominal table normal in the world frame, [3]."""
+        return self.nominal_table_rot[:, 2].copy()
+
+    def set_table(self, pose: TablePose) -> None:
+        """Move the table body to the nominal pose shifted by ``pose`` (changes the model)."""
+        rot = self.nominal_table_rot @ rotation_from_tilt(pose.tilt_x, pose.tilt_y)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, rot.ravel())
+        self.model.body_pos[self.table_body] = self.nominal_table_pos + np.array([0.0, 0.0, pose.height])
+        self.model.body_quat[self.table_body] = quat
+        self.table_pose = pose
+
+    def table_frame(self, actual: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(origin [3], rotation [3, 3]) of the actual (or nominal) table frame in the world."""
+        if not actual:
+            return self.nominal_table_pos.copy(), self.nominal_table_rot.copy()
+        p = self.table_pose
+        origin = self.nominal_table_pos + np.array([0.0, 0.0, p.height])
+        return origin, self.nominal_table_rot @ rotation_from_tilt(p.tilt_x, p.tilt_y)
+
+    def to_world(self, points: np.ndarray, actual: bool = False) -> np.ndarray:
+        """Table-frame points [..., 3] to world points [..., 3] (nominal frame unless ``actual``)."""
+        origin, rot = self.table_frame(actual)
+        return np.asarray(points, dtype=np.float64) @ rot.T + origin
+
+    def arm_qpos(self) -> np.ndarray:
+        """Current positions of the 10 controlled joints, [10]."""
+        return self.data.qpos[self.qpos_adr].copy()
+
+    def set_arm_state(self, q: np.ndarray) -> None:
+        """Reset the simulation to rest at joint positions ``q`` [10] with matching servo targets."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[self.qpos_adr] = q
+        self.data.ctrl[self.actuator_ids] = q
+        mujoco.mj_forward(self.model, self.data)
+
+    def wrist_force_world(self) -> np.ndarray:
+        """Raw wrist force sensor reading rotated into the world frame, [3] (newtons)."""
+        rot = self.data.site_xmat[self.ft_site].reshape(3, 3)
+        return rot @ self.data.sensordata[self.force_adr]
+
+    def servo_lead(self) -> np.ndarray:
+        """``kv / kp`` of the arm's position servos, [10] (s): the lag a moving target sees."""
+        kp = self.model.actuator_gainprm[self.actuator_ids, 0]
+        kv = -self.model.actuator_biasprm[self.actuator_ids, 2]
+        return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
