@@ -1,0 +1,150 @@
+"""The interface every episodic learner implements: ask for rollouts, tell their results, checkpoint.
+
+A learner searches the environment's action space ``[-1, 1]^n`` (``a = 0`` is the imitation fit). One
+update is one ``ask`` (``K`` actions to try) followed by one ``tell`` (their results). The learner
+minimises the episode cost ``J = -return``; :class:`EpisodeBatch` carries the results.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["EpisodeBatch", "Learner", "cost_weights"]
+
+
+@dataclass(frozen=True)
+class EpisodeBatch:
+    """Results of ``K`` episodes.
+
+    Attributes:
+        actions: ``[K, n]`` the actions that were executed.
+        returns: ``[K]`` episode returns (higher is better).
+        cost_traces: ``[K, T]`` per-control-step costs (the part of ``-return`` spread over time).
+        coverage: ``[K]`` wiped fraction of the dirt (NaN where the task has none).
+        force_in_band: ``[K]`` fraction of the wiping time with the contact force in band (or NaN).
+        valid: ``[K]`` whether each episode was simulated (an invalid plan gets a penalty instead).
+        seeds: ``[K]`` the reset seeds.
+    """
+
+    actions: np.ndarray
+    returns: np.ndarray
+    cost_traces: np.ndarray
+    coverage: np.ndarray
+    force_in_band: np.ndarray
+    valid: np.ndarray
+    seeds: np.ndarray
+
+    @property
+    def size(self) -> int:
+        """Number of episodes ``K``."""
+        return int(self.returns.size)
+
+    @property
+    def costs(self) -> np.ndarray:
+        """``[K]`` episode costs ``-return``."""
+        return -self.returns
+
+
+def cost_weights(costs: np.ndarray, h: float) -> np.ndarray:
+    """PI²'s probability weighting ``P_k ∝ exp(-h (J_k - min J) / (max J - min J))``.
+
+    Args:
+        costs: ``[..., K]`` costs of K rollouts (the last axis is normalised).
+        h: eliteness; 10 in Theodorou et al. 2010 and Stulp & Sigaud 2012.
+    Returns:
+        ``[..., K]`` weights that sum to 1 over the last axis (uniform where all costs are equal).
+    """
+    low = costs.min(axis=-1, keepdims=True)
+    spread = costs.max(axis=-1, keepdims=True) - low
+    scaled = np.divide(costs - low, spread, out=np.zeros_like(costs, dtype=np.float64), where=spread > 0)
+    weights = np.exp(-h * scaled)
+    return weights / weights.sum(axis=-1, keepdims=True)
+
+
+class Learner(ABC):
+    """An episodic black-box learner over actions in ``[-1, 1]^n``.
+
+    Args:
+        initial_mean: ``[n]`` start of the search (0 = the imitation fit).
+        rollouts: episodes per update ``K``.
+        rng: the only source of randomness of the learner.
+    """
+
+    name: str = ""
+
+    def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator) -> None:
+        mean = np.array(initial_mean, dtype=np.float64)
+        if mean.ndim != 1 or mean.size == 0 or not np.all(np.isfinite(mean)):
+            raise ValueError(f"initial_mean: expected a finite 1-D array, got shape {mean.shape}")
+        if np.any(np.abs(mean) > 1.0):
+            raise ValueError("initial_mean: expected values in [-1, 1] (the action space)")
+        if isinstance(rollouts, bool) or not isinstance(rollouts, (int, np.integer)) or rollouts < 2:
+            raise ValueError(f"rollouts: expected an int >= 2, got {rollouts!r}")
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+        self.rollouts = int(rollouts)
+        self.rng = rng
+        self.updates = 0
+        self._mean = mean
+
+    @property
+    def n_params(self) -> int:
+        """Dimension ``n`` of the action space."""
+        return int(self._mean.size)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """``[n]`` the current policy (the centre of the search distribution), a copy."""
+        return self._mean.copy()
+
+    @property
+    @abstractmethod
+    def exploration(self) -> float:
+        """The current exploration level: the mean standard deviation of the search distribution."""
+
+    @abstractmethod
+    def ask(self) -> np.ndarray:
+        """``[K, n]`` actions in ``[-1, 1]`` to evaluate next."""
+
+    @abstractmethod
+    def _update(self, batch: EpisodeBatch) -> None:
+        """Update the search distribution from the results of the asked actions."""
+
+    def tell(self, batch: EpisodeBatch) -> None:
+        """Receive the results of the actions returned by the last :meth:`ask`, and update."""
+        if batch.actions.shape != (self.rollouts, self.n_params):
+            raise ValueError(f"batch.actions: expected shape {(self.rollouts, self.n_params)}, "
+                             f"got {batch.actions.shape}")
+        if not np.all(np.isfinite(batch.returns)):
+            raise ValueError("batch.returns: contains NaN or infinite values")
+        self._update(batch)
+        self.updates += 1
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything needed to continue exactly where the learner is (picklable)."""
+        return {"name": self.name, "mean": self._mean.copy(), "updates": self.updates,
+                "rng": self.rng.bit_generator.state, **self._extra_state()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore a state written by :meth:`state_dict` (same learner type and dimension)."""
+        if state.get("name") != self.name:
+            raise ValueError(f"state: written by learner {state.get('name')!r}, this is {self.name!r}")
+        mean = np.asarray(state["mean"], dtype=np.float64)
+        if mean.shape != self._mean.shape:
+            raise ValueError(f"state: mean has shape {mean.shape}, expected {self._mean.shape}")
+        self._mean = mean.copy()
+        self.updates = int(state["updates"])
+        self.rng.bit_generator.state = state["rng"]
+        self._load_extra_state(state)
+
+    @abstractmethod
+    def _extra_state(self) -> dict[str, Any]:
+        """Learner-specific state for :meth:`state_dict`."""
+
+    @abstractmethod
+    def _load_extra_state(self, state: dict[str, Any]) -> None:
+        """Restore what :meth:`_extra_state` wrote."""
