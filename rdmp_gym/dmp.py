@@ -261,8 +261,11 @@ class RhythmicDMP:
             transient: index of the encoded transient (its canonical initial condition).
             y0, yd0: ``[d]`` start position/velocity (default: that transient's demonstration start).
             anchor: ``[d]`` new anchor g (default: the fitted one). The periodic part moves with it.
-            scale: amplitude factor (a number or ``[d]``) of the pattern about the anchor.
+            scale: amplitude factor (a number or ``[d]``) of the movement about the anchor.
             rotation: an angle (rad, about the axis normal to dims 0 and 1) or an orthogonal ``[d, d]`` matrix.
+                With ``scale``/``rotation`` the whole movement is transformed, ``y - g -> M (y - g)`` with
+                ``M = R diag(scale)``: the default start becomes ``g + M (start - g)`` (g: the fitted anchor);
+                the result is exact, and exact on the periodic part for any explicit ``y0``.
             tempo: speed factor (default: the canonical system's; 0.5 = half speed).
             return_velocity: also return velocities.
         Returns:
@@ -271,12 +274,16 @@ class RhythmicDMP:
         k = self._check_transient(transient)
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
         start = self.transients[k]
-        y0 = self._vector(y0, start.start, "y0", 1)
-        yd0 = self._vector(yd0, start.start_velocity * tempo / self.canonical.tempo, "yd0", 1)
+        transform = _transform_matrix(self.n_dims, scale, rotation)
+        default_y0, default_yd0 = start.start, start.start_velocity * tempo / self.canonical.tempo
+        if transform is not None:   # the whole demonstrated movement is transformed about the fitted anchor
+            default_y0 = self.anchor + transform @ (start.start - self.anchor)
+            default_yd0 = transform @ default_yd0
+        y0 = self._vector(y0, default_y0, "y0", 1)
+        yd0 = self._vector(yd0, default_yd0, "yd0", 1)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
         inits = np.array([[start.phi0, start.r0]])
-        y, yd = self._simulate(t, self.weights[None], inits, anchors, y0, yd0, tempo,
-                               _transform_matrix(self.n_dims, scale, rotation))
+        y, yd = self._simulate(t, self.weights[None], inits, anchors, y0, yd0, tempo, transform)
         return (y[0], yd[0]) if return_velocity else y[0]
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
