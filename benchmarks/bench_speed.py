@@ -14,15 +14,15 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")       # one core, before numpy is 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import json  # noqa: E402
-import platform  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
-from pathlib import Path  # noqa: E402
+import json
+import platform
+import time
+from collections.abc import Callable
+from pathlib import Path
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from rdmp_gym import RhythmicDMP, segment, wiping_demonstration  # noqa: E402
+from rdmp_gym import RhythmicDMP, segment, wiping_demonstration
 
 RESULTS = Path(__file__).parent / "results" / "speed.json"
 

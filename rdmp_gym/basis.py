@@ -25,6 +25,10 @@ __all__ = ["BasisSet", "Fading", "periodic_width", "transient_basis_along_path",
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5); keeps it finite off every support."""
 
+GATE_FLOOR = 1e-16
+"""Gate values below this are exactly 0, so a family of basis functions can be skipped where it is
+off (a change of at most 1e-16 in any activation, far below the float64 resolution of the mixture)."""
+
 
 @dataclass(frozen=True)
 class Fading:
@@ -57,13 +61,15 @@ class Fading:
 
     def periodic_gate(self, r: np.ndarray) -> np.ndarray:
         """``g(r)``: 1 for r <= mu1, fading above; same shape as ``r``."""
-        excess = np.maximum(r - self.mu1, 0.0)
-        return np.exp(-self.v_tilde * excess**self.k)
+        return self._fade(np.maximum(r - self.mu1, 0.0))
 
     def transient_gate(self, r: np.ndarray) -> np.ndarray:
         """``a(r)``: 1 for r >= mu2, fading below; same shape as ``r``."""
-        deficit = np.maximum(self.mu2 - r, 0.0)
-        return np.exp(-self.v_tilde * deficit**self.k)
+        return self._fade(np.maximum(self.mu2 - r, 0.0))
+
+    def _fade(self, distance: np.ndarray) -> np.ndarray:
+        gate = np.exp(-self.v_tilde * distance**self.k)
+        return np.where(gate < GATE_FLOOR, 0.0, gate)
 
 
 def von_mises(phi: np.ndarray, centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -109,6 +115,12 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
     return centres, np.maximum(widths, turn_limit)
 
 
+def _active_span(gate: np.ndarray) -> slice:
+    """The smallest slice along the last (time) axis that holds every non-zero entry of ``gate [..., T]``."""
+    active = np.flatnonzero(np.any(gate > 0.0, axis=tuple(range(gate.ndim - 1))))
+    return slice(int(active[0]), int(active[-1]) + 1) if active.size else slice(0, 0)
+
+
 @dataclass(frozen=True)
 class BasisSet:
     """All basis functions of a rhythmic DMP: N periodic ones and the transient sets of K transients.
@@ -139,17 +151,26 @@ class BasisSet:
         return self.n_periodic + int(self.transient_widths.size)
 
     def activations(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Raw activations ``Psi`` (6) at canonical states: ``phi, r`` of shape ``[..., T]`` -> ``[..., T, D]``."""
-        periodic = von_mises(phi, self.periodic_centres, self.periodic_widths)
-        periodic *= self.fading.periodic_gate(r)[..., None]
-        cos_phi, sin_phi = np.cos(phi)[..., None], np.sin(phi)[..., None]
-        radius = r[..., None]
+        """Raw activations ``Psi`` (6) at canonical states: ``phi, r`` of shape ``[..., T]`` -> ``[..., T, D]``.
+
+        Each family is evaluated only over the span of samples where its gate is non-zero (along a path
+        r is monotonic: the periodic family is off during most of a long transient, the transient
+        family is off on the cycle); outside that span it is exactly 0.
+        """
+        phi, r = np.broadcast_arrays(np.asarray(phi, dtype=float), np.asarray(r, dtype=float))
+        out = np.zeros((*phi.shape, self.n_basis))
+        periodic_gate, transient_gate = self.fading.periodic_gate(r), self.fading.transient_gate(r)
+        span = _active_span(periodic_gate)
+        out[..., span, : self.n_periodic] = (von_mises(phi[..., span], self.periodic_centres, self.periodic_widths)
+                                             * periodic_gate[..., span, None])
+        span = _active_span(transient_gate)
+        radius, angle = r[..., span, None], phi[..., span, None]
         q = self.transient_centres
         distance_sq = (radius**2 + np.sum(q**2, axis=1)
-                       - 2.0 * radius * (cos_phi * q[:, 0] + sin_phi * q[:, 1]))
-        transient = np.exp(-self.transient_widths * np.maximum(distance_sq, 0.0))
-        transient *= self.fading.transient_gate(r)[..., None]
-        return np.concatenate([periodic, transient], axis=-1)
+                       - 2.0 * radius * (np.cos(angle) * q[:, 0] + np.sin(angle) * q[:, 1]))
+        out[..., span, self.n_periodic :] = (np.exp(-self.transient_widths * np.maximum(distance_sq, 0.0))
+                                             * transient_gate[..., span, None])
+        return out
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""

@@ -237,10 +237,10 @@ class RhythmicDMP:
         dt = float(elapsed[-1] / (elapsed.size - 1))
         canonical = replace(self.canonical, tempo=tempo)
         unique, inverse = np.unique(inits, axis=0, return_inverse=True)
+        phis, radii = canonical.state(elapsed, unique[:, 0], unique[:, 1])              # [U, T] each
         forcing = np.empty((weights.shape[0], t.size, self.n_dims))
-        for index, (phi0, r0) in enumerate(unique):
+        for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
             members = np.flatnonzero(inverse.ravel() == index)
-            phi, r = canonical.state(elapsed, phi0, r0)
             forcing[members] = self.basis.normalized(phi, r) @ weights[members].transpose(0, 2, 1)
         if transform is not None:
             forcing = forcing @ transform.T

@@ -4,16 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from .canonical import CanonicalSystem  # noqa: E402
-from .demonstrations import Demonstration  # noqa: E402
-from .dmp import RhythmicDMP  # noqa: E402
+from .canonical import CanonicalSystem
+from .demonstrations import Demonstration
+from .dmp import RhythmicDMP
 
 __all__ = [
     "plot_basis_activations",
