@@ -32,6 +32,7 @@ _SEARCH_SPAN = 0.03  # relative half-width of the first period search around the
 _GRID_SIZE = 21
 _PHASE_GRID = 360
 _MAX_ITERATIONS = 5
+_MIN_EXPLAINED = 0.8  # least share of the periodic part's variance the periodic template must explain
 _NOISE_FLOOR = 1e-6  # smallest noise level assumed, relative to the range of a dimension
 
 
@@ -66,10 +67,12 @@ def _check_harmonics(n_harmonics: int) -> None:
         raise ValueError(f"n_harmonics: expected a positive int, got {n_harmonics!r}")
 
 
-def _normalised(Y: np.ndarray) -> np.ndarray:
-    """``Y[L, d]`` centred and divided by each dimension's range (constant dimensions: by 1)."""
+def _normalised(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Y - mean) / scale`` ``[L, d]``, ``mean`` ``[d]`` and ``scale`` ``[d]`` (each dimension's
+    range; 1 for a constant dimension)."""
     span = np.ptp(Y, axis=0)
-    return (Y - Y.mean(axis=0)) / np.where(span > 0.0, span, 1.0)
+    mean, scale = Y.mean(axis=0), np.where(span > 0.0, span, 1.0)
+    return (Y - mean) / scale, mean, scale
 
 
 def _coarse_period(Z: np.ndarray, dt: float) -> float:
@@ -112,8 +115,9 @@ def _harmonics(n_samples: int, period: float, dt: float, n_harmonics: int) -> in
 
 def _fit(t: np.ndarray, Z: np.ndarray, period: float, n_harmonics: int) -> tuple[np.ndarray, float]:
     """Least-squares Fourier coefficients ``[2K + 1, d]`` of ``Z[n, d]`` and the residual sum."""
-    coefficients, *_ = np.linalg.lstsq(_design(t, period, n_harmonics), Z, rcond=None)
-    residual = Z - _design(t, period, n_harmonics) @ coefficients
+    design = _design(t, period, n_harmonics)
+    coefficients, *_ = np.linalg.lstsq(design, Z, rcond=None)
+    residual = Z - design @ coefficients
     return coefficients, float(np.sum(residual**2))
 
 
@@ -188,7 +192,7 @@ def segment(demo: Demonstration, *, period: float | None = None, min_periods: fl
     margin = check_positive(margin, "margin")
     _check_harmonics(n_harmonics)
     t, dt = demo.t - demo.t[0], demo.dt
-    Z = _normalised(demo.Y)
+    Z, mean, scale = _normalised(demo.Y)
     estimate = _coarse_period(Z, dt) if period is None else period
     start, span = Z.shape[0] // 2, _SEARCH_SPAN
     for _ in range(_MAX_ITERATIONS):
@@ -207,10 +211,17 @@ def segment(demo: Demonstration, *, period: float | None = None, min_periods: fl
         raise ValueError(f"demo: only {n_periods:.1f} periods after the transient, "
                          f"need at least {min_periods:g}")
     k = _harmonics(t.size - start, estimate, dt, n_harmonics)
-    coefficients, _ = _fit(t[start:], demo.Y[start:], estimate, k)
-    logger.debug("segment %r: period %.6f s, transient %.3f s, %.1f periods", demo.name, estimate,
-                 transient_length, n_periods)
-    return Segmentation(period=estimate, transient_length=transient_length, anchor=coefficients[0])
+    coefficients, rss = _fit(t[start:], Z[start:], estimate, k)
+    total = float(np.sum((Z[start:] - Z[start:].mean(axis=0)) ** 2))
+    explained = 1.0 - rss / total if total > 0.0 else 0.0
+    if explained < _MIN_EXPLAINED:
+        raise ValueError(f"demo: no periodicity found (a pattern of period {estimate:.4g} s "
+                         f"explains {explained:.0%} of the variance after the transient, "
+                         f"need {_MIN_EXPLAINED:.0%})")
+    logger.debug("segment %r: period %.6f s, transient %.3f s, %.1f periods, %.4f explained",
+                 demo.name, estimate, transient_length, n_periods, explained)
+    return Segmentation(period=estimate, transient_length=transient_length,
+                        anchor=mean + scale * coefficients[0])
 
 
 def _periodic_coefficients(demo: Demonstration, seg: Segmentation, period: float,
