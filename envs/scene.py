@@ -16,6 +16,8 @@ import numpy as np
 
 __all__ = [
     "ARM_JOINTS",
+    "DEFAULT_MOBILITY",
+    "DEFAULT_POSTURE",
     "DEFAULT_XML",
     "TablePose",
     "WipeScene",
@@ -201,3 +203,10 @@ class WipeScene:
         kp = self.model.actuator_gainprm[self.actuator_ids, 0]
         kv = -self.model.actuator_biasprm[self.actuator_ids, 2]
         return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
+
+
+#: Preferred arm configuration (null-space posture of the IK): the wiping posture at the nominal patch
+#: centre with the torso upright; every joint well inside its limits.
+DEFAULT_POSTURE = np.array([0.0, 0.0, 0.0, -0.37, 0.10, 0.68, -0.53, 1.18, 0.0, 0.69])
+#: Relative mobility of the joints in the IK: the torso moves little, the hip roll least.
+DEFAULT_MOBILITY = np.array([0.1, 0.05, 0.1, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])

@@ -75,7 +75,7 @@ def simulate_wipe(
     frame_skip: int,
     limit_margin: float = 0.02,
     max_force: float = 2000.0,
-    callback: Callable[[int], None] | None = None,
+    callback: Callable[[int, np.ndarray], None] | None = None,
 ) -> WipeTrace:
     """Run the plan from the current simulation state.
 
@@ -88,7 +88,8 @@ def simulate_wipe(
         frame_skip: physics steps per control step.
         limit_margin: distance to a joint limit (rad) counted as "at the limit".
         max_force: any wrist or contact force above this (N) counts as a diverged simulation.
-        callback: called as ``callback(k)`` after control step ``k`` (e.g. to grab video frames).
+        callback: called as ``callback(k, wiped)`` after control step ``k`` with the current wiped
+            mask ``[N]`` (e.g. to grab video frames).
     """
     m, d = scene.model, scene.data
     count = len(plan)
@@ -180,7 +181,7 @@ def simulate_wipe(
             break
         last_time = now
         if callback is not None:
-            callback(k)
+            callback(k, wiped)
 
     lo = scene.joint_lower + limit_margin
     hi = scene.joint_upper - limit_margin

@@ -1,0 +1,42 @@
+"""Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP on a simulated ARMAR-III.
+
+Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v0``, an episodic env: one
+``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``; no ``max_episode_steps``)::
+
+    import gymnasium as gym
+    import rdmp_gym  # registers the env
+
+    env = gym.make("rdmp_gym/ArmarWipe-v0", n_periods=4)
+    obs, info = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample() * 0)  # the imitation
+
+Rendering is offscreen (``render_mode="rgb_array"``); on a headless machine set ``MUJOCO_GL=egl``
+before importing mujoco.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+from .context import CONTEXT_FIELDS, Context, ContextSpec
+from .reward import TERMS, RewardWeights
+from .scene import ARM_JOINTS, TablePose, WipeScene
+from .wipe_env import ArmarWipeEnv
+
+__all__ = [
+    "ARM_JOINTS",
+    "CONTEXT_FIELDS",
+    "ENV_ID",
+    "TERMS",
+    "ArmarWipeEnv",
+    "Context",
+    "ContextSpec",
+    "RewardWeights",
+    "TablePose",
+    "WipeScene",
+]
+
+ENV_ID = "rdmp_gym/ArmarWipe-v0"
+
+if ENV_ID not in gym.registry:
+    gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv")

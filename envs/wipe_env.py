@@ -1,0 +1,435 @@
+"""``rdmp_gym/ArmarWipe-v0``: episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+
+One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
+
+1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a``;
+2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
+   the sponge path ``P [T, 3]`` in the nominal table frame (x, y on the table, z above it);
+3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat, joint
+   speeds): an invalid one returns a graded penalty at once, ``info["valid"] = False``;
+4. otherwise MuJoCo simulates it at the control rate with differential-IK joint targets and online
+   wrist-force adaptation of the pressing depth (the table may be higher, lower or tilted);
+5. the reward sums the terms of :mod:`rdmp_gym.envs.reward`, all in ``info["reward_terms"]``, and
+   ``info["cost_trace"]`` gives the per-control-step cost for PI².
+
+Rendering: ``render_mode="rgb_array"`` renders offscreen with ``mujoco.Renderer``; on a headless
+machine set ``MUJOCO_GL=egl`` (or ``osmesa``) before importing mujoco. Because an episode is a single
+step, :meth:`ArmarWipeEnv.record_episode` (or ``record_frames=True``) captures frames inside it.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable, Mapping
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+
+from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+
+from .action import ActionMap
+from .context import SIZE as CONTEXT_SIZE
+from .context import Context, ContextSpec
+from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from .ik import IKResult, PathIK
+from .kinematics import ChainKinematics
+from .recording import SceneRenderer, write_video
+from .reward import RewardSettings, RewardWeights, invalid_reward, wipe_reward
+from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
+from .wiping import DirtCells, WipeTrace, simulate_wipe
+
+__all__ = ["ArmarWipeEnv"]
+
+logger = logging.getLogger(__name__)
+
+#: Path bounds in the nominal table frame (m): beyond them a path is invalid without simulation.
+WORKSPACE_LOW = np.array([-0.35, -0.40, -0.05])
+WORKSPACE_HIGH = np.array([0.35, 0.40, 0.30])
+
+
+@lru_cache(maxsize=16)
+def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> RhythmicDMP:
+    """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s)."""
+    return RhythmicDMP.fit(wiping_demonstration(style=style, rng=0), n_periodic=n_periodic,
+                           n_transient=n_transient, method=method)
+
+
+def _positive(value: Any, name: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name}: expected a number, got {value!r}") from error
+    if not np.isfinite(number) or number <= 0:
+        raise ValueError(f"{name}: expected a finite positive number, got {value!r}")
+    return number
+
+
+class ArmarWipeEnv(gym.Env):
+    """Episodic wiping env; see the module docstring.
+
+    Args:
+        style: synthetic demonstration style 1..4 (1/2 circle, 3/4 figure-eight; 2/4 complex approach).
+        demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame (overrides ``style``).
+        n_periodic, n_transient, fit_method: DMP fit settings.
+        groups: parameter groups in the action (default periodic weights, transient weights, initial condition).
+        scales: per-group action scales (see :mod:`rdmp_gym.envs.action`).
+        n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
+        control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
+        timestep: physics step (s; default the model's 2 ms).
+        target_force: normal force to hold while wiping (N) (controller and reward).
+        force_band: (min, max) normal force (N) that wipes a cell; the max is also the excess-force limit.
+        force_sigma: width (N) of the force-closeness reward.
+        reward_weights: ``{term: weight}`` overrides (see :mod:`rdmp_gym.envs.reward`).
+        adaptation: adapt the pressing depth from the wrist force (``False``: feed-forward preload only).
+        admittance_gain: depth rate per newton of force error (m/(N s)).
+        context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.context`).
+        cell_size: dirt cell side (m).
+        limit_margin: distance to a joint limit (rad) that counts as "at the limit".
+        ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
+        max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid.
+        xml_file: MJCF of the scene (default: the packaged ``armar3_wipe.xml``).
+        render_mode: ``None`` or ``"rgb_array"``; width, height, camera: of the rendered frames.
+        record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
+            many control steps.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+
+    def __init__(
+        self,
+        style: int = 1,
+        demonstration: Demonstration | None = None,
+        n_periodic: int = 40,
+        n_transient: int = 40,
+        fit_method: str = "ridge",
+        groups: Iterable[str] | str = ("periodic", "transient", "initial"),
+        scales: Mapping[str, float] | None = None,
+        n_periods: float = 4.0,
+        duration: float | None = None,
+        control_rate: float = 100.0,
+        frame_skip: int | None = None,
+        timestep: float | None = None,
+        target_force: float = 18.0,
+        force_band: tuple[float, float] = (5.0, 60.0),
+        force_sigma: float = 6.0,
+        reward_weights: Mapping[str, float] | None = None,
+        adaptation: bool = True,
+        admittance_gain: float = 0.004,
+        context_ranges: Mapping[str, tuple] | None = None,
+        cell_size: float = 0.01,
+        limit_margin: float = 0.02,
+        ik_tolerance: tuple[float, float] = (0.005, float(np.deg2rad(5.0))),
+        max_joint_speed: float = 3.0,
+        xml_file: str | Path | None = None,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+        camera: str | None = "front",
+        record_frames: bool = False,
+        frame_stride: int = 4,
+    ):
+        super().__init__()
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, "
+                             f"got {render_mode!r}")
+        self.render_mode = render_mode
+
+        # --- the DMP and the action map
+        if demonstration is not None:
+            if not isinstance(demonstration, Demonstration):
+                raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
+                                 f"got {type(demonstration).__name__}")
+            if demonstration.n_dims != 3:
+                raise ValueError("demonstration: expected 3 dimensions (x, y, z in the table frame), "
+                                 f"got {demonstration.n_dims}")
+            self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
+                                       method=fit_method)
+        else:
+            if isinstance(style, bool) or style not in (1, 2, 3, 4):
+                raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
+            self.dmp = _fit_style(int(style), int(n_periodic), int(n_transient), str(fit_method))
+        self.action_map = ActionMap(self.dmp, groups, scales)
+        self.groups = self.action_map.groups
+        # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
+        # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
+        self._anchor_z = float(self.dmp.anchor[2])
+        self._start_offset = self.dmp.starts[0] - self.dmp.anchor
+
+        # --- the scene, timing and control
+        self.scene = WipeScene(xml_file)
+        model = self.scene.model
+        if timestep is not None:
+            model.opt.timestep = _positive(timestep, "timestep")
+        if frame_skip is not None:
+            if isinstance(frame_skip, bool) or int(frame_skip) != frame_skip or frame_skip < 1:
+                raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
+            self.frame_skip = int(frame_skip)
+        else:
+            rate = _positive(control_rate, "control_rate")
+            self.frame_skip = max(1, round(1.0 / (rate * model.opt.timestep)))
+        self.dt = self.frame_skip * model.opt.timestep
+        self.control_rate = 1.0 / self.dt
+        transient = self.dmp.transients[0].length
+        if duration is None:
+            duration = transient + _positive(n_periods, "n_periods") * self.dmp.period
+        duration = _positive(duration, "duration")
+        self.n_steps = max(2, round(duration / self.dt))
+        self.times = np.arange(self.n_steps) * self.dt
+        self.periodic = self.times >= transient
+        s = np.clip(self.times / transient, 0.0, 1.0)
+        self._fade = 1.0 - s**3 * (10.0 - 15.0 * s + 6.0 * s**2)   # 1 -> 0, minimum jerk
+        if not self.periodic.any():
+            raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
+
+        band = tuple(float(f) for f in force_band)
+        if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
+            raise ValueError(f"force_band: expected (min, max) with 0 <= min < max, got {force_band!r}")
+        target_force = _positive(target_force, "target_force")
+        self.force_band = band
+        self.adaptation_settings = ForceAdaptationSettings(target_force=target_force, enabled=bool(adaptation),
+                                                           gain=float(admittance_gain))
+        self.reward_settings = RewardSettings(target_force=target_force,
+                                              force_sigma=_positive(force_sigma, "force_sigma"), max_force=band[1])
+        self.reward_weights = RewardWeights.from_mapping(reward_weights)
+        self.cell_size = _positive(cell_size, "cell_size")
+        self.limit_margin = float(limit_margin)
+        if len(ik_tolerance) != 2:
+            raise ValueError("ik_tolerance: expected (position m, angle rad)")
+        self.ik_tolerance = (_positive(ik_tolerance[0], "ik_tolerance"), _positive(ik_tolerance[1], "ik_tolerance"))
+        self.max_joint_speed = _positive(max_joint_speed, "max_joint_speed")
+        self.context_spec = ContextSpec(context_ranges)
+
+        kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS)
+        self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY)
+        self._lead = self.scene.servo_lead()
+        self._engage = self.adaptation_settings.engage_height
+
+        # --- spaces
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(self.action_map.size,), dtype=np.float32)
+        self.observation_space = gym.spaces.Box(self.context_spec.bound_low.astype(np.float32),
+                                                self.context_spec.bound_high.astype(np.float32),
+                                                shape=(CONTEXT_SIZE,), dtype=np.float32)
+
+        # --- rendering
+        self.frame_stride = int(frame_stride)
+        if self.frame_stride < 1:
+            raise ValueError(f"frame_stride: expected an integer >= 1, got {frame_stride!r}")
+        self.metadata = {**self.metadata, "render_fps": max(1, round(self.control_rate / self.frame_stride))}
+        self._render_args = (int(width), int(height), camera)
+        self._renderer: SceneRenderer | None = None
+        if render_mode is not None or record_frames:
+            self._renderer = SceneRenderer(self.scene, *self._render_args)
+        self.record_frames = bool(record_frames)
+        self.frames: list[np.ndarray] = []
+
+        self.context: Context | None = None
+        self._cells_world = np.zeros((0, 3))
+        self._wiped = np.zeros(0, dtype=bool)
+
+    # ------------------------------------------------------------------ action <-> parameters
+    def action_to_params(self, action: np.ndarray) -> np.ndarray:
+        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[P]``."""
+        return self.action_map.to_params(self._check_action(action))
+
+    def params_to_action(self, theta: np.ndarray) -> np.ndarray:
+        """The action ``[P]`` (float32, unclipped) that maps to ``theta [P]``."""
+        return self.action_map.to_action(theta)
+
+    def action_time_weights(self) -> np.ndarray:
+        """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
+        return self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+
+    def _check_action(self, action: Any) -> np.ndarray:
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"action: expected a numeric array of shape {self.action_space.shape}") from error
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"action: expected shape {self.action_space.shape}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("action: contains NaN or infinite values")
+        return np.clip(a, -1.0, 1.0)
+
+    # ------------------------------------------------------------------ gym API
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        """Draw a context (``options`` can fix any field; see :mod:`rdmp_gym.envs.context`) and put the
+        robot at rest with the sponge at the start position."""
+        super().reset(seed=seed)
+        if options is not None and not isinstance(options, Mapping):
+            raise ValueError(f"options: expected a dict, got {type(options).__name__}")
+        context = self.context_spec.sample(self.np_random, options)
+        self.context = context
+        self.scene.set_table(TablePose(context.table_height, *context.table_tilt))
+        cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
+        origin, rot = self.scene.table_frame(actual=True)
+        self._cells_world = np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
+        self._wiped = np.zeros(len(cells), dtype=bool)
+        start = self._solve(context.sponge_start[None])
+        self.scene.set_arm_state(start.q[0])
+        self.frames = []
+        return self._observation(), {"context": context.vector()}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """Run one whole wiping episode with the DMP parameters of ``action``."""
+        if self.context is None:
+            raise RuntimeError("call reset() before step()")
+        a = self._check_action(action)
+        theta = self.action_map.to_params(a)
+        self.frames = []
+        reward, info = self._evaluate(theta)
+        return self._observation(), reward, True, False, info
+
+    def render(self) -> np.ndarray | None:
+        """RGB frame ``[height, width, 3]`` uint8 of the current state (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to the env")
+            return None
+        return self._frame()
+
+    def close(self) -> None:
+        """Release the renderer (safe to call more than once)."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def record_episode(self, action: np.ndarray, path: str | Path, fps: float | None = None
+                       ) -> tuple[np.ndarray, float, bool, bool, dict]:
+        """``step(action)`` while capturing frames every ``frame_stride`` control steps, then write them
+        to a video at ``path`` (``.mp4`` or ``.gif``). Returns the step's result."""
+        recording = self.record_frames
+        self.record_frames = True
+        try:
+            result = self.step(action)
+        finally:
+            self.record_frames = recording
+        write_video(self.frames, path, fps=self.metadata["render_fps"] if fps is None else fps)
+        return result
+
+    # ------------------------------------------------------------------ episode
+    def rollout_path(self, theta: np.ndarray) -> np.ndarray:
+        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in this episode's context.
+
+        The DMP is anchored at the patch centre. Its transformation systems are stiff (deviations from
+        the demonstrated path decay within ~0.1 s), so starting the DMP itself at an arbitrary sponge
+        position would make the sponge jump towards the demonstrated start. Instead the DMP starts
+        where the demonstration started relative to its anchor, and the offset to the actual sponge
+        start is added and faded out with a minimum-jerk profile over the demonstrated transient:
+        ``P(0)`` is the sponge start, the path is smooth, and from the end of the transient on it is
+        the DMP's own.
+        """
+        if self.context is None:
+            raise RuntimeError("call reset() before rollout_path()")
+        anchor = np.array([*self.context.patch_centre, self._anchor_z])
+        dmp_start = anchor + self._start_offset
+        path = self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
+                                      y0=dmp_start, anchor=anchor)[0]
+        return path + np.outer(self._fade, self.context.sponge_start - dmp_start)
+
+    def run_path(self, path: np.ndarray) -> tuple[float, dict]:
+        """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,
+        bypassing the DMP (for tests and hand-made motions). Returns (reward, info)."""
+        if self.context is None:
+            raise RuntimeError("call reset() before run_path()")
+        path = np.asarray(path, dtype=np.float64)
+        if path.shape != (self.n_steps, 3):
+            raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
+        return self._evaluate(None, path)
+
+    def _solve(self, path: np.ndarray) -> IKResult:
+        world = self.scene.to_world(path, actual=False)
+        weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
+        return self.ik.solve(world, self.scene.nominal_normal, rot_weight=weight)
+
+    def _evaluate(self, theta: np.ndarray | None, path: np.ndarray | None = None) -> tuple[float, dict]:
+        info: dict[str, Any] = {"params": None if theta is None else theta.copy()}
+        if theta is not None:
+            violation = self.action_map.r0_violation(theta)
+            if violation > 0:
+                return self._invalid(info, "r0", violation - 1.0)
+            path = self.rollout_path(theta)
+        assert path is not None
+        if not np.all(np.isfinite(path)):
+            return self._invalid(info, "nonfinite_path", 1.0)
+        excess = np.maximum(WORKSPACE_LOW - path, 0.0) + np.maximum(path - WORKSPACE_HIGH, 0.0)
+        if np.any(excess > 0):
+            return self._invalid(info, "workspace", float(excess.max()) / 0.1)
+        solution = self._solve(path)
+        flat = path[:, 2] <= self._engage
+        bad = (solution.pos_error > self.ik_tolerance[0]) | (flat & (solution.rot_error > self.ik_tolerance[1]))
+        if np.any(bad):
+            severity = 0.5 * np.mean(bad) + 0.5 * min(1.0, float(solution.pos_error.max()) / 0.1)
+            return self._invalid(info, "unreachable", severity)
+        speed = float(np.max(np.abs(np.diff(solution.q, axis=0)))) / self.dt
+        if speed > self.max_joint_speed:
+            return self._invalid(info, "joint_speed", speed / self.max_joint_speed - 1.0)
+
+        plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper)
+        self.scene.set_arm_state(solution.q[0])
+        adaptation = ForceAdaptation(self.adaptation_settings, self.dt)
+        dirt = DirtCells(self._cells_world, self.force_band)
+        callback = self._capture if self.record_frames else None
+        self._wiped = np.zeros(len(self._cells_world), dtype=bool)
+        if callback is not None:
+            self.frames.append(self._frame())
+        trace = simulate_wipe(self.scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
+                              limit_margin=self.limit_margin, callback=callback)
+        self._wiped = trace.wiped
+        terms, cost = wipe_reward(trace, self.periodic, len(self._cells_world), self.reward_settings,
+                                  self.reward_weights)
+        info.update(self._statistics(trace))
+        return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
+
+    def _statistics(self, trace: WipeTrace) -> dict[str, Any]:
+        live = np.arange(self.n_steps) < trace.steps
+        per = self.periodic & live
+        force = trace.contact_force[per]
+        low, high = self.force_band
+        target = self.reward_settings.target_force
+        return {
+            "coverage": float(np.mean(trace.wiped)) if trace.wiped.size else 0.0,
+            "force_mean": float(force.mean()) if force.size else 0.0,
+            "force_error_mean": float(np.mean(np.abs(force - target))) if force.size else 0.0,
+            "force_in_band_fraction": float(np.mean((force >= low) & (force <= high))) if force.size else 0.0,
+            "contact_fraction": float(np.mean(force >= self.reward_settings.contact_threshold)) if force.size else 0.0,
+            "max_force": float(trace.contact_force[live].max()),
+            "max_wrist_force": float(np.abs(trace.wrist_force[live]).max()),
+            "arm_collision_fraction": float(np.mean(trace.arm_contact[live])),
+            "joint_limit_fraction": float(np.mean(trace.at_limit[live])),
+            "steps": int(trace.steps),
+            "force_trace": trace.contact_force.copy(),
+        }
+
+    def _invalid(self, info: dict, reason: str, severity: float) -> tuple[float, dict]:
+        terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights)
+        info.update({"coverage": 0.0, "force_mean": 0.0, "force_error_mean": 0.0, "force_in_band_fraction": 0.0,
+                     "contact_fraction": 0.0, "max_force": 0.0, "max_wrist_force": 0.0,
+                     "arm_collision_fraction": 0.0, "joint_limit_fraction": 0.0, "steps": 0,
+                     "force_trace": np.zeros(self.n_steps)})
+        logger.debug("invalid parameters (%s, severity %.3g)", reason, severity)
+        return self._finish(info, terms, cost, valid=False, reason=reason, unstable=False)
+
+    def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
+                unstable: bool) -> tuple[float, dict]:
+        reward = sum(terms.values())
+        info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
+                     "unstable": unstable, "n_cells": len(self._cells_world)})
+        return float(reward), info
+
+    # ------------------------------------------------------------------ helpers
+    def _observation(self) -> np.ndarray:
+        assert self.context is not None
+        return self.context.vector().astype(np.float32)
+
+    def _frame(self, wiped: np.ndarray | None = None) -> np.ndarray:
+        if self._renderer is None:
+            self._renderer = SceneRenderer(self.scene, *self._render_args)
+        _, rot = self.scene.table_frame(actual=True)
+        return self._renderer.render(self._cells_world, self._wiped if wiped is None else wiped,
+                                     0.5 * self.cell_size, rot)
+
+    def _capture(self, k: int, wiped: np.ndarray) -> None:
+        if (k + 1) % self.frame_stride == 0:
+            self.frames.append(self._frame(wiped))
