@@ -9,7 +9,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["WIPE_ID", "TaskSpec", "episode_metrics"]
+from .imitation import load_demonstration
+
+__all__ = ["WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v0"
 
@@ -22,11 +24,14 @@ class TaskSpec:
         env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v0`` or ``rdmp_gym/DMPTracking-v0``).
         env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...).
         reset_options: ``options`` passed to every ``reset`` (e.g. to fix the context), or None.
+        demo: a CSV/NPZ demonstration (table frame, m) that the env fits instead of its built-in
+            style ("" = none); passed as the env's ``demonstration`` keyword.
     """
 
     env_id: str = WIPE_ID
     env_kwargs: Mapping[str, Any] = field(default_factory=dict)
     reset_options: Mapping[str, Any] | None = None
+    demo: str = ""
 
     def make(self, render_mode: str | None = None) -> gym.Env:
         """Build the environment (importing the packages that register the ids)."""
@@ -34,12 +39,32 @@ class TaskSpec:
 
         from . import tracking  # noqa: F401  (registers rdmp_gym/DMPTracking-v0)
 
-        extra = {} if render_mode is None else {"render_mode": render_mode}
-        return gym.make(self.env_id, disable_env_checker=True, **dict(self.env_kwargs), **extra)
+        kwargs = dict(self.env_kwargs)
+        if render_mode is not None:
+            kwargs["render_mode"] = render_mode
+        if self.demo:
+            kwargs["demonstration"] = load_demonstration(self.demo)
+        return gym.make(self.env_id, disable_env_checker=True, **kwargs)
+
+    def make_with_options(self) -> gym.Env:
+        """The environment, wrapped so that every reset without options uses ``reset_options``."""
+        return ResetOptions(self.make(), self.options())
 
     def options(self) -> dict[str, Any] | None:
         """A fresh copy of the reset options."""
         return None if self.reset_options is None else dict(self.reset_options)
+
+
+class ResetOptions(gym.Wrapper):
+    """Applies fixed reset options whenever ``reset`` gets none (vector envs auto-reset without options)."""
+
+    def __init__(self, env: gym.Env, options: dict[str, Any] | None) -> None:
+        super().__init__(env)
+        self.fixed_options = options
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[Any, dict[str, Any]]:
+        return self.env.reset(seed=seed, options=self.fixed_options if options is None else options)
 
 
 def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:

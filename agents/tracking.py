@@ -1,11 +1,13 @@
 """A MuJoCo-free episodic DMP task with the wiping env's contract: re-centre a wiping pattern.
 
-The DMP is fitted to a built-in wiping demonstration. The task is to follow the same movement with its
-periodic pattern moved by a ``shift`` (the context: where the dirt is), which the learner must produce
-through the DMP's weights and initial conditions. One ``step`` is one whole rollout
-(``RhythmicDMP.rollout_batch``), sampled at ``control_rate``; the per-step cost is the squared tracking
-error, ``c(t) = (|y(t) - y*(t)| / 1 cm)² dt / duration``, so the return ``-sum_t c(t)`` is minus the
-mean squared error in cm². Actions ``a in [-1, 1]^n`` map to ``theta = theta_imitation + scales * a``.
+The DMP is fitted to a wiping demonstration (a built-in style or the user's). The task is to follow the
+same movement with its periodic pattern moved by a ``shift`` (the context: where the dirt is), blended
+in over the transient, ``y*(t) = y_demo(t) + s(t / T) shift`` (``s`` a 7th-order smoothstep, ``T`` the
+transient length), which the learner must produce through the DMP's weights and initial conditions.
+One ``step`` is one whole rollout (``RhythmicDMP.rollout_batch``), sampled at ``control_rate``; the
+per-step cost is the squared tracking error, ``c(t) = (|y(t) - y*(t)| / 1 cm)² dt / duration``, so the
+return ``-sum_t c(t)`` is minus the mean squared error in cm². Actions ``a in [-1, 1]^n`` map to
+``theta = theta_imitation + scales * a``.
 
 Registered as ``rdmp_gym/DMPTracking-v0``; the tests and quick CLI runs use it where MuJoCo is not needed.
 """
@@ -18,7 +20,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import RhythmicDMP, wiping_demonstration
+from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
 
 __all__ = ["TRACKING_ID", "TrackingEnv"]
 
@@ -31,6 +33,7 @@ class TrackingEnv(gym.Env):
 
     Args:
         style: built-in demonstration style (1-4) that is fitted and shifted.
+        demonstration: a user demonstration ``Y [L, 3]`` instead of ``style`` (at least ``duration`` long).
         n_periodic, n_transient: basis functions of the DMP.
         groups: the parameter groups the action refines.
         duration: rollout length (s).
@@ -45,7 +48,8 @@ class TrackingEnv(gym.Env):
 
     metadata = {"render_modes": []}  # noqa: RUF012 (gymnasium's class attribute)
 
-    def __init__(self, style: int = 1, n_periodic: int = 15, n_transient: int = 15,
+    def __init__(self, style: int = 1, demonstration: Demonstration | None = None, n_periodic: int = 15,
+                 n_transient: int = 15,
                  groups: Sequence[str] = ("periodic", "transient", "initial"), duration: float = 6.0,
                  control_rate: float = 20.0, shift: Sequence[float] = (0.02, -0.015, 0.0),
                  context_range: float = 0.0, weight_scale: float = 0.5, phase_scale: float = 0.5,
@@ -56,7 +60,10 @@ class TrackingEnv(gym.Env):
             raise ValueError(f"context_range: expected a value in [0, 0.1] m, got {context_range}")
         if not 0.0 < radius_scale < 1.0:
             raise ValueError(f"radius_scale: expected a value in (0, 1), got {radius_scale}")
-        self.demo = wiping_demonstration(style, rng=0)
+        self.demo = wiping_demonstration(style, rng=0) if demonstration is None else demonstration
+        if self.demo.duration < duration or self.demo.n_dims != 3:
+            raise ValueError(f"demonstration: expected 3 dimensions and at least {duration} s, "
+                             f"got {self.demo.n_dims} and {self.demo.duration:.3g} s")
         self.dmp = RhythmicDMP.fit(self.demo, n_periodic, n_transient)
         self.groups = tuple(groups)
         self.theta_imitation = self.dmp.get_params(self.groups)
@@ -65,7 +72,6 @@ class TrackingEnv(gym.Env):
         if self.shift.shape != (3,):
             raise ValueError(f"shift: expected 3 values, got {self.shift.shape}")
         self.context_range = float(context_range)
-        self.style = style
         self.t = np.arange(round(duration * 100.0) + 1) / 100.0      # integration grid, 100 Hz
         stride = max(1, round(100.0 / control_rate))
         self._control = np.arange(0, self.t.size, stride)                   # [T_ctrl]
@@ -74,6 +80,11 @@ class TrackingEnv(gym.Env):
         self.action_space = gym.spaces.Box(-1.0, 1.0, (n,), np.float32)
         self.observation_space = gym.spaces.Box(-0.1, 0.1, (2,), np.float32)
         self._context = self.shift.copy()
+        samples = self.demo.Y if self.demo.truth is None else self.demo.truth.clean
+        elapsed = self.demo.t - self.demo.t[0]
+        self._base = np.column_stack([np.interp(self.t, elapsed, column) for column in samples.T])   # [T, 3]
+        u = np.clip(self.t / self.dmp.transients[0].length, 0.0, 1.0)
+        self._blend = u**4 * (35.0 - 84.0 * u + 70.0 * u**2 - 20.0 * u**3)                         # [T]
 
     def _scales(self, weight_scale: float, phase_scale: float, radius_scale: float) -> np.ndarray:
         scales = np.empty_like(self.theta_imitation)
@@ -99,9 +110,11 @@ class TrackingEnv(gym.Env):
 
     def target(self) -> np.ndarray:
         """``[T, 3]`` the target path for the current context (on the integration grid)."""
-        target = wiping_demonstration(self.style, rng=0, noise=0.0, duration=float(self.t[-1]),
-                                      anchor=self.dmp.anchor + self._context, period=self.dmp.period)
-        return target.truth.clean
+        return self._base + self._blend[:, None] * self._context
+
+    def rollout_path(self, theta: np.ndarray) -> np.ndarray:
+        """``[T_ctrl, 3]`` the DMP's path with parameters ``theta [P]``, at the control steps."""
+        return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.t, self.groups)[0][self._control]
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -126,8 +139,7 @@ class TrackingEnv(gym.Env):
         if action.shape != self.action_space.shape or not np.all(np.isfinite(action)):
             raise ValueError(f"action: expected {self.action_space.shape} finite values, got shape {action.shape}")
         theta = self.action_to_params(np.clip(action, -1.0, 1.0))
-        path = self.dmp.rollout_batch(theta[None], self.t, self.groups)[0]
-        error = np.linalg.norm(path - self.target(), axis=1)[self._control] / _ERROR_UNIT
+        error = np.linalg.norm(self.rollout_path(theta) - self.target()[self._control], axis=1) / _ERROR_UNIT
         duration = float(self.t[-1])
         costs = error**2 * self._dt / duration
         reward = -float(costs.sum())

@@ -1,0 +1,167 @@
+"""stable-baselines3 PPO on the same episodic env: a contextual bandit, one step per episode.
+
+Settings (``PPOConfig``) and why:
+
+* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / workers`` per env;
+* every episode terminates after its single step (``terminated=True``), so the advantage is
+  ``r - V(context)`` and ``gamma``/``gae_lambda`` play no role;
+* the observation is the env's context; the policy is a Gaussian whose mean starts at the imitation
+  (``action_net`` bias = start action, weights scaled by 0.01 as SB3 does) with ``std = sigma``, the same
+  initial exploration as the black-box learners;
+* ``batch_size`` 0 means the whole update is one minibatch; ``n_epochs`` passes over it;
+* the learning rate is higher than SB3's 3e-4 default because a budget of a few hundred episodes gives
+  only tens of updates.
+
+``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
+A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
+random streams restart).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import multiprocessing
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
+
+from .learners.base import EpisodeBatch
+from .options import check_range, from_options
+from .tasks import TaskSpec, episode_metrics
+
+__all__ = ["PPOAgent", "PPOConfig", "load_ppo_policy"]
+
+
+@dataclass(frozen=True)
+class PPOConfig:
+    """PPO settings.
+
+    Attributes:
+        sigma: initial standard deviation of the Gaussian policy (action units).
+        learning_rate: Adam step size.
+        n_epochs: passes over each update's episodes.
+        batch_size: minibatch size; 0 = all episodes of the update.
+        hidden: units in each of the two hidden layers (policy and value networks).
+        clip_range: PPO ratio clipping.
+        ent_coef: entropy bonus.
+    """
+
+    sigma: float = 0.3
+    learning_rate: float = 3e-3
+    n_epochs: int = 10
+    batch_size: int = 0
+    hidden: int = 64
+    clip_range: float = 0.2
+    ent_coef: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)
+        check_range(self.learning_rate, "ppo.learning_rate", 0.0, 1.0, low_open=True)
+        check_range(self.n_epochs, "ppo.n_epochs", 1, None)
+        check_range(self.batch_size, "ppo.batch_size", 0, None)
+        check_range(self.hidden, "ppo.hidden", 1, None)
+        check_range(self.clip_range, "ppo.clip_range", 0.0, 1.0, low_open=True)
+        check_range(self.ent_coef, "ppo.ent_coef", 0.0, None)
+
+
+class _EpisodeCollector(BaseCallback):
+    """Collects the executed actions and episode metrics of one PPO rollout phase."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.actions: list[np.ndarray] = []
+        self.metrics: list[dict[str, Any]] = []
+
+    def _on_step(self) -> bool:
+        for action, reward, info in zip(self.locals["clipped_actions"], self.locals["rewards"],
+                                        self.locals["infos"], strict=True):
+            self.actions.append(np.asarray(action, dtype=np.float64))
+            self.metrics.append(episode_metrics(float(reward), info))
+        return True
+
+    def pop_batch(self) -> EpisodeBatch:
+        metrics = self.metrics
+        batch = EpisodeBatch(actions=np.stack(self.actions), returns=np.array([m["return"] for m in metrics]),
+                             cost_traces=np.stack([m["cost_trace"] for m in metrics]),
+                             coverage=np.array([m["coverage"] for m in metrics]),
+                             force_in_band=np.array([m["force_in_band"] for m in metrics]),
+                             valid=np.array([m["valid"] for m in metrics]),
+                             seeds=np.full(len(metrics), -1, dtype=np.int64))
+        self.actions, self.metrics = [], []
+        return batch
+
+
+def _vector_env(task: TaskSpec, workers: int) -> VecEnv:
+    makers = [task.make_with_options] * workers
+    if workers == 1:
+        return DummyVecEnv(makers)
+    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+    return SubprocVecEnv(makers, start_method=method)
+
+
+def load_ppo_policy(model: bytes) -> PPO:
+    """A PPO model saved in a checkpoint (``state["agent"]["model"]``), for prediction only."""
+    return PPO.load(io.BytesIO(model), device="cpu")
+
+
+class PPOAgent:
+    """PPO with one iteration (``rollouts`` episodes, then the gradient epochs) per update.
+
+    Args:
+        task: the env.
+        initial_action: ``[n]`` the policy mean at the start.
+        rollouts: episodes per update (a multiple of ``workers``).
+        workers: parallel envs (``SubprocVecEnv`` if > 1).
+        seed: seeds torch, the policy and the envs.
+        options: fields of :class:`PPOConfig`.
+    """
+
+    def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
+                 options: Mapping[str, Any] | None = None) -> None:
+        self.config = from_options(PPOConfig, options, "ppo")
+        if rollouts % workers:
+            raise ValueError(f"rollouts: PPO needs a multiple of workers={workers}, got {rollouts}")
+        self.rollouts = rollouts
+        self.env = _vector_env(task, workers)
+        self.env.seed(seed)
+        batch = self.config.batch_size or rollouts
+        hidden = [self.config.hidden, self.config.hidden]
+        self.model = PPO("MlpPolicy", self.env, n_steps=rollouts // workers, batch_size=batch,
+                         n_epochs=self.config.n_epochs, learning_rate=self.config.learning_rate,
+                         clip_range=self.config.clip_range, ent_coef=self.config.ent_coef, gamma=0.0,
+                         gae_lambda=1.0, seed=seed, device="cpu", verbose=0,
+                         policy_kwargs={"net_arch": {"pi": hidden, "vf": hidden},
+                                        "log_std_init": math.log(self.config.sigma)})
+        with torch.no_grad():
+            self.model.policy.action_net.bias.copy_(torch.as_tensor(initial_action, dtype=torch.float32))
+        self._collector = _EpisodeCollector()
+
+    @property
+    def exploration(self) -> float:
+        return float(torch.exp(self.model.policy.log_std.detach()).mean())
+
+    def train_update(self) -> EpisodeBatch:
+        self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        return self._collector.pop_batch()
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+
+    def state_dict(self) -> dict[str, Any]:
+        buffer = io.BytesIO()
+        self.model.save(buffer)
+        return {"model": buffer.getvalue()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.model = PPO.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
+
+    def close(self) -> None:
+        self.env.close()
