@@ -29,9 +29,9 @@ logger = logging.getLogger(__name__)
 
 _MIN_CORRELATION = 0.5  # weakest autocorrelation peak accepted as periodicity
 _SEARCH_SPAN = 0.03  # relative half-width of the first period search around the coarse estimate
-_GRID_SIZE = 21
-_PHASE_GRID = 360
-_MAX_ITERATIONS = 5
+_GRID_SIZE = 21  # nodes of that search
+_PHASE_GRID = 360  # nodes of the phase-shift search over one period
+_MAX_ITERATIONS = 5  # re-estimations of period, template and change point
 _MIN_EXPLAINED = 0.8  # least share of the periodic part's variance the periodic template must explain
 _NOISE_FLOOR = 1e-6  # smallest noise level assumed, relative to the range of a dimension
 
