@@ -1,16 +1,6 @@
 """stable-baselines3 PPO on the same episodic env: a contextual bandit, one step per episode.
 
-Settings (``PPOConfig``) and why:
-
-* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / workers`` per env;
-* every episode terminates after its single step (``terminated=True``), so the advantage is
-  ``r - V(context)`` and ``gamma``/``gae_lambda`` play no role;
-* the observation is the env's context; the policy is a Gaussian whose mean starts at the imitation
-  (``action_net`` bias = start action, weights scaled by 0.01 as SB3 does) with ``std = sigma``, the same
-  initial exploration as the black-box learners;
-* ``batch_size`` 0 means the whole update is one minibatch; ``n_epochs`` passes over it;
-* the learning rate is higher than SB3's 3e-4 default because a budget of a few hundred episodes gives
-  only tens of updates.
+Settings: see :mod:`rdmp_gym.agents.ppo_config`.
 
 ``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
@@ -23,7 +13,6 @@ import io
 import math
 import multiprocessing
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -33,42 +22,11 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
-from .options import check_range, from_options
+from .options import from_options
+from .ppo_config import PPOConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent", "PPOConfig", "load_ppo_policy"]
-
-
-@dataclass(frozen=True)
-class PPOConfig:
-    """PPO settings.
-
-    Attributes:
-        sigma: initial standard deviation of the Gaussian policy (action units).
-        learning_rate: Adam step size.
-        n_epochs: passes over each update's episodes.
-        batch_size: minibatch size; 0 = all episodes of the update.
-        hidden: units in each of the two hidden layers (policy and value networks).
-        clip_range: PPO ratio clipping.
-        ent_coef: entropy bonus.
-    """
-
-    sigma: float = 0.3
-    learning_rate: float = 3e-3
-    n_epochs: int = 10
-    batch_size: int = 0
-    hidden: int = 64
-    clip_range: float = 0.2
-    ent_coef: float = 0.0
-
-    def __post_init__(self) -> None:
-        check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)
-        check_range(self.learning_rate, "ppo.learning_rate", 0.0, 1.0, low_open=True)
-        check_range(self.n_epochs, "ppo.n_epochs", 1, None)
-        check_range(self.batch_size, "ppo.batch_size", 0, None)
-        check_range(self.hidden, "ppo.hidden", 1, None)
-        check_range(self.clip_range, "ppo.clip_range", 0.0, 1.0, low_open=True)
-        check_range(self.ent_coef, "ppo.ent_coef", 0.0, None)
+__all__ = ["PPOAgent", "load_ppo_policy"]
 
 
 class _EpisodeCollector(BaseCallback):

@@ -23,6 +23,7 @@ from tqdm.auto import tqdm
 from .evaluation import Evaluator
 from .learners import LEARNERS, EpisodeBatch, Learner, make_learner
 from .options import check_choice, check_range, from_options, to_options
+from .ppo_config import PPOConfig
 from .runs import RunDirectory
 from .tasks import WIPE_ID, TaskSpec
 
@@ -30,7 +31,8 @@ __all__ = ["AGENTS", "ESAgent", "TrainConfig", "batch_summary", "train"]
 
 logger = logging.getLogger(__name__)
 
-AGENTS = (*LEARNERS, "ppo")
+AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig}
+AGENTS = tuple(AGENT_CONFIGS)
 START_MODES = ("imitation", "perturbed")
 _SEED_LIMIT = 2**31 - 1
 
@@ -85,6 +87,7 @@ class TrainConfig:
                 raise TypeError(f"{name}: expected a mapping, got {type(getattr(self, name)).__name__}")
         if self.reset_options is not None and not isinstance(self.reset_options, Mapping):
             raise TypeError(f"reset_options: expected a mapping or None, got {type(self.reset_options).__name__}")
+        from_options(AGENT_CONFIGS[self.agent], self.options, self.agent)  # fail early on a bad setting
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> TrainConfig:

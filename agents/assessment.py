@@ -1,0 +1,126 @@
+"""Evaluate a finished (or running) run: its policy against the imitation on fixed seeds, with figures.
+
+Writes into the run directory ``evaluation.json`` (per-episode and mean return, coverage, force in
+band, validity of both policies), ``evaluation.png`` (sponge paths in the first context, mean
+metrics) and, on request, ``best_episode.mp4`` (the trained policy's best episode, re-run with the
+env's ``record_episode``).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .evaluation import Evaluator
+from .learners.base import EpisodeBatch
+from .options import check_choice
+from .plots import plot_evaluation
+from .runs import RunDirectory
+from .training import TrainConfig
+
+__all__ = ["POLICIES", "evaluate_run"]
+
+logger = logging.getLogger(__name__)
+
+POLICIES = ("best", "last")
+
+
+def _trained_actions(run: RunDirectory, config: TrainConfig, policy: str, observations: np.ndarray) -> np.ndarray:
+    """``[E, n]`` the run's actions for the contexts ``observations [E, o]``."""
+    if policy == "best":
+        return np.repeat(run.load_best()[None], len(observations), axis=0)
+    state = run.load_checkpoint()
+    if state is None:
+        raise FileNotFoundError(f"run: {run.path} has no checkpoint yet")
+    if config.agent == "ppo":
+        from .sb3 import load_ppo_policy
+
+        model = load_ppo_policy(state["agent"]["model"])
+        actions, _ = model.predict(observations.astype(np.float32), deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+    return np.repeat(np.asarray(state["agent"]["learner"]["mean"])[None], len(observations), axis=0)
+
+
+def _run_chunks(evaluator: Evaluator, actions: np.ndarray, seeds: np.ndarray, bar: tqdm) -> EpisodeBatch:
+    size = 2 * evaluator.workers
+    parts = []
+    for start in range(0, len(seeds), size):
+        parts.append(evaluator.run(actions[start:start + size], seeds[start:start + size]))
+        bar.update(len(parts[-1].returns))
+    return EpisodeBatch(*(np.concatenate([getattr(p, name) for p in parts])
+                          for name in ("actions", "returns", "cost_traces", "coverage", "force_in_band",
+                                       "valid", "seeds")))
+
+
+def _summary(batch: EpisodeBatch) -> dict[str, Any]:
+    def clean(values: np.ndarray) -> list[float | None]:
+        return [None if not np.isfinite(v) else float(v) for v in values.astype(np.float64)]
+
+    def mean(values: np.ndarray) -> float | None:
+        return float(np.mean(values)) if np.all(np.isfinite(values)) else None
+
+    return {"return_mean": mean(batch.returns), "coverage_mean": mean(batch.coverage),
+            "force_in_band_mean": mean(batch.force_in_band), "valid_fraction": mean(batch.valid),
+            "returns": clean(batch.returns), "coverage": clean(batch.coverage),
+            "force_in_band": clean(batch.force_in_band), "valid": [bool(v) for v in batch.valid]}
+
+
+def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, workers: int = 1,
+                 policy: str = "best", video: bool = False, progress: bool = False) -> dict[str, Any]:
+    """Evaluate the run at ``path`` and the imitation on the same ``episodes`` reset seeds.
+
+    Args:
+        path: a run directory written by :func:`rdmp_gym.agents.training.train`.
+        episodes: evaluation episodes per policy.
+        seed: draws the reset seeds (contexts).
+        workers: worker processes.
+        policy: ``best`` (``best_params.npy``) or ``last`` (the last checkpoint's policy; PPO: its network).
+        video: also write ``best_episode.mp4`` (needs an env with ``record_episode``, e.g. ArmarWipe).
+        progress: show a progress bar.
+    Returns:
+        the contents of ``evaluation.json``.
+    """
+    check_choice(policy, "policy", POLICIES)
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes: expected a positive int, got {episodes!r}")
+    run = RunDirectory(path)
+    config = TrainConfig.from_dict(run.read_config())
+    spec = config.task
+    seeds = np.random.default_rng(seed).integers(2**31 - 1, size=episodes)
+    with Evaluator(spec, workers) as evaluator:
+        env = evaluator.env
+        if video and not hasattr(env.unwrapped, "record_episode"):
+            raise ValueError(f"video: {config.env_id} has no recording API (record_episode)")
+        observations = np.stack([env.reset(seed=int(s), options=spec.options())[0] for s in seeds])
+        trained = _trained_actions(run, config, policy, observations)
+        imitation = np.zeros_like(trained)
+        with tqdm(total=2 * episodes, disable=not progress, desc="evaluate", unit="episode") as bar:
+            batches = {"imitation": _run_chunks(evaluator, imitation, seeds, bar),
+                       "trained": _run_chunks(evaluator, trained, seeds, bar)}
+        env.reset(seed=int(seeds[0]), options=spec.options())
+        base = env.unwrapped
+        paths = {name: base.rollout_path(base.action_to_params(actions[0]))
+                 for name, actions in (("imitation", imitation), ("trained", trained))}
+        result = {"run": str(run.path), "agent": config.agent, "policy": policy, "episodes": episodes,
+                  "seeds": seeds.tolist(), **{name: _summary(batch) for name, batch in batches.items()}}
+        if video:
+            best = int(np.argmax(batches["trained"].returns))
+            env.reset(seed=int(seeds[best]), options=spec.options())
+            target = run.path / "best_episode.mp4"
+            base.record_episode(trained[best].astype(np.float32), target)
+            result["video"] = str(target)
+            logger.info("wrote %s", target)
+    metrics = {name: {key: value for key, value in (("return", result[name]["return_mean"]),
+                                                    ("coverage", result[name]["coverage_mean"]),
+                                                    ("force in band", result[name]["force_in_band_mean"]))
+                      if value is not None}
+               for name in batches}
+    plot_evaluation(paths, metrics, run.path / "evaluation.png",
+                    title=f"{config.agent} ({policy}) vs imitation, {episodes} episodes")
+    (run.path / "evaluation.json").write_text(json.dumps(result, indent=2) + "\n")
+    return result

@@ -1,0 +1,237 @@
+"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the README's main job).
+
+Examples::
+
+    rdmp-gym train --agent pi2 --updates 30 --rollouts 10 --seed 0 --out runs/pi2
+    rdmp-gym train --out runs/pi2 --resume             # continue a killed run
+    rdmp-gym evaluate runs/pi2 --episodes 10 --video
+    rdmp-gym fit --style 3 --plot
+    rdmp-gym main --out runs/main
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .tasks import WIPE_ID
+
+__all__ = ["main"]
+
+logger = logging.getLogger(__name__)
+
+
+def _key_value(text: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` with VALUE parsed as JSON when it can be (numbers, lists, true/false), else a string."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r}")
+    try:
+        return key, json.loads(raw)
+    except json.JSONDecodeError:
+        return key, raw
+
+
+def _add_task_arguments(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("task")
+    group.add_argument("--env", default=WIPE_ID, help="episodic env id (default %(default)s; "
+                       "rdmp_gym/DMPTracking-v0 is a MuJoCo-free DMP task)")
+    group.add_argument("--style", type=int, help="built-in demonstration style 1-4")
+    group.add_argument("--demo", default="", help="a CSV/NPZ demonstration to imitate instead of --style")
+    group.add_argument("--groups", nargs="+", help="parameter groups to refine: periodic transient initial")
+    group.add_argument("--n-periodic", type=int, help="periodic basis functions")
+    group.add_argument("--n-transient", type=int, help="transient basis functions")
+    group.add_argument("--duration", type=float, help="episode length (s)")
+    group.add_argument("--env-option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
+                       help="any other gym.make keyword (repeatable)")
+    group.add_argument("--reset-option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
+                       help="a reset option applied to every episode, e.g. to fix the context (repeatable)")
+
+
+def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
+    kwargs = {name: value for name, value in (("style", args.style), ("groups", args.groups),
+                                              ("n_periodic", args.n_periodic), ("n_transient", args.n_transient),
+                                              ("duration", args.duration)) if value is not None}
+    for key, value in args.env_option:
+        if key in kwargs:
+            raise ValueError(f"--env-option: {key} is also given by its own flag")
+        kwargs[key] = value
+    return kwargs
+
+
+def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool) -> None:
+    from .training import AGENTS, START_MODES
+
+    if agent:
+        parser.add_argument("--agent", choices=AGENTS, default="pi2", help="learner (default %(default)s)")
+    parser.add_argument("--updates", type=int, default=updates, help="updates (default %(default)s)")
+    parser.add_argument("--rollouts", type=int, default=10, help="episodes per update (default %(default)s)")
+    parser.add_argument("--seed", type=int, default=0, help="run seed (default %(default)s)")
+    parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
+                        help="worker processes (default %(default)s)")
+    parser.add_argument("--option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
+                        help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
+    parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
+    parser.add_argument("--perturbation", type=float, default=0.3, help="std of the perturbed start")
+    parser.add_argument("--eval-episodes", type=int, default=1, help="policy evaluation episodes per update")
+    parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
+    _add_task_arguments(parser)
+
+
+def _train_config(args: argparse.Namespace, agent: str) -> Any:
+    from .training import TrainConfig
+
+    return TrainConfig(agent=agent, updates=args.updates, rollouts=args.rollouts, seed=args.seed,
+                       workers=args.workers, env_id=args.env, env_kwargs=_env_kwargs(args),
+                       reset_options=dict(args.reset_option) or None, options=dict(args.option),
+                       start=args.start, perturbation=args.perturbation, demo=args.demo,
+                       eval_episodes=args.eval_episodes)
+
+
+def _print_table(rows: Sequence[dict[str, Any]]) -> None:
+    keys = list(rows[0])
+    cells = [[("-" if row[k] is None else f"{row[k]:.4g}" if isinstance(row[k], float) else str(row[k]))
+              for k in keys] for row in rows]
+    widths = [max(len(k), *(len(c[i]) for c in cells)) for i, k in enumerate(keys)]
+    print("  ".join(k.rjust(w) for k, w in zip(keys, widths, strict=True)))
+    for c in cells:
+        print("  ".join(v.rjust(w) for v, w in zip(c, widths, strict=True)))
+
+
+def _evaluation_rows(result: dict[str, Any]) -> list[dict[str, Any]]:
+    return [{"policy": name, "return": result[name]["return_mean"], "coverage": result[name]["coverage_mean"],
+             "force_in_band": result[name]["force_in_band_mean"], "valid": result[name]["valid_fraction"]}
+            for name in ("imitation", "trained")]
+
+
+def _command_train(args: argparse.Namespace) -> None:
+    from .training import train
+
+    config = _train_config(args, args.agent)
+    run = train(config, args.out, resume=args.resume, progress=True)
+    last = run.read_log()[-1]
+    print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
+          f"best policy return {last['best_eval_return']:.4g}")
+
+
+def _command_evaluate(args: argparse.Namespace) -> None:
+    from .assessment import evaluate_run
+
+    result = evaluate_run(args.run, args.episodes, seed=args.seed, workers=args.workers, policy=args.policy,
+                          video=args.video, progress=True)
+    _print_table(_evaluation_rows(result))
+    print(f"wrote {Path(args.run) / 'evaluation.json'} and evaluation.png" +
+          (f" and {result['video']}" if "video" in result else ""))
+
+
+def _command_fit(args: argparse.Namespace) -> None:
+    from .imitation import fit_dmp, load_demonstration
+    from .plots import plot_fit
+
+    demo = load_demonstration(args.demo if args.demo else args.style)
+    dmp = fit_dmp(demo, args.n_periodic, args.n_transient, args.method)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    dmp.save(out / "dmp.json")
+    reproduction = dmp.rollout(demo.t)
+    rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
+    print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
+    if args.plot:
+        figure = out / "fit.png"
+        plot_fit(demo.t - demo.t[0], demo.Y, reproduction, figure, title=f"{demo.name}: demonstration vs DMP")
+        print(f"wrote {figure}")
+
+
+def _command_main(args: argparse.Namespace) -> None:
+    from .assessment import evaluate_run
+    from .imitation import fit_dmp, load_demonstration
+    from .plots import plot_fit
+    from .training import train
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = _train_config(args, "pi2")
+    style = config.env_kwargs.get("style", 1)
+    demo = load_demonstration(args.demo if args.demo else style)
+    print(f"[1/3] imitation: fitting the rhythmic DMP to {demo.name!r}")
+    dmp = fit_dmp(demo, config.env_kwargs.get("n_periodic", 40), config.env_kwargs.get("n_transient", 40))
+    plot_fit(demo.t - demo.t[0], demo.Y, dmp.rollout(demo.t), out / "fit.png", title=f"{demo.name}: imitation")
+    print(f"[2/3] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
+    run = train(config, out / "train", resume=args.resume, progress=True)
+    print(f"[3/3] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
+    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True)
+    _print_table(_evaluation_rows(result))
+    summary = {"fit": str(out / "fit.png"), "run": str(run.path), "learning_curve": str(run.curve_png),
+               "evaluation": {name: {k: v for k, v in result[name].items() if k.endswith(("_mean", "_fraction"))}
+                              for name in ("imitation", "trained")}}
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(f"wrote {out / 'summary.json'}, {out / 'fit.png'}, {run.curve_png}, {run.path / 'evaluation.png'}")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rdmp-gym", description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    train = commands.add_parser("train", help="train an agent (pi2, pibb, cmaes, ppo)")
+    train.add_argument("--out", required=True, help="run directory")
+    _add_training_arguments(train, updates=30, agent=True)
+    train.set_defaults(handler=_command_train)
+
+    evaluate = commands.add_parser("evaluate", help="evaluate a run against the imitation")
+    evaluate.add_argument("run", help="run directory")
+    evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy (default %(default)s)")
+    evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
+    evaluate.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="worker processes")
+    evaluate.add_argument("--policy", choices=("best", "last"), default="best", help="which policy of the run")
+    evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
+    evaluate.set_defaults(handler=_command_evaluate)
+
+    fit = commands.add_parser("fit", help="fit the rhythmic DMP to a demonstration")
+    fit.add_argument("--style", type=int, default=1, help="built-in demonstration style 1-4")
+    fit.add_argument("--demo", default="", help="a CSV/NPZ demonstration instead of --style")
+    fit.add_argument("--n-periodic", type=int, default=40, help="periodic basis functions")
+    fit.add_argument("--n-transient", type=int, default=40, help="transient basis functions")
+    fit.add_argument("--method", choices=("ridge", "lwr"), default="ridge", help="regression")
+    fit.add_argument("--plot", action="store_true", help="write fit.png (demonstration vs reproduction)")
+    fit.add_argument("--out", default="runs/fit", help="output directory (default %(default)s)")
+    fit.set_defaults(handler=_command_fit)
+
+    job = commands.add_parser("main", help="imitation, PI² refinement and evaluation, end to end")
+    job.add_argument("--out", default="runs/main", help="output directory (default %(default)s)")
+    job.add_argument("--episodes", type=int, default=6, help="evaluation episodes (default %(default)s)")
+    job.add_argument("--video", action="store_true", help="record the best evaluation episode")
+    _add_training_arguments(job, updates=12, agent=False)
+    job.set_defaults(handler=_command_main)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``rdmp-gym``; returns the exit status."""
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    try:
+        if getattr(args, "video", False) and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
+            raise ValueError("--video: no display; run with MUJOCO_GL=egl (or osmesa) set in the environment")
+        import torch
+
+        torch.set_num_threads(1)
+        args.handler(args)
+    except (ValueError, TypeError, FileNotFoundError, FileExistsError) as error:
+        print(f"rdmp-gym {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
