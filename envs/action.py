@@ -20,7 +20,10 @@ import numpy as np
 
 __all__ = ["DEFAULT_SCALES", "ActionMap"]
 
-DEFAULT_SCALES = {"periodic": 0.25, "transient": 0.25, "initial": 0.2}
+#: Default fractions. Chosen so that a uniformly random action stays a plausible wiping motion: with
+#: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
+#: 16 random actions), while coordinated actions still change the pattern's amplitude by ~20 %.
+DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1}
 
 
 class ActionMap:

@@ -1,0 +1,209 @@
+"""Gymnasium/SB3 contract of rdmp_gym/ArmarWipe-v0: spaces, checkers, reward terms, determinism, bad input."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from rdmp_gym.envs import ENV_ID, TERMS, ArmarWipeEnv
+
+import rdmp_gym  # noqa: F401  (registers the env)
+from rdmp_gym import wiping_demonstration
+
+FAST = {"n_periods": 1.0}
+
+
+@pytest.fixture(scope="module")
+def env():
+    environment = gym.make(ENV_ID, **FAST)
+    yield environment
+    environment.close()
+
+
+def zero(env):
+    return np.zeros(env.action_space.shape, dtype=np.float32)
+
+
+def test_registered_and_spaces(env):
+    assert ENV_ID in gym.registry
+    assert gym.registry[ENV_ID].max_episode_steps is None
+    u = env.unwrapped
+    assert isinstance(u, ArmarWipeEnv)
+    assert env.action_space.dtype == np.float32
+    assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
+    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial")),)
+    space = env.observation_space
+    assert space.dtype == np.float32 and space.shape == (10,)
+    assert np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
+
+
+def test_gymnasium_and_sb3_checkers():
+    from gymnasium.utils.env_checker import check_env as gym_check
+    from stable_baselines3.common.env_checker import check_env as sb3_check
+
+    environment = gym.make(ENV_ID, **FAST)
+    gym_check(environment.unwrapped, skip_render_check=True)
+    sb3_check(environment.unwrapped, warn=True)
+    environment.close()
+
+
+def test_step_contract_and_reward_terms(env):
+    obs, info = env.reset(seed=3)
+    assert env.observation_space.contains(obs)
+    obs2, reward, terminated, truncated, info = env.step(zero(env))
+    assert terminated is True and truncated is False
+    assert type(reward) is float
+    assert np.array_equal(obs, obs2)
+    terms = info["reward_terms"]
+    assert tuple(terms) == TERMS
+    assert reward == sum(terms.values())
+    cost = info["cost_trace"]
+    assert cost.dtype == np.float64 and cost.shape == (env.unwrapped.n_steps,)
+    assert cost.sum() == pytest.approx(-reward, abs=1e-9)
+    assert 0.5 < reward < 1.5                                    # O(1)
+    for key in ("coverage", "force_mean", "force_in_band_fraction", "valid", "unstable", "params"):
+        assert key in info
+    assert info["valid"] is True and info["unstable"] is False
+    assert info["params"] == pytest.approx(env.unwrapped.action_map.theta0)
+
+
+def test_seeded_determinism_is_bit_identical(env):
+    action = np.random.default_rng(1).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    results = []
+    for _ in range(2):
+        obs, _ = env.reset(seed=11)
+        results.append((obs, *env.step(action)))
+    (o1, p1, r1, _, _, i1), (o2, p2, r2, _, _, i2) = results
+    assert np.array_equal(o1, o2) and np.array_equal(p1, p2) and r1 == r2
+    assert np.array_equal(i1["cost_trace"], i2["cost_trace"])
+    assert np.array_equal(i1["force_trace"], i2["force_trace"])
+    assert i1["reward_terms"] == i2["reward_terms"]
+    o3, _ = env.reset(seed=12)
+    assert not np.array_equal(o1, o3)
+
+
+def test_action_param_mapping(env):
+    u = env.unwrapped
+    env.reset(seed=0)
+    assert u.action_to_params(zero(env)) == pytest.approx(u.dmp.get_params(u.groups))
+    a = np.random.default_rng(2).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    assert u.params_to_action(u.action_to_params(a)) == pytest.approx(a, abs=1e-5)
+    weights = u.action_time_weights()
+    assert weights.shape == (u.n_steps, env.action_space.shape[0])
+    assert weights.min() >= 0.0 and weights.max() <= 1.0
+    # the transient weights act early, the periodic ones late
+    part = u.action_map.slices
+    early, late = slice(0, 20), slice(-20, None)
+    assert weights[early, part["transient:0"]].sum() > weights[early, part["periodic"]].sum()
+    assert weights[late, part["periodic"]].sum() > weights[late, part["transient:0"]].sum()
+
+
+def test_bad_actions_raise(env):
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        env.unwrapped.step(np.zeros(3, dtype=np.float32))
+    bad = zero(env)
+    bad[5] = np.nan
+    with pytest.raises(ValueError, match="action"):
+        env.unwrapped.step(bad)
+    with pytest.raises(ValueError, match="action"):
+        env.unwrapped.action_to_params(np.full(env.action_space.shape, np.inf))
+
+
+def test_invalid_parameters_get_a_graded_penalty_without_simulation():
+    environment = gym.make(ENV_ID, scales={"initial": 2.0}, **FAST)   # r0 scale 2 x r0: a = -1 gives r0 < 0
+    u = environment.unwrapped
+    environment.reset(seed=0)
+    index = u.action_map.r0_index[0]
+    rewards = []
+    for value in (-0.6, -0.9):
+        action = np.zeros(environment.action_space.shape, dtype=np.float32)
+        action[index] = value
+        _, reward, terminated, truncated, info = environment.step(action)
+        assert terminated is True and truncated is False
+        assert info["valid"] is False and info["invalid_reason"] == "r0"
+        assert info["steps"] == 0
+        assert reward == sum(info["reward_terms"].values()) and reward <= -1.0
+        assert info["cost_trace"].sum() == pytest.approx(-reward)
+        rewards.append(reward)
+    assert rewards[1] < rewards[0]                                   # graded: worse violation, lower reward
+    environment.close()
+
+
+def test_out_of_reach_paths_are_invalid(env):
+    u = env.unwrapped
+    env.reset(seed=0)
+    path = np.zeros((u.n_steps, 3))
+    path[:, 0] = 5.0                                                 # 5 m out: outside the workspace
+    reward, info = u.run_path(path)
+    assert info["valid"] is False and info["invalid_reason"] == "workspace"
+    assert reward == pytest.approx(-2.0)                              # severity capped at 1
+    # an IK that cannot meet its tolerance marks the path unreachable (graded by the residual)
+    strict = gym.make(ENV_ID, ik_tolerance=(1e-12, 1e-12), **FAST).unwrapped
+    strict.reset(seed=0)
+    reward, info = strict.run_path(strict.rollout_path(strict.action_map.theta0))
+    assert info["valid"] is False and info["invalid_reason"] == "unreachable"
+    assert -2.0 <= reward <= -1.0
+
+
+def test_reset_options(env):
+    obs, _ = env.reset(seed=0, options={"table_height": 0.01, "patch_centre": [0.02, -0.01],
+                                        "patch_size": [0.1, 0.08], "sponge_start": [-0.05, 0.1, 0.08]})
+    assert obs[0] == pytest.approx(0.01)
+    assert obs[3:5] == pytest.approx([0.02, -0.01])
+    assert obs[5:7] == pytest.approx([0.1, 0.08])
+    assert obs[7:] == pytest.approx([-0.05, 0.1, 0.08])
+    full = np.array([0, 0, 0, 0, 0, 0.12, 0.12, -0.07, 0.1, 0.08])
+    obs, _ = env.reset(seed=0, options={"context": full})
+    assert obs == pytest.approx(full)
+    with pytest.raises(ValueError, match="options"):
+        env.reset(options={"table_height": 0.5})
+    with pytest.raises(ValueError, match="options"):
+        env.reset(options={"nonsense": 1})
+    with pytest.raises(ValueError, match="options"):
+        env.reset(options={"patch_size": [0.1]})
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"style": 7}, "style"),
+    ({"groups": ("periodic", "anchor")}, "groups"),
+    ({"groups": ("bogus",)}, "groups"),
+    ({"scales": {"periodic": -1.0}}, "scales"),
+    ({"control_rate": 0.0}, "control_rate"),
+    ({"frame_skip": 0}, "frame_skip"),
+    ({"force_band": (30.0, 10.0)}, "force_band"),
+    ({"reward_weights": {"coverage": -1.0}}, "reward_weights"),
+    ({"reward_weights": {"typo": 1.0}}, "reward_weights"),
+    ({"render_mode": "depth_array"}, "render_mode"),
+    ({"xml_file": "/nonexistent.xml"}, "xml_file"),
+    ({"context_ranges": {"table_height": (0.0, 1.0)}}, "context_ranges"),
+])
+def test_bad_constructor_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ArmarWipeEnv(**FAST, **kwargs)
+
+
+def test_variants_frame_skip_xml_groups_demonstration():
+    u = gym.make(ENV_ID, frame_skip=10, **FAST).unwrapped
+    assert u.frame_skip == 10 and u.control_rate == pytest.approx(50.0)
+    default_xml = u.scene.xml_file
+    v = gym.make(ENV_ID, xml_file=default_xml, groups=("periodic",), control_rate=50.0, **FAST).unwrapped
+    assert v.frame_skip == 10
+    assert v.action_space.shape == (v.dmp.layout.size("periodic"),)
+    demo = wiping_demonstration(style=3, rng=5)
+    w = gym.make(ENV_ID, demonstration=demo, n_periodic=20, n_transient=20, **FAST).unwrapped
+    w.reset(seed=0)
+    _, reward, *_ = w.step(np.zeros(w.action_space.shape, dtype=np.float32))
+    assert reward > 0.5
+
+
+def test_render_and_record(tmp_path):
+    environment = gym.make(ENV_ID, render_mode="rgb_array", width=96, height=64, n_periods=0.3, frame_stride=20)
+    environment.reset(seed=0)
+    frame = environment.render()
+    assert frame.shape == (64, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
+    out = environment.unwrapped.record_episode(np.zeros(environment.action_space.shape, np.float32),
+                                               tmp_path / "episode.gif", fps=5)
+    assert out[2] is True
+    assert (tmp_path / "episode.gif").stat().st_size > 0
+    assert len(environment.unwrapped.frames) >= 2
+    environment.close()
+    environment.close()
