@@ -1,0 +1,136 @@
+"""Wiping behaviour in MuJoCo: coverage and force of the imitation, force adaptation, collisions, divergence."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from rdmp_gym.envs import ENV_ID
+from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from rdmp_gym.envs.ik import IKResult
+from rdmp_gym.envs.reward import RewardSettings, RewardWeights, wipe_reward
+from rdmp_gym.envs.wiping import DirtCells, simulate_wipe
+
+import rdmp_gym  # noqa: F401  (registers the env)
+
+NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
+           "sponge_start": [-0.07, 0.10, 0.08]}
+
+
+def run(env, options, action=None, seed=0):
+    env.reset(seed=seed, options=options)
+    if action is None:
+        action = np.zeros(env.action_space.shape, dtype=np.float32)
+    _, reward, _, _, info = env.step(action)
+    return reward, info
+
+
+@pytest.fixture(scope="module")
+def adaptive():
+    return gym.make(ENV_ID, n_periods=3.0)
+
+
+@pytest.fixture(scope="module")
+def rigid():
+    return gym.make(ENV_ID, n_periods=3.0, adaptation=False)
+
+
+def test_imitation_wipes_the_default_patch(adaptive):
+    reward, info = run(adaptive, NOMINAL)
+    assert info["valid"] and not info["unstable"]
+    assert info["coverage"] >= 0.8
+    assert info["force_in_band_fraction"] >= 0.8
+    assert 12.0 <= info["force_mean"] <= 25.0                    # near the 18 N target
+    assert info["contact_fraction"] >= 0.9
+    assert info["max_force"] < 1000.0 and info["max_wrist_force"] < 1000.0   # no kN forces
+    assert info["arm_collision_fraction"] == 0.0 and info["joint_limit_fraction"] == 0.0
+    assert 0.9 <= reward <= 1.3
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_imitation_wipes_patches_anywhere_in_the_context_range(adaptive, seed):
+    _, info = run(adaptive, {"patch_size": [0.12, 0.12]}, seed=seed)
+    assert info["valid"] and not info["unstable"]
+    assert info["coverage"] >= 0.8
+    assert info["force_in_band_fraction"] >= 0.75
+
+
+def test_lower_table_is_found_only_with_force_adaptation(adaptive, rigid):
+    lower = {**NOMINAL, "table_height": -0.03}
+    _, with_adaptation = run(adaptive, lower)
+    _, without = run(rigid, lower)
+    assert with_adaptation["coverage"] >= 0.8
+    assert with_adaptation["force_in_band_fraction"] >= 0.7
+    assert without["coverage"] < 0.1                              # 3 cm above the table: no contact
+    assert without["contact_fraction"] < 0.1
+
+
+def test_higher_table_is_pressed_with_the_target_force_only_with_adaptation(adaptive, rigid):
+    higher = {**NOMINAL, "table_height": 0.03}
+    r_adapt, with_adaptation = run(adaptive, higher)
+    r_rigid, without = run(rigid, higher)
+    assert with_adaptation["coverage"] >= 0.8
+    assert abs(with_adaptation["force_mean"] - 18.0) < 4.0
+    assert without["force_mean"] > 30.0                           # pressed 3 cm too deep
+    assert with_adaptation["force_error_mean"] < 0.5 * without["force_error_mean"]
+    assert r_adapt > r_rigid
+
+
+def test_tilted_table_is_followed_with_adaptation(adaptive, rigid):
+    tilted = {**NOMINAL, "table_tilt": [0.07, 0.0]}              # 4 degrees, right side up
+    r_adapt, with_adaptation = run(adaptive, tilted)
+    r_rigid, without = run(rigid, tilted)
+    assert with_adaptation["coverage"] >= 0.8
+    assert with_adaptation["force_in_band_fraction"] >= 0.8
+    assert with_adaptation["force_error_mean"] < without["force_error_mean"]
+    assert r_adapt > r_rigid
+
+
+def test_pressing_far_into_the_table_is_penalised_not_explosive(rigid):
+    u = rigid.unwrapped
+    rigid.reset(seed=0, options={**NOMINAL, "table_height": 0.04})   # 4 cm higher than assumed ...
+    path = u.rollout_path(u.action_map.theta0)
+    ramp = np.clip((u.times - u.times[u.periodic][0]) / 0.5, 0.0, 1.0)
+    path[u.periodic, 2] = -0.045 * ramp[u.periodic]              # ... and 4.5 cm into it: 8.5 cm deep
+    reward, info = u.run_path(path)
+    assert info["valid"] and not info["unstable"]
+    assert info["force_mean"] > 60.0                              # the compliant arm gives way ...
+    assert info["max_force"] < 1000.0                             # ... no kN spikes
+    assert info["reward_terms"]["excess_force"] < 0.0
+    assert reward == sum(info["reward_terms"].values()) and reward < 0.5
+
+
+def test_arm_contact_with_the_table_is_detected_and_penalised(adaptive):
+    u = adaptive.unwrapped
+    adaptive.reset(seed=0, options=NOMINAL)
+    scene = u.scene
+    q = np.tile(scene.arm_qpos(), (150, 1))
+    q[:, 0] += np.linspace(0.0, -0.7, 150)                         # lean the torso forward onto the table
+    solution = IKResult(q=q, normal_dq=np.zeros_like(q), pos_error=np.zeros(150), rot_error=np.zeros(150))
+    plan = JointTargetPlan(solution, u.dt, np.zeros(10), scene.joint_lower, scene.joint_upper)
+    adaptation = ForceAdaptation(ForceAdaptationSettings(enabled=False), u.dt)
+    trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, DirtCells(u._cells_world), u.frame_skip)
+    assert not trace.unstable
+    assert trace.arm_contact[:50].sum() == 0 and trace.arm_contact[-20:].mean() > 0.8   # the palm hits the table
+    terms, cost = wipe_reward(trace, np.ones(150, dtype=bool), len(u._cells_world), RewardSettings(),
+                              RewardWeights())
+    assert terms["arm_collision"] == pytest.approx(-trace.arm_contact.mean())
+    assert cost.sum() == pytest.approx(-sum(terms.values()))
+
+
+def test_diverging_simulation_ends_with_a_flag_and_penalty():
+    env = gym.make(ENV_ID, n_periods=1.0)
+    u = env.unwrapped
+    env.reset(seed=0)
+    damping = u.scene.model.dof_damping.copy()
+    u.scene.model.dof_damping[u.scene.dof_adr] = -500.0           # an unstable model
+    _, reward, terminated, truncated, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    assert terminated is True and truncated is False
+    assert info["unstable"] is True and info["valid"] is True
+    assert info["steps"] < u.n_steps
+    assert np.isfinite(reward) and reward == sum(info["reward_terms"].values())
+    assert info["reward_terms"]["unstable"] == -1.0
+    assert np.all(np.isfinite(info["cost_trace"])) and info["cost_trace"].sum() == pytest.approx(-reward)
+    # the next episode starts from a clean state
+    u.scene.model.dof_damping[:] = damping
+    env.reset(seed=0)
+    _, reward, *_ , info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    assert info["unstable"] is False and reward > 0.5
