@@ -39,7 +39,7 @@ _REQUIRED = {
     mujoco.mjtObj.mjOBJ_BODY: ("table", "hand", "sponge"),
     mujoco.mjtObj.mjOBJ_GEOM: ("sponge", "table_top"),
     mujoco.mjtObj.mjOBJ_SITE: ("ft_site", "sponge_tcp", "tcp"),
-    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch"),
+    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch", "sponge_table", "robot_table"),
     mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide"),
 }
 
@@ -135,6 +135,13 @@ class WipeScene:
         sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_torque")
         self.torque_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
         self.touch_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_touch")])
+        # MuJoCo contact sensors, evaluated in C at every step: sponge-table (found, net force [3],
+        # world frame) and robot-subtree-table (found).
+        self.sponge_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")])
+        self.robot_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "robot_table")])
+        if m.sensor_dim[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")] != 4:
+            raise ValueError("xml_file: sensor 'sponge_table' must be a contact sensor with data=\"found force\" "
+                             "and reduce=\"netforce\"")
         # Robot = every body on the platform's subtree; arm-collision geoms = robot geoms but the sponge.
         root = idx(mujoco.mjtObj.mjOBJ_BODY, "platform")
         robot_bodies = {b for b in range(m.nbody) if self._descends(b, root)} if root >= 0 else set()

@@ -369,7 +369,7 @@ class ArmarWipeEnv(gym.Env):
         plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper)
         self.scene.set_arm_state(solution.q[0])
         adaptation = ForceAdaptation(self.adaptation_settings, self.dt)
-        dirt = DirtCells(self._cells_world, self.force_band)
+        dirt = DirtCells(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], self.force_band)
         callback = self._capture if self.record_frames else None
         self._wiped = np.zeros(len(self._cells_world), dtype=bool)
         if callback is not None:

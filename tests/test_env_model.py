@@ -34,7 +34,11 @@ def test_counts_and_options(scene):
     m = scene.model
     assert m.nu == 10 and m.njnt == 11 and m.nq == 11      # 10 hinges + the sponge slide
     assert [m.joint(j).name for j in scene.joint_ids] == list(ARM_JOINTS)
-    assert m.nsensor == 3 and m.nsensordata == 7             # force(3), torque(3), touch(1)
+    # wrist force(3), torque(3), sponge touch(1), contact sensors sponge-table (found, force 3), robot-table (found)
+    assert m.nsensor == 5 and m.nsensordata == 12
+    assert [m.sensor(i).name for i in range(m.nsensor)] == ["wrist_force", "wrist_torque", "sponge_touch",
+                                                            "sponge_table", "robot_table"]
+    assert m.sensor("wrist_force").objid[0] == m.site("ft_site").id
     assert m.opt.timestep == pytest.approx(0.002)
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     assert m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC

@@ -7,7 +7,7 @@ from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, wipe_reward
-from rdmp_gym.envs.wiping import DirtCells, simulate_wipe
+from rdmp_gym.envs.wiping import DirtCells, contact_summary, simulate_wipe
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
@@ -107,13 +107,44 @@ def test_arm_contact_with_the_table_is_detected_and_penalised(adaptive):
     solution = IKResult(q=q, normal_dq=np.zeros_like(q), pos_error=np.zeros(150), rot_error=np.zeros(150))
     plan = JointTargetPlan(solution, u.dt, np.zeros(10), scene.joint_lower, scene.joint_upper)
     adaptation = ForceAdaptation(ForceAdaptationSettings(enabled=False), u.dt)
-    trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, DirtCells(u._cells_world), u.frame_skip)
+    dirt = DirtCells(u._cells_world, np.array([0.0, 0.0, 1.0]))
+    trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, dirt, u.frame_skip)
     assert not trace.unstable
     assert trace.arm_contact[:50].sum() == 0 and trace.arm_contact[-20:].mean() > 0.8   # the palm hits the table
     terms, cost = wipe_reward(trace, np.ones(150, dtype=bool), len(u._cells_world), RewardSettings(),
                               RewardWeights())
     assert terms["arm_collision"] == pytest.approx(-trace.arm_contact.mean())
     assert cost.sum() == pytest.approx(-sum(terms.values()))
+
+
+def test_contact_sensor_force_and_coverage_match_the_contact_list(adaptive):
+    """The sponge-table force (contact sensor) equals the sum of mj_contactForce over data.contact, and
+    the coverage evaluated after the episode equals the one tracked online during it."""
+    u = adaptive.unwrapped
+    adaptive.reset(seed=4, options={**NOMINAL, "table_tilt": [0.05, -0.03]})
+    scene = u.scene
+    normal = scene.table_frame(actual=True)[1][:, 2]
+    adr = scene.sponge_contact_adr
+    seen = {"pairs": [], "wiped": None}
+
+    def check(k, wiped):
+        reference, _ = contact_summary(scene, normal)
+        sensor = abs(float(scene.data.sensordata[adr + 1:adr + 4] @ normal))
+        seen["pairs"].append((reference, sensor))
+        seen["wiped"] = wiped.copy()
+
+    solution = u._solve(u.rollout_path(u.action_map.theta0))
+    plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper)
+    scene.set_arm_state(solution.q[0])
+    adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
+    trace = simulate_wipe(scene, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
+                          DirtCells(u._cells_world, normal), u.frame_skip, callback=check)
+    pairs = np.array(seen["pairs"])
+    assert pairs[:, 0].max() > 10.0
+    assert pairs[:, 1] == pytest.approx(pairs[:, 0], abs=1e-9)
+    assert trace.contact_force == pytest.approx(pairs[:, 1], abs=1e-9)
+    assert np.array_equal(seen["wiped"], trace.wiped) and trace.wiped.mean() > 0.8
+    assert trace.new_cells.sum() == trace.wiped.sum()
 
 
 def test_diverging_simulation_ends_with_a_flag_and_penalty():
