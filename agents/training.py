@@ -33,7 +33,7 @@ logger = logging.getLogger(__name__)
 
 AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig}
 AGENTS = tuple(AGENT_CONFIGS)
-START_MODES = ("imitation", "perturbed")
+START_MODES = ("imitation", "perturbed", "shrunk")
 _SEED_LIMIT = 2**31 - 1
 
 
@@ -51,8 +51,10 @@ class TrainConfig:
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
         options: the agent's settings (fields of ``PI2Config``, ``PIBBConfig``, ``CMAESConfig``, ``PPOConfig``).
-        start: ``imitation`` (the fitted DMP) or ``perturbed`` (imitation plus Gaussian noise).
-        perturbation: standard deviation of the perturbed start, in action units.
+        start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
+            ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
+            a smaller, damped movement; the initial conditions as fitted).
+        perturbation: size of the perturbed or shrunk start.
         demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
         eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
         shared_context: all rollouts of one update use the same reset seed (same context).
@@ -189,11 +191,21 @@ def _seed_streams(seed: int) -> dict[str, np.random.Generator]:
 
 
 def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Generator) -> np.ndarray:
-    """``[n]`` the start: the imitation (``a = 0``) or the imitation plus Gaussian noise, clipped."""
+    """``[n]`` the start (see ``TrainConfig.start``), clipped to the action box."""
     action = np.zeros(evaluator.n_actions)
     if config.start == "perturbed":
-        action = np.clip(action + config.perturbation * rng.standard_normal(action.size), -1.0, 1.0)
-    return action
+        action = config.perturbation * rng.standard_normal(action.size)
+    elif config.start == "shrunk":
+        base = evaluator.env.unwrapped
+        theta = base.action_to_params(action)
+        for name, part in base.dmp.param_slices(base.groups).items():
+            if not name.startswith("initial"):
+                theta[part] *= 1.0 - config.perturbation
+        action = np.asarray(base.params_to_action(theta), dtype=np.float64)
+    clipped = float(np.mean(np.abs(action) > 1.0))
+    if clipped:
+        logger.info("start: %.0f%% of the start action lies outside [-1, 1] and is clipped", 100 * clipped)
+    return np.clip(action, -1.0, 1.0)
 
 
 def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np.random.Generator],
@@ -212,7 +224,8 @@ def _resolve_config(config: TrainConfig | None, run: RunDirectory, resume: bool)
     if not resume:
         if config is None:
             raise ValueError("config: required for a new run")
-        run.create(config.to_dict())
+        if run.config_path.exists():
+            raise FileExistsError(f"out: {run.path} already holds a run; pass --resume or choose another --out")
         return config
     saved = TrainConfig.from_dict(run.read_config())
     if config is None:
@@ -246,6 +259,8 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, 
         observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                  for s in eval_seeds])
         agent = _make_agent(config, evaluator, streams, initial)
+        if not resume:
+            run.create(config.to_dict())
         try:
             _loop(config, run, agent, evaluator, eval_seeds, observations, resume, progress)
         finally:
