@@ -23,13 +23,13 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import gymnasium as gym  # noqa: E402
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
+import gymnasium as gym
+import mujoco
+import numpy as np
+from rdmp_gym.envs import ENV_ID
+from rdmp_gym.envs.controller import JointTargetPlan
 
-import rdmp_gym  # noqa: E402,F401  (registers the env)
-from rdmp_gym.envs import ENV_ID  # noqa: E402
-from rdmp_gym.envs.controller import JointTargetPlan  # noqa: E402
+import rdmp_gym  # noqa: F401  (registers the env)
 
 RESULTS = Path(__file__).resolve().parent / "results" / "env.json"
 
@@ -55,7 +55,7 @@ def episode_parts(u, options: dict) -> dict[str, float]:
     t1 = time.perf_counter()
     solution = u._solve(path)
     t2 = time.perf_counter()
-    reward, info = u.run_path(path)            # IK again + simulation + reward
+    u.run_path(path)                           # IK again + simulation + reward
     t3 = time.perf_counter()
     return {"dmp_rollout_s": t1 - t0, "path_ik_s": t2 - t1, "simulate_and_reward_s": (t3 - t2) - (t2 - t1),
             "_solution": solution}
