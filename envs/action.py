@@ -18,6 +18,8 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
+from rdmp_gym import RhythmicDMP
+
 __all__ = ["DEFAULT_SCALES", "ActionMap"]
 
 #: Default fractions. Chosen so that a uniformly random action stays a plausible wiping motion: with
@@ -30,12 +32,12 @@ class ActionMap:
     """Affine action <-> parameter map for one DMP and one group selection.
 
     Args:
-        dmp: the imitation DMP (``rdmp_gym.RhythmicDMP``).
+        dmp: the imitation DMP.
         groups: parameter groups in the action (``periodic``, ``transient[:k]``, ``initial[:k]``).
         scales: ``{group: frac}`` overrides of :data:`DEFAULT_SCALES` (short or full group names).
     """
 
-    def __init__(self, dmp, groups: Iterable[str] | str, scales: Mapping[str, float] | None = None):
+    def __init__(self, dmp: RhythmicDMP, groups: Iterable[str] | str, scales: Mapping[str, float] | None = None):
         groups = (groups,) if isinstance(groups, str) else tuple(groups)
         names = dmp.layout.resolve(groups)
         if "anchor" in names:

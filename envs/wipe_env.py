@@ -273,7 +273,8 @@ class ArmarWipeEnv(gym.Env):
         return self._observation(), {"context": context.vector()}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
-        """Run one whole wiping episode with the DMP parameters of ``action``."""
+        """Run one whole wiping episode with the DMP parameters of ``action`` ``[n]`` (clipped to [-1, 1];
+        NaN, infinite values or a wrong shape raise ValueError). Always ``terminated=True, truncated=False``."""
         if self.context is None:
             raise RuntimeError("call reset() before step()")
         a = self._check_action(action)

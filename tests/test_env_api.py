@@ -207,3 +207,8 @@ def test_render_and_record(tmp_path):
     assert len(environment.unwrapped.frames) >= 2
     environment.close()
     environment.close()
+    recorder = gym.make(ENV_ID, record_frames=True, width=48, height=48, n_periods=0.3, frame_stride=25).unwrapped
+    recorder.reset(seed=1)
+    recorder.step(np.zeros(recorder.action_space.shape, np.float32))
+    assert len(recorder.frames) == 1 + recorder.n_steps // 25 and recorder.frames[0].shape == (48, 48, 3)
+    recorder.close()
