@@ -29,8 +29,8 @@ class IKResult:
     Attributes:
         q: joint positions, [T, n] (radians).
         normal_dq: joint motion per metre of sponge motion along the table normal, [T, n].
-        pos_error: position error norm per point before the last update, [T] (metres; an upper bound).
-        rot_error: angle between the sponge normal and the target normal before the last update, [T] (rad).
+        pos_error: remaining position error norm per point, [T] (metres).
+        rot_error: remaining angle between the sponge normal and the target normal per point, [T] (rad).
     """
 
     q: np.ndarray
@@ -174,12 +174,9 @@ class PathIK:
             q = np.stack([np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
             blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
                                axis=1) > 0.5
-        if fine_iterations < 1:
-            _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, blocked)
         for _ in range(fine_iterations):
-            # The residuals and Jacobian terms are those of the configuration *before* this last
-            # update: the reported errors are upper bounds of the returned solution's.
-            q, pos_err, rot_err, jw, a, blocked = self._step(q, targets, normal, basis, rot_weight, True, blocked)
+            q, *_, blocked = self._step(q, targets, normal, basis, rot_weight, True, blocked)
+        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, blocked)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])
