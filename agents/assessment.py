@@ -13,6 +13,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from tqdm.auto import tqdm
 
@@ -23,7 +24,7 @@ from .plots import plot_evaluation
 from .runs import RunDirectory
 from .training import TrainConfig
 
-__all__ = ["POLICIES", "evaluate_run"]
+__all__ = ["POLICIES", "evaluate_run", "record_best_episode"]
 
 logger = logging.getLogger(__name__)
 
@@ -44,6 +45,30 @@ def _trained_actions(run: RunDirectory, config: TrainConfig, policy: str, observ
         actions, _ = model.predict(observations.astype(np.float32), deterministic=True)
         return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
     return np.repeat(np.asarray(state["agent"]["learner"]["mean"])[None], len(observations), axis=0)
+
+
+def _record(env: gym.Env, options: dict[str, Any] | None, action: np.ndarray, seed: int, folder: Path) -> Path:
+    """Re-run one episode with the env's ``record_episode`` and write ``folder / best_episode.mp4``."""
+    if not hasattr(env.unwrapped, "record_episode"):
+        raise ValueError(f"video: {env.spec.id if env.spec else env} has no recording API (record_episode)")
+    env.reset(seed=seed, options=options)
+    target = folder / "best_episode.mp4"
+    env.unwrapped.record_episode(np.asarray(action, dtype=np.float32), target)
+    logger.info("wrote %s", target)
+    return target
+
+
+def record_best_episode(path: str | Path) -> Path:
+    """Record the run's best policy (``best_params.npy``) in the first evaluation context of training,
+    as ``best_episode.mp4`` in the run directory."""
+    run = RunDirectory(path)
+    config = TrainConfig.from_dict(run.read_config())
+    seed = int(json.loads(run.best_json.read_text())["eval_seed"])
+    env = config.task.make()
+    try:
+        return _record(env, config.task.options(), run.load_best(), seed, run.path)
+    finally:
+        env.close()
 
 
 def _run_chunks(evaluator: Evaluator, actions: np.ndarray, seeds: np.ndarray, bar: tqdm) -> EpisodeBatch:
@@ -94,8 +119,6 @@ def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, wor
     seeds = np.random.default_rng(seed).integers(2**31 - 1, size=episodes)
     with Evaluator(spec, workers) as evaluator:
         env = evaluator.env
-        if video and not hasattr(env.unwrapped, "record_episode"):
-            raise ValueError(f"video: {config.env_id} has no recording API (record_episode)")
         observations = np.stack([env.reset(seed=int(s), options=spec.options())[0] for s in seeds])
         trained = _trained_actions(run, config, policy, observations)
         imitation = np.zeros_like(trained)
@@ -110,11 +133,7 @@ def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, wor
                   "seeds": seeds.tolist(), **{name: _summary(batch) for name, batch in batches.items()}}
         if video:
             best = int(np.argmax(batches["trained"].returns))
-            env.reset(seed=int(seeds[best]), options=spec.options())
-            target = run.path / "best_episode.mp4"
-            base.record_episode(trained[best].astype(np.float32), target)
-            result["video"] = str(target)
-            logger.info("wrote %s", target)
+            result["video"] = str(_record(env, spec.options(), trained[best], int(seeds[best]), run.path))
     metrics = {name: {key: value for key, value in (("return", result[name]["return_mean"]),
                                                     ("coverage", result[name]["coverage_mean"]),
                                                     ("force in band", result[name]["force_in_band_mean"]))

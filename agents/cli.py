@@ -67,7 +67,8 @@ def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return kwargs
 
 
-def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool) -> None:
+def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool, eval_episodes: int
+                            ) -> None:
     from .training import AGENTS, START_MODES
 
     if agent:
@@ -81,7 +82,8 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
                         help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
     parser.add_argument("--perturbation", type=float, default=0.3, help="std of the perturbed start")
-    parser.add_argument("--eval-episodes", type=int, default=1, help="policy evaluation episodes per update")
+    parser.add_argument("--eval-episodes", type=int, default=eval_episodes,
+                        help="policy evaluation episodes (fixed contexts) per update (default %(default)s)")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
     _add_task_arguments(parser)
 
@@ -120,6 +122,10 @@ def _command_train(args: argparse.Namespace) -> None:
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
           f"best policy return {last['best_eval_return']:.4g}")
+    if args.video:
+        from .assessment import record_best_episode
+
+        print(f"wrote {record_best_episode(run.path)}")
 
 
 def _command_evaluate(args: argparse.Namespace) -> None:
@@ -184,7 +190,8 @@ def _parser() -> argparse.ArgumentParser:
 
     train = commands.add_parser("train", help="train an agent (pi2, pibb, cmaes, ppo)")
     train.add_argument("--out", required=True, help="run directory")
-    _add_training_arguments(train, updates=30, agent=True)
+    train.add_argument("--video", action="store_true", help="record the best policy's episode (best_episode.mp4)")
+    _add_training_arguments(train, updates=30, agent=True, eval_episodes=1)
     train.set_defaults(handler=_command_train)
 
     evaluate = commands.add_parser("evaluate", help="evaluate a run against the imitation")
@@ -210,7 +217,7 @@ def _parser() -> argparse.ArgumentParser:
     job.add_argument("--out", default="runs/main", help="output directory (default %(default)s)")
     job.add_argument("--episodes", type=int, default=6, help="evaluation episodes (default %(default)s)")
     job.add_argument("--video", action="store_true", help="record the best evaluation episode")
-    _add_training_arguments(job, updates=12, agent=False)
+    _add_training_arguments(job, updates=15, agent=False, eval_episodes=4)
     job.set_defaults(handler=_command_main)
     return parser
 

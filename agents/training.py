@@ -293,7 +293,8 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
         if batch is not None:
             record.update(batch_summary(batch, ""))
         if best is None or record["eval_return_mean"] > best["eval_return_mean"]:
-            best = {**{k: v for k, v in record.items() if k.startswith("eval_")}, "update": update}
+            best = {**{k: v for k, v in record.items() if k.startswith("eval_")}, "update": update,
+                    "eval_seed": int(eval_seeds[0])}
             params = evaluator.env.unwrapped.action_to_params(actions[0])
             run.save_best(actions[0], params, best)
         record["best_eval_return"] = best["eval_return_mean"]
