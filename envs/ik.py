@@ -133,7 +133,7 @@ class PathIK:
     def solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None = None,
               q_init: np.ndarray | None = None,
               stride: int = 10, coarse_iterations: int = 60, fine_iterations: int = 1,
-              min_iterations: int = 10) -> IKResult:
+              min_iterations: int = 6) -> IKResult:
         """Solve the IK for a path.
 
         Args:
