@@ -29,6 +29,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym.fitting import FIT_METHODS
 
 from .action import ActionMap
 from .context import SIZE as CONTEXT_SIZE
@@ -138,6 +139,8 @@ class ArmarWipeEnv(gym.Env):
         self.render_mode = render_mode
 
         # --- the DMP and the action map
+        if fit_method not in FIT_METHODS:
+            raise ValueError(f"fit_method: expected one of {FIT_METHODS}, got {fit_method!r}")
         if demonstration is not None:
             if not isinstance(demonstration, Demonstration):
                 raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
@@ -196,6 +199,8 @@ class ArmarWipeEnv(gym.Env):
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
         self.cell_size = _positive(cell_size, "cell_size")
         self.limit_margin = float(limit_margin)
+        if not (np.isfinite(self.limit_margin) and self.limit_margin >= 0):
+            raise ValueError(f"limit_margin: expected a number >= 0, got {limit_margin!r}")
         if len(ik_tolerance) != 2:
             raise ValueError("ik_tolerance: expected (position m, angle rad)")
         self.ik_tolerance = (_positive(ik_tolerance[0], "ik_tolerance"), _positive(ik_tolerance[1], "ik_tolerance"))
@@ -231,7 +236,8 @@ class ArmarWipeEnv(gym.Env):
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
-        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[P]``."""
+        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[P]`` (clipped to
+        [-1, 1] as in :meth:`step`; NaN or a wrong shape raise ValueError)."""
         return self.action_map.to_params(self._check_action(action))
 
     def params_to_action(self, theta: np.ndarray) -> np.ndarray:

@@ -164,6 +164,9 @@ def test_reset_options(env):
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"style": 7}, "style"),
+    ({"fit_method": "magic"}, "fit_method"),
+    ({"limit_margin": -0.1}, "limit_margin"),
+    ({"duration": 0.5}, "duration"),
     ({"groups": ("periodic", "anchor")}, "groups"),
     ({"groups": ("bogus",)}, "groups"),
     ({"scales": {"periodic": -1.0}}, "scales"),
