@@ -159,7 +159,6 @@ class ArmarWipeEnv(gym.Env):
         # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
         # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
         self._anchor_z = float(self.dmp.anchor[2])
-        self._start_offset = self.dmp.starts[0] - self.dmp.anchor
 
         # --- the scene, timing and control
         self.scene = WipeScene(xml_file)
@@ -182,8 +181,6 @@ class ArmarWipeEnv(gym.Env):
         self.n_steps = max(2, round(duration / self.dt))
         self.times = np.arange(self.n_steps) * self.dt
         self.periodic = self.times >= transient
-        s = np.clip(self.times / transient, 0.0, 1.0)
-        self._fade = 1.0 - s**3 * (10.0 - 15.0 * s + 6.0 * s**2)   # 1 -> 0, minimum jerk
         if not self.periodic.any():
             raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
 
@@ -319,21 +316,16 @@ class ArmarWipeEnv(gym.Env):
     def rollout_path(self, theta: np.ndarray) -> np.ndarray:
         """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in this episode's context.
 
-        The DMP is anchored at the patch centre. Its transformation systems are stiff (deviations from
-        the demonstrated path decay within ~0.1 s), so starting the DMP itself at an arbitrary sponge
-        position would make the sponge jump towards the demonstrated start. Instead the DMP starts
-        where the demonstration started relative to its anchor, and the offset to the actual sponge
-        start is added and faded out with a minimum-jerk profile over the demonstrated transient:
-        ``P(0)`` is the sponge start, the path is smooth, and from the end of the transient on it is
-        the DMP's own.
+        The DMP is anchored at the patch centre and starts at the sponge start with ``start_blend``:
+        the offset from the demonstrated start (relative to the anchor) is faded out over the
+        transient, so the path starts where the sponge is, keeps the demonstrated approach's shape
+        and is the DMP's own periodic pattern from the end of the transient on.
         """
         if self.context is None:
             raise RuntimeError("call reset() before rollout_path()")
         anchor = np.array([*self.context.patch_centre, self._anchor_z])
-        dmp_start = anchor + self._start_offset
-        path = self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
-                                      y0=dmp_start, anchor=anchor)[0]
-        return path + np.outer(self._fade, self.context.sponge_start - dmp_start)
+        return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
+                                      y0=self.context.sponge_start, anchor=anchor, start_blend=True)[0]
 
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,

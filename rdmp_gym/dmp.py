@@ -46,6 +46,13 @@ class TransientStart:
     start_velocity: np.ndarray
 
 
+def start_fade(elapsed: np.ndarray, length: float) -> np.ndarray:
+    """Weight ``[T]`` of the start offset under ``start_blend``: 1 at the start, 0 from ``length`` on
+    (a minimum-jerk profile, C2)."""
+    u = np.clip(elapsed / length, 0.0, 1.0)
+    return 1.0 - u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+
+
 @lru_cache(maxsize=64)
 def _transformation(omega: float, dt: float, alpha_z: float) -> TransformationSystem:
     return TransformationSystem(omega, dt, alpha_z)
@@ -228,10 +235,12 @@ class RhythmicDMP:
         return np.broadcast_to(array, (batch, self.n_dims))
 
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
-                  y0: np.ndarray, yd0: np.ndarray, tempo: float, transform: np.ndarray | None
+                  y0: np.ndarray, yd0: np.ndarray, tempo: float, transform: np.ndarray | None,
+                  start_offset: np.ndarray | None = None, fade_length: float = 1.0
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
-        anchors/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``."""
+        anchors/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. A ``start_offset [B, d]``
+        moves the anchor at the start and fades out over ``fade_length`` seconds (``start_blend``)."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -244,15 +253,32 @@ class RhythmicDMP:
             forcing[members] = self.basis.normalized(phi, r) @ weights[members].transpose(0, 2, 1)
         if transform is not None:
             forcing = forcing @ transform.T
+        if start_offset is not None:
+            anchors = anchors[:, None, :] + start_fade(elapsed, fade_length)[:, None] * start_offset[:, None, :]
         omega = canonical.omega * tempo
         system = _transformation(omega, dt, self.alpha_z)
         y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
         return y, z * omega
 
+    def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, start_blend: bool,
+               transform: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Initial ``(y0, yd0)`` ``[B, d]`` of transient k for anchors ``[B, d]`` (defaults: its demonstration's
+        start, transformed) and, under ``start_blend``, the offset of ``y0`` from the demonstrated start
+        carried along with the anchor, ``anchor + M (start - g)``."""
+        start = self.transients[k]
+        relative_start = start.start - self.anchor
+        default_yd0 = start.start_velocity * tempo / self.canonical.tempo
+        if transform is not None:   # the whole demonstrated movement is transformed about the fitted anchor
+            relative_start, default_yd0 = transform @ relative_start, transform @ default_yd0
+        batch = anchors.shape[0]
+        y0 = self._vector(y0, self.anchor + relative_start, "y0", batch)
+        offset = y0 - (anchors + relative_start) if start_blend else None
+        return y0, self._vector(yd0, default_yd0, "yd0", batch), offset
+
     def rollout(self, t: np.ndarray, transient: int = 0, y0: np.ndarray | None = None,
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
                 scale: float | np.ndarray = 1.0, rotation: float | np.ndarray | None = None,
-                tempo: float | None = None, return_velocity: bool = False
+                tempo: float | None = None, start_blend: bool = False, return_velocity: bool = False
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Reproduce the movement: transient ``transient`` from its own initial condition, then the cycle.
 
@@ -267,6 +293,12 @@ class RhythmicDMP:
                 ``M = R diag(scale)``: the default start becomes ``g + M (start - g)`` (g: the fitted anchor);
                 the result is exact, and exact on the periodic part for any explicit ``y0``.
             tempo: speed factor (default: the canonical system's; 0.5 = half speed).
+            start_blend: for a ``y0`` away from the demonstrated start (carried along with the anchor,
+                ``anchor + M (start - g)``): shift the anchor by the offset at the start and fade the shift
+                out over the transient (minimum jerk), so the movement starts at ``y0``, keeps the
+                demonstrated transient's shape and joins the pattern smoothly. Without it the stiff
+                spring closes the gap within about ``4 / (alpha_z Omega)`` seconds. The periodic part
+                is the same either way.
             return_velocity: also return velocities.
         Returns:
             positions ``[T, d]`` (and velocities ``[T, d]``).
@@ -275,27 +307,24 @@ class RhythmicDMP:
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
         start = self.transients[k]
         transform = _transform_matrix(self.n_dims, scale, rotation)
-        default_y0, default_yd0 = start.start, start.start_velocity * tempo / self.canonical.tempo
-        if transform is not None:   # the whole demonstrated movement is transformed about the fitted anchor
-            default_y0 = self.anchor + transform @ (start.start - self.anchor)
-            default_yd0 = transform @ default_yd0
-        y0 = self._vector(y0, default_y0, "y0", 1)
-        yd0 = self._vector(yd0, default_yd0, "yd0", 1)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend, transform)
         inits = np.array([[start.phi0, start.r0]])
-        y, yd = self._simulate(t, self.weights[None], inits, anchors, y0, yd0, tempo, transform)
+        y, yd = self._simulate(t, self.weights[None], inits, anchors, y0, yd0, tempo, transform,
+                               offset, start.length / tempo)
         return (y[0], yd[0]) if return_velocity else y[0]
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
                       transient: int = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
-                      anchor: np.ndarray | None = None, tempo: float | None = None) -> np.ndarray:
+                      anchor: np.ndarray | None = None, tempo: float | None = None,
+                      start_blend: bool = False) -> np.ndarray:
         """Roll out B parameter vectors at once (the selected ``groups`` of each; the rest as fitted).
 
         Args:
             thetas: ``[B, P]`` parameter vectors, P = ``self.layout.size(groups)``.
             t: ``[T]`` evenly spaced times.
             groups: which parameter groups ``thetas`` holds (see :mod:`rdmp_gym.parameters`).
-            transient, y0, yd0, anchor, tempo: as in :meth:`rollout`; y0/yd0/anchor may be ``[B, d]``.
+            transient, y0, yd0, anchor, tempo, start_blend: as in :meth:`rollout`; y0/yd0/anchor may be ``[B, d]``.
         Returns:
             ``[B, T, d]`` positions.
         """
@@ -308,22 +337,21 @@ class RhythmicDMP:
                 raise ValueError("anchor: given both as an argument and in thetas (group 'anchor')")
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
-        start = self.transients[k]
-        y0 = self._vector(y0, start.start, "y0", batch)
-        yd0 = self._vector(yd0, start.start_velocity * tempo / self.canonical.tempo, "yd0", batch)
-        return self._simulate(t, weights, inits[:, k], anchors, y0, yd0, tempo, None)[0]
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend)
+        return self._simulate(t, weights, inits[:, k], anchors, y0, yd0, tempo, None,
+                              offset, self.transients[k].length / tempo)[0]
 
     def start(self, dt: float, transient: int = 0, y0: np.ndarray | None = None,
               yd0: np.ndarray | None = None, anchor: np.ndarray | None = None,
-              tempo: float | None = None) -> DMPStepper:
-        """An online integrator that advances by ``dt`` per :meth:`DMPStepper.step` (for feedback)."""
+              tempo: float | None = None, start_blend: bool = False) -> DMPStepper:
+        """An online integrator that advances by ``dt`` per :meth:`DMPStepper.step` (for feedback);
+        arguments as in :meth:`rollout`."""
         k = self._check_transient(transient)
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
-        start = self.transients[k]
-        return DMPStepper(self, check_positive(dt, "dt"), k,
-                          self._vector(y0, start.start, "y0", 1)[0].copy(),
-                          self._vector(yd0, start.start_velocity * tempo / self.canonical.tempo, "yd0", 1)[0].copy(),
-                          self._vector(anchor, self.anchor, "anchor", 1)[0].copy(), tempo)
+        anchors = self._vector(anchor, self.anchor, "anchor", 1)
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend)
+        return DMPStepper(self, check_positive(dt, "dt"), k, y0[0].copy(), yd0[0].copy(), anchors[0].copy(), tempo,
+                          None if offset is None else offset[0])
 
     def forcing(self, t: np.ndarray, transient: int = 0) -> np.ndarray:
         """The forcing term f along transient ``transient``'s canonical path, ``[T, d]`` (t from the start)."""
@@ -442,8 +470,10 @@ class DMPStepper:
     """
 
     def __init__(self, dmp: RhythmicDMP, dt: float, transient: int, y0: np.ndarray, yd0: np.ndarray,
-                 anchor: np.ndarray, tempo: float) -> None:
+                 anchor: np.ndarray, tempo: float, start_offset: np.ndarray | None = None) -> None:
         self.dmp, self.dt, self.transient, self.anchor = dmp, dt, transient, anchor
+        self.start_offset = np.zeros_like(anchor) if start_offset is None else start_offset
+        self.fade_length = dmp.transients[transient].length / tempo
         self.canonical = replace(dmp.canonical, tempo=tempo)
         self.omega = self.canonical.omega * tempo
         self.system = _transformation(self.omega, dt, dmp.alpha_z)
@@ -456,6 +486,10 @@ class DMPStepper:
         phi, r = self.canonical.state(np.array([time]), start.phi0, start.r0)
         return (self.dmp.basis.normalized(phi, r) @ self.dmp.weights.T)[0]
 
+    def _anchor_term(self, time: float) -> np.ndarray:
+        fade = start_fade(np.array([time]), self.fade_length)[0]
+        return self.dmp.alpha_z * self.system.beta_z * (self.anchor + fade * self.start_offset)
+
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Current ``(y [d], yd [d])`` (copies)."""
@@ -467,9 +501,8 @@ class DMPStepper:
         if c.size != self.dmp.n_dims:
             raise ValueError(f"coupling: expected {self.dmp.n_dims} values, got {c.size}")
         forcing_next = self._forcing_at(self.time + self.dt)
-        anchor_term = self.dmp.alpha_z * self.system.beta_z * self.anchor
-        u_now = self.omega * (anchor_term + self._forcing_now + c)
-        u_next = self.omega * (anchor_term + forcing_next + c)
+        u_now = self.omega * (self._anchor_term(self.time) + self._forcing_now + c)
+        u_next = self.omega * (self._anchor_term(self.time + self.dt) + forcing_next + c)
         self.y, self.z = self.system.step(self.y, self.z, u_now, u_next)
         self.time += self.dt
         self._forcing_now = forcing_next

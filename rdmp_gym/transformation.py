@@ -87,8 +87,10 @@ class TransformationSystem:
         return numerators[0], numerators[1], denominator
 
     def input(self, anchor: np.ndarray, forcing: np.ndarray) -> np.ndarray:
-        """Input ``u = Omega (alpha_z beta_z g + f)``; ``anchor [..., d]`` broadcast against ``forcing [..., T, d]``."""
-        return self.omega * (self.alpha_z * self.beta_z * anchor[..., None, :] + forcing)
+        """Input ``u = Omega (alpha_z beta_z g + f)`` for ``forcing [..., T, d]`` and a constant anchor
+        ``[..., d]`` or a moving one ``[..., T, d]``."""
+        anchor = anchor if anchor.ndim == forcing.ndim else anchor[..., None, :]
+        return self.omega * (self.alpha_z * self.beta_z * anchor + forcing)
 
     def free_response(self, times: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``exp(A t) x0`` for ``times [T]`` and ``state [..., 2, d]``, as ``(y, z)`` each ``[..., T, d]``.

@@ -213,3 +213,36 @@ def test_too_short_demo_is_rejected():
     short = Demonstration(demo.t[:300], demo.Y[:300])           # 3 s: fewer than two periods after the transient
     with pytest.raises(ValueError, match="period"):
         RhythmicDMP.fit(short)
+
+
+def test_start_blend_keeps_the_transient_shape_from_a_new_start(dmp, demos):
+    t = demos[1].t
+    offset = np.array([0.06, -0.08, 0.03])
+    base = dmp.rollout(t)
+    snapped = dmp.rollout(t, y0=dmp.starts[0] + offset)
+    blended = dmp.rollout(t, y0=dmp.starts[0] + offset, start_blend=True)
+    np.testing.assert_allclose(blended[0], dmp.starts[0] + offset)
+    speed = lambda Y: np.max(np.linalg.norm(np.diff(Y, axis=0), axis=1)) / 0.01  # noqa: E731
+    assert speed(blended) < 1.5 * speed(base) < speed(snapped)          # no jump towards the demonstrated start
+    early = t - t[0] < 0.3
+    assert np.max(np.abs(blended[early] - base[early] - offset)) < 0.02   # starts out as the shifted demonstration
+    late = t - t[0] > dmp.transients[0].length + 0.5
+    np.testing.assert_allclose(blended[late], base[late], atol=1e-8)     # same periodic part
+    stepper = dmp.start(0.01, y0=dmp.starts[0] + offset, start_blend=True)
+    online = [stepper.state[0]] + [stepper.step()[0] for _ in range(t.size - 1)]
+    np.testing.assert_allclose(np.array(online), blended, atol=1e-10)
+    batch = dmp.rollout_batch(dmp.get_params()[None], t, y0=dmp.starts[0] + offset, start_blend=True)
+    np.testing.assert_allclose(batch[0], blended, atol=1e-12)
+
+
+def test_start_blend_with_a_new_anchor_starts_at_y0(dmp, demos):
+    t = demos[1].t
+    anchor = dmp.anchor + np.array([0.1, 0.05, 0.0])
+    y0 = dmp.starts[0] + np.array([0.02, 0.0, 0.01])
+    blended = dmp.rollout(t, y0=y0, anchor=anchor, start_blend=True)
+    shifted = dmp.rollout(t, y0=dmp.starts[0] + 0.1 * np.array([1.0, 0.5, 0.0]), anchor=anchor)
+    np.testing.assert_allclose(blended[0], y0)
+    late = t - t[0] > dmp.transients[0].length + 0.5
+    np.testing.assert_allclose(blended[late], shifted[late], atol=1e-8)
+    assert np.max(np.linalg.norm(np.diff(blended, axis=0), axis=1)) < 1.5 * np.max(
+        np.linalg.norm(np.diff(shifted, axis=0), axis=1))
