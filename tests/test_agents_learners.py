@@ -115,7 +115,7 @@ def test_pi2_update_is_the_time_weighted_average_of_per_step_updates():
     np.testing.assert_allclose(learner.mean, expected, atol=1e-12)
     assert learner.mean[2] == 0.0
     # at t = 0 the weighting is by the total cost: the early parameter leans to the cheapest rollout
-    assert learner.exploration == pytest.approx(0.3 * 0.95)
+    assert learner.exploration == pytest.approx(0.6 * 0.95)
 
 
 def test_pi2_rejects_cost_traces_of_the_wrong_length(task):

@@ -34,7 +34,7 @@ class CMAESConfig:
         diagonal: learn only a diagonal covariance (separable CMA-ES; faster in high dimension).
     """
 
-    sigma: float = 0.3
+    sigma: float = 0.6
     bounds: str = "transform"
     diagonal: bool = False
 

@@ -41,7 +41,7 @@ class PI2Config:
         min_sigma: exploration floor.
     """
 
-    sigma: float = 0.3
+    sigma: float = 0.6
     h: float = 10.0
     decay: float = 0.95
     min_sigma: float = 0.02

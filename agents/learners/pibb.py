@@ -34,7 +34,7 @@ class PIBBConfig:
         min_sigma: floor of the standard deviation along every eigen-direction.
     """
 
-    sigma: float = 0.3
+    sigma: float = 0.6
     h: float = 10.0
     covariance: str = "decay"
     decay: float = 0.95
