@@ -46,7 +46,8 @@ class TrainConfig:
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
-        workers: worker processes for the episodes (does not change the numbers).
+        workers: worker processes for the episodes (the black-box learners' numbers do not depend on it;
+            PPO steps one env per worker, so its numbers do).
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
@@ -276,6 +277,8 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
     state = run.load_checkpoint() if resume else None
     if state is None:
         update, episodes, best, elapsed = 0, 0, None, 0.0
+        if resume:
+            run.truncate_log(-1)   # killed before its first checkpoint: start over
     else:
         agent.load_state_dict(state["agent"])
         update, episodes, best, elapsed = state["update"], state["episodes"], state["best"], state["elapsed"]

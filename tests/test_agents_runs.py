@@ -111,3 +111,18 @@ def test_bad_configs_fail_clearly(tmp_path):
         with Evaluator(TaskSpec(TRACKING_ID), 1) as evaluator:
             evaluator.run(np.zeros((2, 3)), np.arange(2))
     assert not (tmp_path / "bad").exists()          # nothing written for a run that cannot start
+
+
+def test_a_user_demonstration_file_is_the_imitation_start(tmp_path):
+    from rdmp_gym import wiping_demonstration
+
+    path = tmp_path / "demo.csv"
+    wiping_demonstration(3, rng=1).to_csv(path)
+    config = _config(updates=1, demo=str(path), start="imitation",
+                     env_kwargs={"n_periodic": 10, "n_transient": 10, "duration": 4.0, "shift": [0.0, 0.0, 0.0]})
+    env = config.task.make()
+    assert env.unwrapped.demo.name == "demo"            # the env fitted the file, not its built-in style
+    run = train(config, tmp_path / "run")
+    assert run.read_log()[0]["eval_return_mean"] > -0.1    # a = 0 reproduces the demonstration (unshifted)
+    with pytest.raises(FileNotFoundError, match="demo"):
+        _config(demo=str(tmp_path / "missing.npz")).task.make()
