@@ -217,7 +217,7 @@ def _parser() -> argparse.ArgumentParser:
     job.add_argument("--out", default="runs/main", help="output directory (default %(default)s)")
     job.add_argument("--episodes", type=int, default=6, help="evaluation episodes (default %(default)s)")
     job.add_argument("--video", action="store_true", help="record the best evaluation episode")
-    _add_training_arguments(job, updates=15, agent=False, eval_episodes=4)
+    _add_training_arguments(job, updates=30, agent=False, eval_episodes=4)
     job.set_defaults(handler=_command_main)
     return parser
 

@@ -97,6 +97,7 @@ def _parse() -> argparse.Namespace:
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--terminal-coverage", action="store_true", help="add the pi2-tc experiment (see above)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
+    parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
     return parser.parse_args()
 
 
@@ -189,19 +190,23 @@ def _plot(runs: list[dict], agents: list[str], starts: list[str], path: Path, ti
     for row, start in enumerate(starts):
         for col, (key, label) in enumerate(keys):
             axis = axes[row][col]
+            shown: list[np.ndarray] = []
             for index, agent in enumerate(agents):
                 group = [r for r in runs if r["agent"] == agent and r["start"] == start]
                 if not group:
                     continue
                 episodes = np.array([c["episodes"] for c in group[0]["curve"]])
                 values = np.array([[c[key] for c in r["curve"]] for r in group], dtype=float)
-                axis.plot(episodes, values.mean(axis=0), color=f"C{index}", label=agent)
-                axis.fill_between(episodes, values.min(axis=0), values.max(axis=0), color=f"C{index}", alpha=0.15)
+                axis.plot(episodes, np.median(values, axis=0), color=f"C{index}", label=agent)
+                axis.fill_between(episodes, values.min(axis=0), values.max(axis=0), color=f"C{index}", alpha=0.12)
+                shown.append(np.median(values, axis=0))
             if key == "eval_coverage":
                 axis.axhline(COVERAGE_TARGET, color="k", ls=":", lw=0.8)
             if key == "eval_force_in_band":
                 axis.axhline(FORCE_TARGET, color="k", ls=":", lw=0.8)
-            axis.set_title(f"{start} start: {label}", fontsize=10)
+            low, high = np.min(shown), np.max(shown)      # frame the medians; a rare invalid episode dips below
+            axis.set_ylim(low - 0.15 * (high - low) - 1e-3, high + 0.15 * (high - low) + 1e-3)
+            axis.set_title(f"{start} start: {label} (median, min-max over seeds)", fontsize=9)
             axis.set_xlabel("training episodes")
             axis.grid(alpha=0.3)
         axes[row][0].legend(fontsize=8)
@@ -216,6 +221,13 @@ def main() -> None:
 
     torch.set_num_threads(1)
     args = _parse()
+    if args.replot:
+        document = json.loads((RESULTS / f"{args.name}.json").read_text())
+        settings = document["settings"]
+        _print(document["summary"], settings["budget"])
+        _plot(document["runs"], settings["agents"], settings["starts"], RESULTS / f"{args.name}.png",
+              f"{settings['contexts']} contexts, {settings['budget']} episodes, {settings['seeds']} seed(s)")
+        return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     if args.terminal_coverage:
         args.agents = [*args.agents, "pi2-tc"]

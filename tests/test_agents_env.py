@@ -96,6 +96,11 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     assert main(["fit", "--style", "3", "--plot", "--out", str(tmp_path / "fit")]) == 0
     assert (tmp_path / "fit" / "fit.png").exists() and (tmp_path / "fit" / "dmp.json").exists()
     assert main(["evaluate", str(out / "train"), "--episodes", "1", "--workers", "1"]) == 0
+    assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--video", *tiny]) == 0
+    assert (tmp_path / "cmaes" / "best_episode.mp4").stat().st_size > 0
+    assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--resume", "--updates", "3",
+                 *tiny[2:]]) == 0
+    assert len((tmp_path / "cmaes" / "log.jsonl").read_text().splitlines()) == 4
     capsys.readouterr()
     assert main(["train", "--out", str(tmp_path / "bad"), "--option", "sigmaa=0.2"]) == 2
     assert "sigmaa" in capsys.readouterr().err
