@@ -76,8 +76,8 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     parser.add_argument("--updates", type=int, default=updates, help="updates (default %(default)s)")
     parser.add_argument("--rollouts", type=int, default=10, help="episodes per update (default %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="run seed (default %(default)s)")
-    parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
-                        help="worker processes (default %(default)s)")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                        help="worker processes (default: all cores, %(default)s)")
     parser.add_argument("--option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                         help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
@@ -198,7 +198,7 @@ def _parser() -> argparse.ArgumentParser:
     evaluate.add_argument("run", help="run directory")
     evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy (default %(default)s)")
     evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
-    evaluate.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="worker processes")
+    evaluate.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes")
     evaluate.add_argument("--policy", choices=("best", "last"), default="best", help="which policy of the run")
     evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
     evaluate.set_defaults(handler=_command_evaluate)

@@ -2,7 +2,8 @@
 
 Why these settings (PPO as a contextual bandit, one step per episode):
 
-* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / workers`` per env;
+* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / envs`` per env
+  (``envs`` the largest divisor of ``rollouts`` not above ``workers``);
 * every episode terminates after its single step (``terminated=True``), so the advantage is
   ``r - V(context)`` and ``gamma``/``gae_lambda`` play no role;
 * the observation is the env's context; the policy is a Gaussian whose mean starts at the imitation

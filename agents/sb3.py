@@ -75,8 +75,9 @@ class PPOAgent:
     Args:
         task: the env.
         initial_action: ``[n]`` the policy mean at the start.
-        rollouts: episodes per update (a multiple of ``workers``).
-        workers: parallel envs (``SubprocVecEnv`` if > 1).
+        rollouts: episodes per update.
+        workers: at most this many parallel envs (``SubprocVecEnv`` if > 1): the largest count that
+            divides ``rollouts``, so every env takes the same number of steps per update.
         seed: seeds torch, the policy and the envs.
         options: fields of :class:`PPOConfig`.
     """
@@ -84,14 +85,13 @@ class PPOAgent:
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
                  options: Mapping[str, Any] | None = None) -> None:
         self.config = from_options(PPOConfig, options, "ppo")
-        if rollouts % workers:
-            raise ValueError(f"rollouts: PPO needs a multiple of workers={workers}, got {rollouts}")
+        envs = max(count for count in range(1, min(workers, rollouts) + 1) if rollouts % count == 0)
         self.rollouts = rollouts
-        self.env = _vector_env(task, workers)
+        self.env = _vector_env(task, envs)
         self.env.seed(seed)
         batch = self.config.batch_size or rollouts
         hidden = [self.config.hidden, self.config.hidden]
-        self.model = PPO("MlpPolicy", self.env, n_steps=rollouts // workers, batch_size=batch,
+        self.model = PPO("MlpPolicy", self.env, n_steps=rollouts // envs, batch_size=batch,
                          n_epochs=self.config.n_epochs, learning_rate=self.config.learning_rate,
                          clip_range=self.config.clip_range, ent_coef=self.config.ent_coef, gamma=0.0,
                          gae_lambda=1.0, seed=seed, device="cpu", verbose=0,
