@@ -32,6 +32,8 @@ test: install
 bench: install
 	$(BIN)/python benchmarks/bench_fidelity.py
 	$(BIN)/python benchmarks/bench_speed.py
+	$(BIN)/python benchmarks/bench_env.py
+	$(BIN)/python benchmarks/bench_agents.py
 
 clean:
 	rm -rf $(VENV) runs figures

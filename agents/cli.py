@@ -157,6 +157,8 @@ def _command_fit(args: argparse.Namespace) -> None:
 
 
 def _command_main(args: argparse.Namespace) -> None:
+    from rdmp_gym.figures import write_paper_figures
+
     from .assessment import evaluate_run
     from .imitation import fit_dmp, load_demonstration
     from .plots import plot_fit
@@ -167,15 +169,18 @@ def _command_main(args: argparse.Namespace) -> None:
     config = _train_config(args, "pi2")
     style = config.env_kwargs.get("style", 1)
     demo = load_demonstration(args.demo if args.demo else style)
-    print(f"[1/3] imitation: fitting the rhythmic DMP to {demo.name!r}")
+    print(f"[1/4] imitation: fitting the rhythmic DMP to {demo.name!r}")
     dmp = fit_dmp(demo, config.env_kwargs.get("n_periodic", 40), config.env_kwargs.get("n_transient", 40))
     plot_fit(demo.t - demo.t[0], demo.Y, dmp.rollout(demo.t), out / "fit.png", title=f"{demo.name}: imitation")
-    print(f"[2/3] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
+    print(f"[2/4] the paper's figures (2, 6, 7, 8, 9, 12) for the built-in demonstrations -> {out / 'figures'}")
+    write_paper_figures(out / "figures")
+    print(f"[3/4] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
     run = train(config, out / "train", resume=args.resume, progress=True)
-    print(f"[3/3] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
+    print(f"[4/4] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
     result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True)
     _print_table(_evaluation_rows(result))
-    summary = {"fit": str(out / "fit.png"), "run": str(run.path), "learning_curve": str(run.curve_png),
+    summary = {"fit": str(out / "fit.png"), "figures": str(out / "figures"), "run": str(run.path),
+               "learning_curve": str(run.curve_png),
                "evaluation": {name: {k: v for k, v in result[name].items() if k.endswith(("_mean", "_fraction"))}
                               for name in ("imitation", "trained")}}
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")

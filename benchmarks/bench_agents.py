@@ -6,10 +6,6 @@ contexts (``--eval-contexts`` per seed, the same for every agent). Contexts: ``r
 default, a new table/patch/start per update, shared by that update's rollouts) or ``fixed`` (one
 context per seed for training and evaluation).
 
-``--terminal-coverage`` adds the agent ``pi2-tc``: PI² on the env with the coverage part of its cost
-trace moved to the terminal cost (an experiment wrapper that emulates a requested env change; see
-:class:`TerminalCoverage`).
-
 Writes ``benchmarks/results/agents.json`` (settings, curves, summary) and ``agents.png``, and prints
 the table. Target checked: coverage >= 0.95 with force in band >= 0.9 (policy evaluation).
 
@@ -44,41 +40,6 @@ import rdmp_gym  # noqa: F401  (registers the env)
 
 COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
 RESULTS = Path(__file__).resolve().parent / "results"
-TERMINAL_COVERAGE_ID = "bench/ArmarWipeTerminalCoverage-v0"
-
-
-class TerminalCoverage(gym.Wrapper):
-    """Experiment: ArmarWipe whose ``cost_trace`` keeps only the force-closeness, contact-loss and
-    excess-force costs per step; the rest of the cost (coverage, plus the rare joint-limit, collision
-    and divergence penalties) becomes terminal, i.e. PI² counts it at every step.
-
-    The env charges coverage per step as "newly wiped cells", so a rollout that wipes early has little
-    left to wipe later and looks worse at later steps; this wrapper shows what PI² does without that
-    anti-correlation. It recomputes the per-step force terms from ``info["force_trace"]`` and the env's
-    reward settings (the env does not give per-term traces); invalid episodes are left unchanged.
-    """
-
-    def step(self, action: np.ndarray) -> tuple:
-        observation, reward, terminated, truncated, info = self.env.step(action)
-        if info["valid"]:
-            env = self.env.unwrapped
-            force, periodic = info["force_trace"], env.periodic
-            settings, weights = env.reward_settings, env.reward_weights
-            wiping = max(1, int(np.count_nonzero(periodic)))
-            closeness = np.exp(-0.5 * ((force - settings.target_force) / settings.force_sigma) ** 2)
-            per_step = (-weights.force * np.where(periodic, closeness, 0.0) / wiping
-                        + weights.contact_loss * (periodic & (force < settings.contact_threshold)) / wiping
-                        + weights.excess_force * np.minimum(1.0, np.maximum(0.0, force - settings.max_force)
-                                                            / settings.max_force) / force.size)
-            info = {**info, "cost_trace": per_step}
-        return observation, reward, terminated, truncated, info
-
-
-def _terminal_coverage_env(**kwargs: object) -> gym.Env:
-    return TerminalCoverage(gym.make(WIPE_ID, disable_env_checker=True, **kwargs))
-
-
-gym.register(TERMINAL_COVERAGE_ID, entry_point=_terminal_coverage_env)  # workers see it: forkserver preloads __main__
 
 
 def _parse() -> argparse.Namespace:
@@ -95,7 +56,6 @@ def _parse() -> argparse.Namespace:
                         help="override a learner setting, e.g. pi2.sigma=0.5 (repeatable)")
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                         help="a gym.make keyword (default: the env's defaults)")
-    parser.add_argument("--terminal-coverage", action="store_true", help="add the pi2-tc experiment (see above)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
     return parser.parse_args()
@@ -133,8 +93,7 @@ def _run(agent: str, start: str, seed: int, args: argparse.Namespace, env_kwargs
         reset_options = {"context": env.reset(seed=seed)[1]["context"].tolist()}
         env.close()
         eval_episodes = 1
-    learner, env_id = ("pi2", TERMINAL_COVERAGE_ID) if agent == "pi2-tc" else (agent, WIPE_ID)
-    config = TrainConfig(agent=learner, env_id=env_id, updates=args.budget // args.rollouts, rollouts=args.rollouts,
+    config = TrainConfig(agent=agent, env_id=WIPE_ID, updates=args.budget // args.rollouts, rollouts=args.rollouts,
                          seed=seed, workers=args.workers, env_kwargs=env_kwargs, reset_options=reset_options,
                          options=options, start=start, perturbation=0.3, eval_episodes=eval_episodes)
     began = time.perf_counter()
@@ -229,10 +188,7 @@ def main() -> None:
               f"{settings['contexts']} contexts, {settings['budget']} episodes, {settings['seeds']} seed(s)")
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
-    if args.terminal_coverage:
-        args.agents = [*args.agents, "pi2-tc"]
     options = _options(args)
-    options["pi2-tc"] = options.get("pi2", {})
     scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
     jobs = [(agent, start, seed) for start in args.starts for agent in args.agents for seed in range(args.seeds)]
     runs = []

@@ -10,11 +10,17 @@ Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v0``, an
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample() * 0)  # the imitation
 
-Rendering is offscreen (``render_mode="rgb_array"``); on a headless machine set ``MUJOCO_GL=egl``
-before importing mujoco.
+Rendering is offscreen (``render_mode="rgb_array"``). MuJoCo picks its OpenGL backend when it is
+first imported; on a machine without a display, importing this package sets ``MUJOCO_GL=egl``
+(which needs no GPU: Mesa's llvmpipe renders) unless ``MUJOCO_GL`` is already set.
 """
 
 from __future__ import annotations
+
+import os
+
+if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+    os.environ["MUJOCO_GL"] = "egl"
 
 import gymnasium as gym
 

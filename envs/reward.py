@@ -4,7 +4,10 @@ The return is ``sum(terms.values())`` and the per-step cost trace sums (up to ro
 negative, so episodic learners (PI², which needs a cost-to-go per time step) and SB3 see the same
 objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1)):
 
-- ``coverage``: ``+w`` x wiped dirty cells / dirty cells (per step: minus the newly wiped fraction);
+- ``coverage``: ``+w`` x wiped dirty cells / dirty cells, charged at the last step (a terminal cost):
+  which cells a step wipes first depends on what earlier steps already wiped, so a per-step "newly
+  wiped" cost would blame the later steps of a rollout that wipes well early on, and PI²'s per-step
+  weighting learned measurably worse with it (benchmarks/bench_agents.py);
 - ``force``: ``+w`` x mean over the periodic phase of ``exp(-((F - F*) / sigma)^2 / 2)``, the closeness
   of the sponge–table normal force F to its target F*;
 - ``excess_force``: ``-w`` x mean over all steps of ``min(1, max(0, F - F_max) / F_max)``;
@@ -100,7 +103,7 @@ def wipe_reward(trace: WipeTrace, periodic: np.ndarray, n_cells: int, settings: 
     per = periodic & live
     n_per = max(1, int(np.count_nonzero(periodic)))
     parts = {name: np.zeros(count) for name in TERMS}
-    parts["coverage"] = -weights.coverage * trace.new_cells / max(1, n_cells)
+    parts["coverage"][max(trace.steps, 1) - 1] = -weights.coverage * float(np.sum(trace.new_cells)) / max(1, n_cells)
     score = np.exp(-0.5 * ((force - settings.target_force) / settings.force_sigma) ** 2)
     parts["force"] = -weights.force * np.where(per, score, 0.0) / n_per
     excess = np.minimum(1.0, np.maximum(0.0, force - settings.max_force) / settings.max_force)
