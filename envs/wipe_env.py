@@ -30,6 +30,7 @@ import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
 from rdmp_gym.fitting import FIT_METHODS
+from rdmp_gym.validation import check_positive
 
 from .action import ActionMap
 from .context import SIZE as CONTEXT_SIZE
@@ -56,16 +57,6 @@ def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> Rh
     """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s)."""
     return RhythmicDMP.fit(wiping_demonstration(style=style, rng=0), n_periodic=n_periodic,
                            n_transient=n_transient, method=method)
-
-
-def _positive(value: Any, name: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: expected a number, got {value!r}") from error
-    if not np.isfinite(number) or number <= 0:
-        raise ValueError(f"{name}: expected a finite positive number, got {value!r}")
-    return number
 
 
 class ArmarWipeEnv(gym.Env):
@@ -164,20 +155,20 @@ class ArmarWipeEnv(gym.Env):
         self.scene = WipeScene(xml_file)
         model = self.scene.model
         if timestep is not None:
-            model.opt.timestep = _positive(timestep, "timestep")
+            model.opt.timestep = check_positive(timestep, "timestep")
         if frame_skip is not None:
             if isinstance(frame_skip, bool) or int(frame_skip) != frame_skip or frame_skip < 1:
                 raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
             self.frame_skip = int(frame_skip)
         else:
-            rate = _positive(control_rate, "control_rate")
+            rate = check_positive(control_rate, "control_rate")
             self.frame_skip = max(1, round(1.0 / (rate * model.opt.timestep)))
         self.dt = self.frame_skip * model.opt.timestep
         self.control_rate = 1.0 / self.dt
         transient = self.dmp.transients[0].length
         if duration is None:
-            duration = transient + _positive(n_periods, "n_periods") * self.dmp.period
-        duration = _positive(duration, "duration")
+            duration = transient + check_positive(n_periods, "n_periods") * self.dmp.period
+        duration = check_positive(duration, "duration")
         self.n_steps = max(2, round(duration / self.dt))
         self.times = np.arange(self.n_steps) * self.dt
         self.periodic = self.times >= transient
@@ -187,21 +178,21 @@ class ArmarWipeEnv(gym.Env):
         band = tuple(float(f) for f in force_band)
         if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
             raise ValueError(f"force_band: expected (min, max) with 0 <= min < max, got {force_band!r}")
-        target_force = _positive(target_force, "target_force")
+        target_force = check_positive(target_force, "target_force")
         self.force_band = band
         self.adaptation_settings = ForceAdaptationSettings(target_force=target_force, enabled=bool(adaptation),
                                                            gain=float(admittance_gain))
         self.reward_settings = RewardSettings(target_force=target_force,
-                                              force_sigma=_positive(force_sigma, "force_sigma"), max_force=band[1])
+                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1])
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
-        self.cell_size = _positive(cell_size, "cell_size")
+        self.cell_size = check_positive(cell_size, "cell_size")
         self.limit_margin = float(limit_margin)
         if not (np.isfinite(self.limit_margin) and self.limit_margin >= 0):
             raise ValueError(f"limit_margin: expected a number >= 0, got {limit_margin!r}")
         if len(ik_tolerance) != 2:
             raise ValueError("ik_tolerance: expected (position m, angle rad)")
-        self.ik_tolerance = (_positive(ik_tolerance[0], "ik_tolerance"), _positive(ik_tolerance[1], "ik_tolerance"))
-        self.max_joint_speed = _positive(max_joint_speed, "max_joint_speed")
+        self.ik_tolerance = tuple(check_positive(value, "ik_tolerance") for value in ik_tolerance)
+        self.max_joint_speed = check_positive(max_joint_speed, "max_joint_speed")
         self.context_spec = ContextSpec(context_ranges)
 
         kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS)
