@@ -172,6 +172,12 @@ class BasisSet:
                                              * transient_gate[..., span, None])
         return out
 
+    def forcing(self, phi: np.ndarray, r: np.ndarray, weights: np.ndarray) -> np.ndarray:
+        """The forcing term (5), ``sum Psi w / (sum Psi + eps)``: ``phi, r [T]`` and ``weights [..., d, D]``
+        -> ``[..., T, d]`` (the normalisation is applied to the ``d`` outputs, not the ``D`` activations)."""
+        raw = self.activations(phi, r)
+        return (raw @ np.swapaxes(weights, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""
         raw = self.activations(phi, r)

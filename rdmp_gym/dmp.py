@@ -250,7 +250,7 @@ class RhythmicDMP:
         forcing = np.empty((weights.shape[0], t.size, self.n_dims))
         for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
             members = np.flatnonzero(inverse.ravel() == index)
-            forcing[members] = self.basis.normalized(phi, r) @ weights[members].transpose(0, 2, 1)
+            forcing[members] = self.basis.forcing(phi, r, weights[members])
         if transform is not None:
             forcing = forcing @ transform.T
         if start_offset is not None:
@@ -357,7 +357,7 @@ class RhythmicDMP:
         """The forcing term f along transient ``transient``'s canonical path, ``[T, d]`` (t from the start)."""
         start = self.transients[self._check_transient(transient)]
         phi, r = self.canonical.state(as_finite_array(t, "t", ndim=1), start.phi0, start.r0)
-        return self.basis.normalized(phi, r) @ self.weights.T
+        return self.basis.forcing(phi, r, self.weights)
 
     # ------------------------------------------------------------------ parameters
     def param_slices(self, groups: GroupSelection = None) -> dict[str, slice]:
@@ -499,7 +499,7 @@ class DMPStepper:
             phi, r = self.canonical.state(times, start.phi0, start.r0)
             fade = start_fade(times, self.fade_length)[:, None]
             self._block = (self.dmp.alpha_z * self.system.beta_z * (self.anchor + fade * self.start_offset)
-                           + self.dmp.basis.normalized(phi, r) @ self.dmp.weights.T)
+                           + self.dmp.basis.forcing(phi, r, self.dmp.weights))
             self._block_index = index
         return self._block[offset]
 
