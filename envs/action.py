@@ -7,7 +7,9 @@
   dimension that is flat in the demonstration, such as the height while wiping, can still be moved);
 - ``initial:k`` = ``(phi0, r0)``: ``frac * pi`` for the phase and ``frac * r0`` for the radius, so
   with ``frac < 1`` every action keeps ``r0 > 0``. With a larger ``frac``, an action that makes
-  ``r0 <= 0`` is an invalid parameter vector (penalised, not simulated).
+  ``r0 <= 0`` is an invalid parameter vector (penalised, not simulated);
+- ``amplitude`` (``[d]`` factors about the anchor, 1 in the imitation): ``frac`` itself, so the
+  movement can grow or shrink by up to ``frac`` in each dimension (to fit a larger or smaller patch).
 
 The ``anchor`` group cannot be in the action: the anchor is the dirt patch centre from the context.
 """
@@ -25,7 +27,7 @@ __all__ = ["DEFAULT_SCALES", "ActionMap"]
 #: Default fractions. Chosen so that a uniformly random action stays a plausible wiping motion: with
 #: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
 #: 16 random actions), while coordinated actions still change the pattern's amplitude by ~20 %.
-DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1}
+DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5}
 
 
 class ActionMap:
@@ -33,7 +35,7 @@ class ActionMap:
 
     Args:
         dmp: the imitation DMP.
-        groups: parameter groups in the action (``periodic``, ``transient[:k]``, ``initial[:k]``).
+        groups: parameter groups in the action (``periodic``, ``transient[:k]``, ``initial[:k]``, ``amplitude``).
         scales: ``{group: frac}`` overrides of :data:`DEFAULT_SCALES` (short or full group names).
     """
 
@@ -63,6 +65,8 @@ class ActionMap:
             if short == "initial":
                 self.scale[part] = [frac * np.pi, frac * self.theta0[part.start + 1]]
                 self.r0_index.append(part.start + 1)
+            elif short == "amplitude":
+                self.scale[part] = frac
             else:
                 w = self.theta0[part].reshape(d, -1)
                 spread = w.max(axis=1) - w.min(axis=1)

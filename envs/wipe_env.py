@@ -66,7 +66,8 @@ class ArmarWipeEnv(gym.Env):
         style: synthetic demonstration style 1..4 (1/2 circle, 3/4 figure-eight; 2/4 complex approach).
         demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame (overrides ``style``).
         n_periodic, n_transient, fit_method: DMP fit settings.
-        groups: parameter groups in the action (default periodic weights, transient weights, initial condition).
+        groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
+            amplitude).
         scales: per-group action scales (see :mod:`rdmp_gym.envs.action`).
         n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
         control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
@@ -97,7 +98,7 @@ class ArmarWipeEnv(gym.Env):
         n_periodic: int = 40,
         n_transient: int = 40,
         fit_method: str = "ridge",
-        groups: Iterable[str] | str = ("periodic", "transient", "initial"),
+        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude"),
         scales: Mapping[str, float] | None = None,
         n_periods: float = 4.0,
         duration: float | None = None,

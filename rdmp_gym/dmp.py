@@ -106,16 +106,23 @@ class RhythmicDMP:
         transients: one :class:`TransientStart` per encoded transient.
         anchor: ``[d]`` anchor g, the centre of the periodic pattern.
         alpha_z: damping gain of the transformation system (``beta_z = alpha_z / 4``).
+        amplitude: ``[d]`` factors that scale the movement about the anchor (forcing term and default
+            start); ones by default. A learnable parameter group, like the weights.
     """
 
     def __init__(self, canonical: CanonicalSystem, basis: BasisSet, weights: np.ndarray,
-                 transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0) -> None:
+                 transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0,
+                 amplitude: np.ndarray | None = None) -> None:
         self.canonical = canonical
         self.basis = basis
         self.weights = as_finite_array(weights, "weights", ndim=2)
         self.transients = tuple(transients)
         self.anchor = as_finite_array(anchor, "anchor", ndim=1)
         self.alpha_z = check_positive(alpha_z, "alpha_z")
+        self.amplitude = (np.ones(self.anchor.size) if amplitude is None
+                          else as_finite_array(amplitude, "amplitude", ndim=1))
+        if self.amplitude.shape != self.anchor.shape:
+            raise ValueError(f"amplitude: expected shape {self.anchor.shape}, got {self.amplitude.shape}")
         if self.weights.shape != (self.anchor.size, basis.n_basis):
             raise ValueError(f"weights: expected shape {(self.anchor.size, basis.n_basis)}, got {self.weights.shape}")
         if len(self.transients) != len(basis.transient_sizes):
@@ -235,12 +242,13 @@ class RhythmicDMP:
         return np.broadcast_to(array, (batch, self.n_dims))
 
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
-                  y0: np.ndarray, yd0: np.ndarray, tempo: float, transform: np.ndarray | None,
-                  start_offset: np.ndarray | None = None, fade_length: float = 1.0
+                  amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
+                  transform: np.ndarray | None, start_offset: np.ndarray | None = None, fade_length: float = 1.0
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
-        anchors/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. A ``start_offset [B, d]``
-        moves the anchor at the start and fades out over ``fade_length`` seconds (``start_blend``)."""
+        anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. The forcing term is
+        multiplied by ``M diag(amplitude)``. A ``start_offset [B, d]`` moves the anchor at the start and fades
+        out over ``fade_length`` seconds (``start_blend``)."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -251,6 +259,7 @@ class RhythmicDMP:
         for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
             members = np.flatnonzero(inverse.ravel() == index)
             forcing[members] = self.basis.forcing(phi, r, weights[members])
+        forcing *= amplitudes[:, None, :]
         if transform is not None:
             forcing = forcing @ transform.T
         if start_offset is not None:
@@ -260,20 +269,22 @@ class RhythmicDMP:
         y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
         return y, z * omega
 
-    def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, start_blend: bool,
-               transform: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Initial ``(y0, yd0)`` ``[B, d]`` of transient k for anchors ``[B, d]`` (defaults: its demonstration's
-        start, transformed) and, under ``start_blend``, the offset of ``y0`` from the demonstrated start
-        carried along with the anchor, ``anchor + M (start - g)``."""
+    def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, amplitudes: np.ndarray,
+               start_blend: bool, transform: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Initial ``(y0, yd0)`` ``[B, d]`` of transient k for anchors and amplitudes ``[B, d]``.
+
+        The defaults are its demonstration's start and start velocity, transformed like the whole movement
+        (``g + M diag(amplitude) (start - g)``, g the fitted anchor). Under ``start_blend`` also the offset of
+        ``y0`` from that start carried along with the anchor, ``anchor + M diag(amplitude) (start - g)``."""
         start = self.transients[k]
-        relative_start = start.start - self.anchor
-        default_yd0 = start.start_velocity * tempo / self.canonical.tempo
+        relative_start = amplitudes * (start.start - self.anchor)                       # [B, d]
+        default_yd0 = amplitudes * start.start_velocity * tempo / self.canonical.tempo
         if transform is not None:   # the whole demonstrated movement is transformed about the fitted anchor
-            relative_start, default_yd0 = transform @ relative_start, transform @ default_yd0
-        batch = anchors.shape[0]
-        y0 = self._vector(y0, self.anchor + relative_start, "y0", batch)
+            relative_start, default_yd0 = relative_start @ transform.T, default_yd0 @ transform.T
+        y0 = self._vector(y0, self.anchor + relative_start, "y0", anchors.shape[0])
         offset = y0 - (anchors + relative_start) if start_blend else None
-        return y0, self._vector(yd0, default_yd0, "yd0", batch), offset
+        return y0, self._vector(yd0, default_yd0, "yd0", anchors.shape[0]), offset
 
     def rollout(self, t: np.ndarray, transient: int = 0, y0: np.ndarray | None = None,
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
@@ -308,9 +319,10 @@ class RhythmicDMP:
         start = self.transients[k]
         transform = _transform_matrix(self.n_dims, scale, rotation)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend, transform)
+        amplitudes = self.amplitude[None]
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend, transform)
         inits = np.array([[start.phi0, start.r0]])
-        y, yd = self._simulate(t, self.weights[None], inits, anchors, y0, yd0, tempo, transform,
+        y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
                                offset, start.length / tempo)
         return (y[0], yd[0]) if return_velocity else y[0]
 
@@ -330,15 +342,15 @@ class RhythmicDMP:
         """
         k = self._check_transient(transient)
         thetas = as_finite_array(thetas, "thetas", ndim=2)
-        weights, inits, anchors = self._decode(thetas, groups)
+        weights, inits, anchors, amplitudes = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:
             if "anchor" in self.layout.resolve(groups):
                 raise ValueError("anchor: given both as an argument and in thetas (group 'anchor')")
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend)
-        return self._simulate(t, weights, inits[:, k], anchors, y0, yd0, tempo, None,
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend)
+        return self._simulate(t, weights, inits[:, k], anchors, amplitudes, y0, yd0, tempo, None,
                               offset, self.transients[k].length / tempo)[0]
 
     def start(self, dt: float, transient: int = 0, y0: np.ndarray | None = None,
@@ -349,7 +361,7 @@ class RhythmicDMP:
         k = self._check_transient(transient)
         tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, start_blend)
+        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, self.amplitude[None], start_blend)
         return DMPStepper(self, check_positive(dt, "dt"), k, y0[0].copy(), yd0[0].copy(), anchors[0].copy(), tempo,
                           None if offset is None else offset[0])
 
@@ -357,7 +369,7 @@ class RhythmicDMP:
         """The forcing term f along transient ``transient``'s canonical path, ``[T, d]`` (t from the start)."""
         start = self.transients[self._check_transient(transient)]
         phi, r = self.canonical.state(as_finite_array(t, "t", ndim=1), start.phi0, start.r0)
-        return self.basis.forcing(phi, r, self.weights)
+        return self.amplitude * self.basis.forcing(phi, r, self.weights)
 
     # ------------------------------------------------------------------ parameters
     def param_slices(self, groups: GroupSelection = None) -> dict[str, slice]:
@@ -375,8 +387,10 @@ class RhythmicDMP:
             elif name.startswith("initial:"):
                 start = self.transients[int(name[8:])]
                 parts.append(np.array([start.phi0, start.r0]))
-            else:
+            elif name == "anchor":
                 parts.append(self.anchor.copy())
+            else:
+                parts.append(self.amplitude.copy())
         return np.concatenate(parts)
 
     def _transient_columns(self, k: int) -> slice:
@@ -384,8 +398,9 @@ class RhythmicDMP:
         return slice(offset, offset + self.basis.transient_sizes[k])
 
     def _decode(self, thetas: np.ndarray, groups: GroupSelection
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors ``[B, d]``."""
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors and
+        amplitudes ``[B, d]``."""
         slices = self.layout.slices(groups)
         expected = self.layout.size(groups)
         if thetas.shape[-1] != expected:
@@ -395,6 +410,7 @@ class RhythmicDMP:
         weights = np.repeat(self.weights[None], batch, axis=0)
         inits = np.repeat(np.array([[[s.phi0, s.r0] for s in self.transients]]), batch, axis=0)
         anchors = np.repeat(self.anchor[None], batch, axis=0)
+        amplitudes = np.repeat(self.amplitude[None], batch, axis=0)
         for name, part in slices.items():
             values = thetas[:, part]
             if name == "periodic":
@@ -405,24 +421,27 @@ class RhythmicDMP:
                 if np.any(values[:, 1] <= 0.0):
                     raise ValueError(f"theta: the initial radius r0 of {name} must be > 0")
                 inits[:, int(name[8:])] = values
-            else:
+            elif name == "anchor":
                 anchors = values.copy()
-        return weights, inits, anchors
+            else:
+                amplitudes = values.copy()
+        return weights, inits, anchors, amplitudes
 
     def with_params(self, theta: np.ndarray, groups: GroupSelection = None) -> RhythmicDMP:
         """A new DMP whose selected groups are replaced by ``theta [P]``."""
         theta = as_finite_array(theta, "theta", ndim=1)
-        weights, inits, anchors = self._decode(theta[None], groups)
+        weights, inits, anchors, amplitudes = self._decode(theta[None], groups)
         transients = [replace(start, phi0=float(phi0), r0=float(r0))
                       for start, (phi0, r0) in zip(self.transients, inits[0], strict=True)]
-        return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z)
+        return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z,
+                           amplitudes[0])
 
     def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0
                            ) -> np.ndarray:
         """How active each parameter is at each time, ``[T, P]`` in [0, 1] (PI²'s time weighting).
 
         A weight's entry is its basis function's normalised activation along the path of transient
-        ``transient``; the initial condition of that transient and the anchor act throughout (1);
+        ``transient``; the initial condition of that transient, the anchor and the amplitude act throughout (1);
         another transient's initial condition does not act (0).
         """
         k = self._check_transient(transient)
@@ -499,7 +518,7 @@ class DMPStepper:
             phi, r = self.canonical.state(times, start.phi0, start.r0)
             fade = start_fade(times, self.fade_length)[:, None]
             self._block = (self.dmp.alpha_z * self.system.beta_z * (self.anchor + fade * self.start_offset)
-                           + self.dmp.basis.forcing(phi, r, self.dmp.weights))
+                           + self.dmp.amplitude * self.dmp.basis.forcing(phi, r, self.dmp.weights))
             self._block_index = index
         return self._block[offset]
 

@@ -1,7 +1,8 @@
 """Named, selectable groups of a flat parameter vector (what a learner sees of a DMP).
 
 Groups, in this order: ``periodic`` (``[d, N]`` weights), ``transient:k`` (``[d, M_k]`` weights of
-transient k), ``initial:k`` (``(phi0, r0)`` of transient k) and ``anchor`` (``[d]``). The short names
+transient k), ``initial:k`` (``(phi0, r0)`` of transient k), ``anchor`` (``[d]``) and ``amplitude``
+(``[d]`` factors that scale the movement about the anchor, 1 = as demonstrated). The short names
 ``transient`` and ``initial`` select every transient's group.
 """
 
@@ -11,7 +12,7 @@ from collections.abc import Iterable, Sequence
 
 __all__ = ["GROUPS", "ParameterLayout"]
 
-GROUPS = ("periodic", "transient", "initial", "anchor")
+GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude")
 
 
 class ParameterLayout:
@@ -28,6 +29,7 @@ class ParameterLayout:
         self.sizes.update({f"transient:{k}": n_dims * m for k, m in enumerate(transient_sizes)})
         self.sizes.update({f"initial:{k}": 2 for k in range(len(transient_sizes))})
         self.sizes["anchor"] = n_dims
+        self.sizes["amplitude"] = n_dims
         self.n_transients = len(transient_sizes)
 
     def resolve(self, groups: str | Iterable[str] | None) -> list[str]:

@@ -6,6 +6,7 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
 * ``canonical``: ``period, mu, eta, alpha, beta, tempo``
 * ``transformation``: ``alpha_z`` (``beta_z = alpha_z / 4``)
 * ``anchor``: ``[d]``
+* ``amplitude``: ``[d]`` (factors that scale the movement about the anchor)
 * ``basis``: ``periodic_centres [N]``, ``periodic_widths [N]``, ``transient_centres [M, 2]``,
   ``transient_widths [M]``, ``transient_sizes [K]``, ``fading {mu1, mu2, k, delta}``
 * ``weights``: ``[d, D]`` (periodic columns first, then each transient's)
@@ -39,6 +40,7 @@ def dmp_to_dict(dmp: RhythmicDMP) -> dict:
         "canonical": asdict(dmp.canonical),
         "transformation": {"alpha_z": dmp.alpha_z},
         "anchor": dmp.anchor.tolist(),
+        "amplitude": dmp.amplitude.tolist(),
         "basis": {
             "periodic_centres": basis.periodic_centres.tolist(),
             "periodic_widths": basis.periodic_widths.tolist(),
@@ -73,7 +75,8 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
                                      float(s["entrance_phase"]), np.array(s["start"], dtype=float),
                                      np.array(s["start_velocity"], dtype=float)) for s in data["transients"]]
         return RhythmicDMP(CanonicalSystem(**data["canonical"]), basis_set, np.array(data["weights"], dtype=float),
-                           transients, np.array(data["anchor"], dtype=float), data["transformation"]["alpha_z"])
+                           transients, np.array(data["anchor"], dtype=float), data["transformation"]["alpha_z"],
+                           np.array(data["amplitude"], dtype=float))
     except KeyError as error:
         raise ValueError(f"path: DMP file is missing the field {error.args[0]!r}") from error
 

@@ -246,3 +246,19 @@ def test_start_blend_with_a_new_anchor_starts_at_y0(dmp, demos):
     np.testing.assert_allclose(blended[late], shifted[late], atol=1e-8)
     assert np.max(np.linalg.norm(np.diff(blended, axis=0), axis=1)) < 1.5 * np.max(
         np.linalg.norm(np.diff(shifted, axis=0), axis=1))
+
+
+def test_amplitude_group_scales_the_movement_like_the_scale_argument(dmp, tmp_path):
+    t = np.arange(0, 6.0, 0.01)
+    amplitude = np.array([1.3, 0.8, 1.0])
+    scaled = dmp.with_params(amplitude, "amplitude")
+    np.testing.assert_allclose(scaled.rollout(t), dmp.rollout(t, scale=amplitude), atol=1e-12)
+    groups = ("periodic", "amplitude")
+    thetas = np.stack([dmp.get_params(groups), scaled.get_params(groups)])
+    batch = dmp.rollout_batch(thetas, t, groups=groups, y0=dmp.starts[0] + 0.02, start_blend=True)
+    np.testing.assert_allclose(batch[1], scaled.rollout(t, y0=dmp.starts[0] + 0.02, start_blend=True), atol=1e-12)
+    assert np.max(np.abs(batch[1] - batch[0])) > 0.01
+    scaled.save(tmp_path / "scaled.json")
+    np.testing.assert_array_equal(RhythmicDMP.load(tmp_path / "scaled.json").amplitude, amplitude)
+    with pytest.raises(ValueError, match="amplitude"):
+        RhythmicDMP(dmp.canonical, dmp.basis, dmp.weights, dmp.transients, dmp.anchor, amplitude=np.ones(2))

@@ -29,7 +29,7 @@ def test_registered_and_spaces(env):
     assert isinstance(u, ArmarWipeEnv)
     assert env.action_space.dtype == np.float32
     assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
-    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial")),)
+    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")),)
     space = env.observation_space
     assert space.dtype == np.float32 and space.shape == (10,)
     assert np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
