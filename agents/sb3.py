@@ -93,7 +93,8 @@ class PPOAgent:
         hidden = [self.config.hidden, self.config.hidden]
         self.model = PPO("MlpPolicy", self.env, n_steps=rollouts // envs, batch_size=batch,
                          n_epochs=self.config.n_epochs, learning_rate=self.config.learning_rate,
-                         clip_range=self.config.clip_range, ent_coef=self.config.ent_coef, gamma=0.0,
+                         clip_range=self.config.clip_range, ent_coef=self.config.ent_coef,
+                         target_kl=self.config.target_kl or None, gamma=0.0,
                          gae_lambda=1.0, seed=seed, device="cpu", verbose=0,
                          policy_kwargs={"net_arch": {"pi": hidden, "vf": hidden},
                                         "log_std_init": math.log(self.config.sigma)})
@@ -107,6 +108,9 @@ class PPOAgent:
 
     def train_update(self) -> EpisodeBatch:
         self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
+            raise FloatingPointError("ppo: the policy diverged (NaN or inf weights); lower learning_rate "
+                                     "or target_kl (--option learning_rate=...)")
         return self._collector.pop_batch()
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
