@@ -107,11 +107,18 @@ class PPOAgent:
         return float(torch.exp(self.model.policy.log_std.detach()).mean())
 
     def train_update(self) -> EpisodeBatch:
-        self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        try:
+            self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        except ValueError as error:        # torch rejects a Normal with NaN parameters while collecting
+            self._check_finite(error)
+            raise
+        self._check_finite()
+        return self._collector.pop_batch()
+
+    def _check_finite(self, cause: Exception | None = None) -> None:
         if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
             raise FloatingPointError("ppo: the policy diverged (NaN or inf weights); lower learning_rate "
-                                     "or target_kl (--option learning_rate=...)")
-        return self._collector.pop_batch()
+                                     "or target_kl (--option learning_rate=...)") from cause
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)

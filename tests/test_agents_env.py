@@ -106,3 +106,18 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     assert "sigmaa" in capsys.readouterr().err
     assert main(["train", "--out", str(tmp_path / "bad"), "--env-option", "n_periodics=3"]) == 2
     assert "n_periodics" in capsys.readouterr().err
+
+
+def test_ppo_reports_a_diverged_policy_clearly(context):
+    from rdmp_gym.agents.sb3 import PPOAgent
+
+    spec = TaskSpec(WIPE_ID, FAST, {"context": context})
+    n = gym.make(WIPE_ID, disable_env_checker=True, **FAST).action_space.shape[0]
+    agent = PPOAgent(spec, np.zeros(n), rollouts=2, workers=1, seed=0, options={"n_epochs": 1})
+    try:
+        with torch.no_grad():
+            agent.model.policy.log_std.fill_(float("nan"))
+        with pytest.raises(FloatingPointError, match="diverged"):
+            agent.train_update()
+    finally:
+        agent.close()
