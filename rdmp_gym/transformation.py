@@ -28,7 +28,10 @@ from scipy.signal import lfilter
 
 from .validation import check_positive
 
-__all__ = ["TransformationSystem"]
+__all__ = ["FREE_RESPONSE_FLOOR", "TransformationSystem"]
+
+FREE_RESPONSE_FLOOR = 1e-17
+"""Relative size below which the decaying response to the initial state is taken as 0."""
 
 
 @dataclass(frozen=True)
@@ -96,11 +99,20 @@ class TransformationSystem:
         """``exp(A t) x0`` for ``times [T]`` and ``state [..., 2, d]``, as ``(y, z)`` each ``[..., T, d]``.
 
         ``A`` has the double eigenvalue ``lam = -alpha_z Omega / 2``, so ``exp(A t) = exp(lam t) (I + (A - lam I) t)``.
+        It is evaluated while ``exp(lam t) (1 + |lam| t)`` exceeds ``FREE_RESPONSE_FLOOR`` and is 0 after
+        (there it is below the float64 resolution of the initial state it decays from).
         """
         lam = -0.5 * self.alpha_z * self.omega
         slope = (self.system_matrix - lam * np.eye(2)) @ state                    # [..., 2, d]
-        decay, t = np.exp(lam * times)[:, None], times[:, None]
-        return tuple(decay * (state[..., row, None, :] + t * slope[..., row, None, :]) for row in (0, 1))
+        decay = np.exp(lam * times)
+        live = int(np.count_nonzero(decay * (1.0 - lam * times) > FREE_RESPONSE_FLOOR))   # times increase
+        decay, t = decay[:live, None], times[:live, None]
+        responses = []
+        for row in (0, 1):
+            response = np.zeros((*state.shape[:-2], times.size, state.shape[-1]))
+            response[..., :live, :] = decay * (state[..., row, None, :] + t * slope[..., row, None, :])
+            responses.append(response)
+        return responses[0], responses[1]
 
     def rollout(self, u: np.ndarray, y0: np.ndarray, z0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Integrate a whole input sequence.
