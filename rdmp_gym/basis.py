@@ -20,7 +20,7 @@ import numpy as np
 from .canonical import CanonicalSystem
 from .validation import check_positive
 
-__all__ = ["BasisSet", "Fading", "periodic_width", "transient_basis_along_path", "von_mises"]
+__all__ = ["BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path", "von_mises"]
 
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5); keeps it finite off every support."""
@@ -70,6 +70,11 @@ class Fading:
     def _fade(self, distance: np.ndarray) -> np.ndarray:
         gate = np.exp(-self.v_tilde * distance**self.k)
         return np.where(gate < GATE_FLOOR, 0.0, gate)
+
+
+def normalize(activations: np.ndarray) -> np.ndarray:
+    """Normalised activations ``Psi / (sum Psi + eps)`` along the last axis, ``[..., D]`` (the mixture (5))."""
+    return activations / (activations.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
 
 
 def von_mises(phi: np.ndarray, centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -180,5 +185,4 @@ class BasisSet:
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""
-        raw = self.activations(phi, r)
-        return raw / (np.sum(raw, axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+        return normalize(self.activations(phi, r))

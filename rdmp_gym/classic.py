@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .basis import NORMALISATION_EPSILON, periodic_width, von_mises
+from .basis import normalize, periodic_width, von_mises
 from .demonstrations import Demonstration
 from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
 from .segmentation import Segmentation, segment
@@ -52,8 +52,7 @@ class PeriodicDMP:
         return 2.0 * np.pi / self.period
 
     def _normalized(self, phi: np.ndarray) -> np.ndarray:
-        raw = von_mises(phi, self.centres, np.full(self.centres.size, self.width))
-        return raw / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+        return normalize(von_mises(phi, self.centres, np.full(self.centres.size, self.width)))
 
     @classmethod
     def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40, method: str = "ridge", *,

@@ -234,6 +234,10 @@ class RhythmicDMP:
             raise ValueError(f"transient: expected an index in [0, {self.n_transients}), got {transient!r}")
         return int(transient)
 
+    def _tempo(self, tempo: float | None) -> float:
+        """The requested tempo, or the canonical system's when ``None``."""
+        return self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
+
     def _vector(self, value: object, default: np.ndarray, name: str, batch: int) -> np.ndarray:
         """``value`` (``[d]`` or ``[B, d]``, or None for ``default``) broadcast to ``[B, d]``."""
         array = default if value is None else as_finite_array(value, name, ndim=(1, 2))
@@ -315,7 +319,7 @@ class RhythmicDMP:
             positions ``[T, d]`` (and velocities ``[T, d]``).
         """
         k = self._check_transient(transient)
-        tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
+        tempo = self._tempo(tempo)
         start = self.transients[k]
         transform = _transform_matrix(self.n_dims, scale, rotation)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
@@ -348,7 +352,7 @@ class RhythmicDMP:
             if "anchor" in self.layout.resolve(groups):
                 raise ValueError("anchor: given both as an argument and in thetas (group 'anchor')")
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
-        tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
+        tempo = self._tempo(tempo)
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend)
         return self._simulate(t, weights, inits[:, k], anchors, amplitudes, y0, yd0, tempo, None,
                               offset, self.transients[k].length / tempo)[0]
@@ -359,7 +363,7 @@ class RhythmicDMP:
         """An online integrator that advances by ``dt`` per :meth:`DMPStepper.step` (for feedback);
         arguments as in :meth:`rollout`."""
         k = self._check_transient(transient)
-        tempo = self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
+        tempo = self._tempo(tempo)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, self.amplitude[None], start_blend)
         return DMPStepper(self, check_positive(dt, "dt"), k, y0[0].copy(), yd0[0].copy(), anchors[0].copy(), tempo,

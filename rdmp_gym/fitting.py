@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .basis import NORMALISATION_EPSILON
+from .basis import normalize
 
 __all__ = ["FIT_METHODS", "fit_weights", "forcing_target", "smooth_derivatives"]
 
@@ -55,7 +55,7 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
         weights[active] = (activations[:, active].T @ target) / mass[active, None]
         return weights
     if method == "ridge":
-        normalized = activations / (activations.sum(axis=1, keepdims=True) + NORMALISATION_EPSILON)
+        normalized = normalize(activations)
         gram = normalized.T @ normalized
         lam = regularization * max(float(np.mean(np.diag(gram))), 1e-300)
         return np.linalg.solve(gram + lam * np.eye(gram.shape[0]), normalized.T @ target)
