@@ -114,6 +114,7 @@ class RunDirectory:
         directory cannot be written.
         """
         created = new and not self.path.exists()
+        stray_lock = not self.lock_path.exists()       # remove the lock file again if the run is refused
         if not new and not self.config_path.exists():
             raise FileNotFoundError(f"run: {self.path} has no config.json (not a run directory); "
                                     "start a new run instead of --resume")
@@ -135,6 +136,8 @@ class RunDirectory:
             lock.release()
             if created:
                 shutil.rmtree(self.path, ignore_errors=True)
+            elif stray_lock:
+                self.lock_path.unlink(missing_ok=True)
             raise
         try:
             yield self

@@ -342,8 +342,12 @@ def _start_files(run: RunDirectory, config: TrainConfig) -> TrainConfig:
     return stored
 
 
-def _resume_session(run: RunDirectory) -> None:
-    """Add this resume to ``provenance.json``; warn when the package versions changed."""
+def _resume_session(run: RunDirectory, config: TrainConfig) -> None:
+    """Record the changed ``updates``/``workers`` in ``config.json`` and this resume in ``provenance.json``;
+    warn when the package versions changed."""
+    stored = run.read_config()
+    if any(stored.get(key) != getattr(config, key) for key in MUTABLE_ON_RESUME):
+        run.write_config({**stored, **{key: getattr(config, key) for key in MUTABLE_ON_RESUME}})
     provenance = run.read_provenance()
     record = environment_record()
     sessions = provenance["sessions"]
@@ -388,7 +392,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
             agent = _make_agent(config, evaluator, streams, initial)
             try:
                 if resume:
-                    _resume_session(run)
+                    _resume_session(run, config)
                 else:
                     run.write_config(_start_files(run, config).to_dict())
                 _loop(config, run, agent, evaluator, eval_seeds, observations, resume, progress)
