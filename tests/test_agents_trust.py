@@ -170,8 +170,9 @@ def test_the_demo_is_copied_into_the_run_and_versions_are_recorded(tmp_path, mon
 
 # 6. Training on nothing stops --------------------------------------------------------------------------
 def test_a_run_whose_first_update_is_all_invalid_stops_with_the_reasons(tmp_path):
-    from rdmp_gym import wiping_demonstration
     from rdmp_gym.agents.tasks import WIPE_ID
+
+    from rdmp_gym import wiping_demonstration
     from rdmp_gym.demonstrations import Demonstration
 
     demo = wiping_demonstration(1, rng=0)
