@@ -127,7 +127,7 @@ def test_a_directory_with_files_but_no_config_is_refused_and_left_alone(tmp_path
     stale.mkdir()
     (stale / "log.jsonl").write_text('{"update": 0}\n')
     np.save(stale / "best_params.npy", np.ones(3))
-    with pytest.raises(FileExistsError, match="no config.json"):
+    with pytest.raises(FileExistsError, match=r"no config\.json"):
         train(_config(), stale)
     assert (stale / "log.jsonl").read_text() == '{"update": 0}\n'
     np.testing.assert_array_equal(np.load(stale / "best_params.npy"), np.ones(3))
