@@ -200,8 +200,8 @@ def load_dmp(path: str | Path) -> RhythmicDMP:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ValueError(f"{path}: not a JSON DMP file ({error})") from error
+        raise ValueError(f"path: {path}: not a JSON DMP file ({error})") from error
     try:
         return dmp_from_dict(data)
     except ValueError as error:
-        raise ValueError(f"{path}: {error}") from error
+        raise ValueError(f"path: {path}: {error}") from error
