@@ -5,6 +5,7 @@ import tracemalloc
 
 import numpy as np
 import pytest
+
 from rdmp_gym import PeriodicDMP, RhythmicDMP, wiping_demonstration
 from rdmp_gym.demonstrations import Demonstration
 
