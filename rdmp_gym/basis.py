@@ -107,6 +107,8 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
     """
     if n_basis < 1:
         raise ValueError(f"n_transient: expected at least 1 basis function, got {n_basis}")
+    if not 0.0 < overlap < 1.0:
+        raise ValueError(f"transient_overlap: must lie in (0, 1), got {overlap!r}")
     times = np.linspace(0.0, span, n_basis) if n_basis > 1 else np.array([0.0])
     phi, r = canonical.state(times, phi0, r0)
     centres = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)

@@ -98,4 +98,9 @@ class PeriodicDMP:
         g = self.anchor if anchor is None else self._vector(anchor, "anchor", d)
         y0 = self.start if y0 is None else self._vector(y0, "y0", d)
         yd0 = self.start_velocity if yd0 is None else self._vector(yd0, "yd0", d)
-        return system.rollout(system.input(g, forcing), y0, yd0 / self.omega)[0]
+        with np.errstate(all="ignore"):
+            y = system.rollout(system.input(g, forcing), y0, yd0 / self.omega)[0]
+        if not np.all(np.isfinite(y)):
+            raise ValueError(f"rollout: the result overflowed to NaN or inf; the period ({self.period:g} s), gains "
+                             "or weights are out of range")
+        return y

@@ -270,8 +270,13 @@ class RhythmicDMP:
             anchors = anchors[:, None, :] + start_fade(elapsed, fade_length)[:, None] * start_offset[:, None, :]
         omega = canonical.omega * tempo
         system = _transformation(omega, dt, self.alpha_z)
-        y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
-        return y, z * omega
+        with np.errstate(all="ignore"):
+            y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
+            z = z * omega
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+            raise ValueError("rollout: the result overflowed to NaN or inf; the period, gains, weights or time grid "
+                             f"are out of range (period {self.period:g} s, alpha_z {self.alpha_z:g}, tempo {tempo:g})")
+        return y, z
 
     def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, amplitudes: np.ndarray,
                start_blend: bool, transform: np.ndarray | None = None
