@@ -83,9 +83,9 @@ def dmp(demo):
        period=st.floats(0.05, 5.0), transient=st.floats(0.0, 3.0), noise=st.floats(0.0, 0.2),
        flaw=st.sampled_from(["none", "nan", "inf", "repeat_t", "short_y", "flat"]))
 def test_fuzz_demonstrations_and_their_fit(n, dt, d, period, transient, noise, flaw):
-    t = np.arange(n) * dt
     rng = np.random.default_rng(n)
     with np.errstate(all="ignore"):           # non-finite time stamps make non-finite samples: that is the test
+        t = np.arange(n) * dt
         Y = np.sin(2 * np.pi * t / period)[:, None] * np.arange(1, d + 1) + np.exp(-t / max(transient, 1e-3))[:, None]
         Y = Y + noise * rng.standard_normal(Y.shape)
     if flaw == "nan" and Y.size:
