@@ -4,7 +4,9 @@ Settings: see :mod:`rdmp_gym.agents.ppo_config`.
 
 ``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
-random streams restart).
+random streams restart). Its checkpoint is SB3's own ``.zip``, of which only the weights are read
+(``set_parameters``: torch ``weights_only`` loading); SB3's ``data`` entry, which may hold pickled
+objects, is never loaded.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from .options import from_options
 from .ppo_config import PPOConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent", "load_ppo_policy"]
+__all__ = ["PPOAgent"]
 
 
 class _EpisodeCollector(BaseCallback):
@@ -62,11 +64,6 @@ def _vector_env(task: TaskSpec, workers: int) -> VecEnv:
         return DummyVecEnv(makers)
     method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
     return SubprocVecEnv(makers, start_method=method)
-
-
-def load_ppo_policy(model: bytes) -> PPO:
-    """A PPO model saved in a checkpoint (``state["agent"]["model"]``), for prediction only."""
-    return PPO.load(io.BytesIO(model), device="cpu")
 
 
 class PPOAgent:
@@ -127,10 +124,21 @@ class PPOAgent:
     def state_dict(self) -> dict[str, Any]:
         buffer = io.BytesIO()
         self.model.save(buffer)
-        return {"model": buffer.getvalue()}
+        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
+                "n_updates": int(self.model._n_updates)}
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        self.model = PPO.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        """Restore the policy and optimiser weights from SB3's zip (weights only, nothing unpickled)."""
+        if not isinstance(state.get("model"), bytes):
+            raise ValueError("state.model: expected the bytes of an SB3 model zip")
+        for key in ("num_timesteps", "n_updates"):
+            if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
+                raise ValueError(f"state.{key}: expected a count >= 0, got {state.get(key)!r}")
+        try:
+            self.model.set_parameters(io.BytesIO(state["model"]), exact_match=True, device="cpu")
+        except (ValueError, KeyError, RuntimeError) as error:
+            raise ValueError(f"state.model: not a PPO model of this run's shape ({error})") from error
+        self.model.num_timesteps, self.model._n_updates = state["num_timesteps"], state["n_updates"]
 
     def close(self) -> None:
         self.env.close()

@@ -163,6 +163,9 @@ class ArmarWipeEnv(gym.Env):
             self.frame_skip = int(frame_skip)
         else:
             rate = check_positive(control_rate, "control_rate")
+            if rate * model.opt.timestep > 1.0 + 1e-9:
+                raise ValueError(f"control_rate: expected at most the physics rate {1.0 / model.opt.timestep:g} Hz "
+                                 f"(1 / timestep), got {control_rate!r}")
             self.frame_skip = max(1, round(1.0 / (rate * model.opt.timestep)))
         self.dt = self.frame_skip * model.opt.timestep
         self.control_rate = 1.0 / self.dt

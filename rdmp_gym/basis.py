@@ -25,6 +25,9 @@ __all__ = ["BasisSet", "Fading", "normalize", "periodic_width", "transient_basis
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5); keeps it finite off every support."""
 
+FORCING_BLOCK = 1 << 15
+"""Time samples per block in :meth:`BasisSet.forcing` (bounds the ``[T, D]`` activations held at once)."""
+
 GATE_FLOOR = 1e-16
 """Gate values below this are exactly 0, so a family of basis functions can be skipped where it is
 off (a change of at most 1e-16 in any activation, far below the float64 resolution of the mixture)."""
@@ -104,6 +107,8 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
     """
     if n_basis < 1:
         raise ValueError(f"n_transient: expected at least 1 basis function, got {n_basis}")
+    if not 0.0 < overlap < 1.0:
+        raise ValueError(f"transient_overlap: must lie in (0, 1), got {overlap!r}")
     times = np.linspace(0.0, span, n_basis) if n_basis > 1 else np.array([0.0])
     phi, r = canonical.state(times, phi0, r0)
     centres = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
@@ -179,9 +184,15 @@ class BasisSet:
 
     def forcing(self, phi: np.ndarray, r: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """The forcing term (5), ``sum Psi w / (sum Psi + eps)``: ``phi, r [T]`` and ``weights [..., d, D]``
-        -> ``[..., T, d]`` (the normalisation is applied to the ``d`` outputs, not the ``D`` activations)."""
-        raw = self.activations(phi, r)
-        return (raw @ np.swapaxes(weights, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+        -> ``[..., T, d]`` (the normalisation is applied to the ``d`` outputs, not the ``D`` activations).
+        Evaluated in blocks of ``FORCING_BLOCK`` samples, so memory beyond the output does not grow with T."""
+        phi, r = np.broadcast_arrays(np.asarray(phi, dtype=float), np.asarray(r, dtype=float))
+        transposed = np.swapaxes(weights, -1, -2)
+        blocks = []
+        for start in range(0, max(phi.shape[-1], 1), FORCING_BLOCK):
+            raw = self.activations(phi[..., start:start + FORCING_BLOCK], r[..., start:start + FORCING_BLOCK])
+            blocks.append((raw @ transposed) / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON))
+        return blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-2)
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""

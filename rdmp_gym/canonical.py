@@ -127,7 +127,12 @@ class _TravelTime:
 
 @lru_cache(maxsize=8)
 def _travel_time(mu: float, eta: float, alpha: float, beta: float) -> _TravelTime:
-    return _TravelTime(mu, eta, alpha, beta)
+    with np.errstate(all="ignore"):
+        try:
+            return _TravelTime(mu, eta, alpha, beta)
+        except ValueError as error:     # the tables overflow: travel times beyond float64
+            raise ValueError(f"mu, eta, alpha, beta: the radial dynamics with ({mu:g}, {eta:g}, {alpha:g}, "
+                             f"{beta:g}) are too slow or too fast to tabulate ({error})") from error
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivative
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .transformation import TransformationSystem
-from .validation import as_finite_array, check_positive, check_time_grid
+from .validation import as_finite_array, check_count, check_positive, check_time_grid
 
 __all__ = ["DMPStepper", "RhythmicDMP", "TransientStart"]
 
@@ -178,9 +178,9 @@ class RhythmicDMP:
         demos = _as_demos(demos)
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
-        if int(n_periodic) < 2:
-            raise ValueError(f"n_periodic: expected at least 2, got {n_periodic}")
-        sizes = [int(n_transient)] * len(demos) if np.ndim(n_transient) == 0 else [int(m) for m in n_transient]
+        n_periodic = check_count(n_periodic, "n_periodic", 2)
+        sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
+                 else [check_count(m, "n_transient", 1) for m in n_transient])
         if len(sizes) != len(demos) or min(sizes) < 1:
             raise ValueError(f"n_transient: expected a positive int or {len(demos)} positive ints, got {n_transient!r}")
         if segmentations is None:
@@ -270,8 +270,13 @@ class RhythmicDMP:
             anchors = anchors[:, None, :] + start_fade(elapsed, fade_length)[:, None] * start_offset[:, None, :]
         omega = canonical.omega * tempo
         system = _transformation(omega, dt, self.alpha_z)
-        y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
-        return y, z * omega
+        with np.errstate(all="ignore"):
+            y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
+            z = z * omega
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+            raise ValueError("rollout: the result overflowed to NaN or inf; the period, gains, weights or time grid "
+                             f"are out of range (period {self.period:g} s, alpha_z {self.alpha_z:g}, tempo {tempo:g})")
+        return y, z
 
     def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, amplitudes: np.ndarray,
                start_blend: bool, transform: np.ndarray | None = None
@@ -346,6 +351,9 @@ class RhythmicDMP:
         """
         k = self._check_transient(transient)
         thetas = as_finite_array(thetas, "thetas", ndim=2)
+        if thetas.shape[0] == 0:
+            raise ValueError("thetas: expected at least one parameter vector (B >= 1), got shape "
+                             f"{thetas.shape}")
         weights, inits, anchors, amplitudes = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:

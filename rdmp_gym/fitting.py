@@ -12,6 +12,7 @@ import numpy as np
 from scipy.signal import savgol_filter
 
 from .basis import normalize
+from .validation import check_positive
 
 __all__ = ["FIT_METHODS", "fit_weights", "forcing_target", "smooth_derivatives"]
 
@@ -25,6 +26,7 @@ def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int =
     ``window`` is the filter length in seconds (rounded to an odd number of samples, at least
     ``polyorder + 2``). Returns three ``[L, d]`` arrays.
     """
+    window = check_positive(window, "smoothing")
     length = max(round(window / dt) | 1, polyorder + 2 + (polyorder % 2))
     length = min(length, Y.shape[0] - (1 - Y.shape[0] % 2))
     if length <= polyorder:
@@ -48,6 +50,9 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
     ``regularization`` (ridge only) is relative to the mean diagonal of the normal matrix. A basis
     function that is never active gets weight 0 under either method.
     """
+    if isinstance(regularization, bool) or not isinstance(regularization, (int, float, np.integer, np.floating)) \
+            or not 0.0 <= regularization < np.inf:
+        raise ValueError(f"regularization: expected a finite number >= 0, got {regularization!r}")
     if method == "lwr":
         mass = activations.sum(axis=0)                                          # [D]
         active = mass > 1e-12 * max(float(mass.max()), 1e-300)

@@ -6,6 +6,7 @@ import numpy as np
 
 __all__ = [
     "as_finite_array",
+    "check_count",
     "check_positive",
     "check_time_grid",
 ]
@@ -65,3 +66,13 @@ def check_time_grid(t: object, name: str = "t", *, uniform: bool = True, min_len
             raise ValueError(f"{name}: time stamps must be evenly spaced (steps range from "
                              f"{steps.min():.6g} to {steps.max():.6g}); resample the data first")
     return t
+
+
+def check_count(value: object, name: str, low: int = 0) -> int:
+    """Return ``value`` as an int, raising ``TypeError`` unless it is an integer (not a bool or a float)
+    and ``ValueError`` unless it is ``>= low``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {value!r}")
+    if value < low:
+        raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}")
+    return int(value)
