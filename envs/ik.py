@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from .kinematics import ChainKinematics
 
@@ -171,7 +172,11 @@ class PathIK:
                 break
         if len(knots) < count:
             index = np.arange(count)
-            q = np.stack([np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
+            # a cubic spline, not straight lines, through the coarse solution: the joint path has no
+            # velocity kinks at the knots (which showed up as 20 rad/s² spikes in the joint acceleration)
+            q = CubicSpline(knots, q, axis=0)(index) if len(knots) > 2 else np.stack(
+                [np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
+            q = np.clip(q, self.lower, self.upper)
             blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
                                axis=1) > 0.5
         for _ in range(fine_iterations):
