@@ -62,13 +62,15 @@ class PathIK:
         limit_zone: width (rad) of the band inside each limit from which the null-space task pushes
             joints back towards the interior.
         limit_gain: fraction of the intrusion into that band corrected per iteration.
-        tolerance: after ``min_iterations``, the coarse pass stops when the task errors (m, rad) or the
-            joint updates (rad) of all its points are below this.
+        tolerance: after ``min_iterations``, the coarse pass stops when the position errors (m) or the
+            joint updates (rad) of all its points are below this (and the angle errors below ``rot_tolerance``).
+        rot_tolerance: angle error (rad) below which the coarse pass may stop (1e-3 rad = 0.06 deg).
     """
 
     def __init__(self, kinematics: ChainKinematics, posture: np.ndarray, joint_weights: np.ndarray,
                  damping: float = 0.01, limit_margin: float = 0.01, nullspace_gain: float = 0.1,
-                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4):
+                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4,
+                 rot_tolerance: float = 1e-3):
         n = kinematics.n
         posture = np.asarray(posture, dtype=np.float64)
         joint_weights = np.asarray(joint_weights, dtype=np.float64)
@@ -86,6 +88,7 @@ class PathIK:
         self.damping2 = damping**2
         self.nullspace_gain = nullspace_gain
         self.tolerance = tolerance
+        self.rot_tolerance = rot_tolerance
         self.zone_lower = kinematics.lower + limit_zone
         self.zone_upper = kinematics.upper - limit_zone
         self.limit_gain = limit_gain
@@ -167,7 +170,7 @@ class PathIK:
             q, pos_err, rot_err, _, _, blocked = self._step(q, targets[knots], normal, basis,
                                                             rot_weight[knots], True, blocked)
             if iteration + 1 >= min_iterations and (
-                    (pos_err.max() < self.tolerance and rot_err.max() < self.tolerance)
+                    (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):
                 break
         if len(knots) < count:

@@ -140,11 +140,9 @@ def cells_under_sponge(cells: np.ndarray, pos: np.ndarray, rot: np.ndarray, half
         half: the sponge box half sizes [3]; the face is the box side at -x.
         tolerance: how far (m) beyond the face plane a cell may lie and still count.
     """
-    k = len(pos)
-    rot = rot.reshape(k, 3, 3)
-    # local[k, n, :] = R_k^T (c_n - p_k): one gemm for all poses
-    local = (cells @ rot.transpose(1, 0, 2).reshape(3, 3 * k)).reshape(len(cells), k, 3).transpose(1, 0, 2)
-    local = local - np.einsum("kj,kji->ki", pos, rot)[:, None, :]
+    rot = rot.reshape(len(pos), 3, 3)
+    # local[k, n, :] = R_k^T (c_n - p_k), as row vectors: c_n R_k - p_k R_k (one batched matmul)
+    local = np.matmul(cells[None], rot) - np.matmul(pos[:, None, :], rot)
     return ((np.abs(local[..., 1]) <= half[1]) & (np.abs(local[..., 2]) <= half[2])
             & (local[..., 0] >= -half[0] - tolerance))
 
