@@ -182,9 +182,11 @@ class PathIK:
             q = np.clip(q, self.lower, self.upper)
             blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
                                axis=1) > 0.5
+        # The fine pass treats every joint as free (limits still enforced by projection): a "blocked" flag
+        # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
-            q, *_, blocked = self._step(q, targets, normal, basis, rot_weight, True, blocked)
-        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, blocked)
+            q, *_ = self._step(q, targets, normal, basis, rot_weight, True, None)
+        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, None)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])
