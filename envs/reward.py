@@ -137,8 +137,11 @@ class Smoothness:
         return np.r_[acc[:1], acc, acc[-1:]]
 
 
-def _terms(parts: dict[str, np.ndarray]) -> tuple[dict[str, float], np.ndarray]:
-    """Cost traces per term ``[T]`` -> (reward terms = -sum of each trace, total cost trace ``[T]``)."""
+def _terms(parts: dict[str, np.ndarray], traces: dict | None) -> tuple[dict[str, float], np.ndarray]:
+    """Cost traces per term ``[T]`` -> (reward terms = -sum of each trace, total cost trace ``[T]``); the
+    per-term traces are copied into ``traces`` if given."""
+    if traces is not None:
+        traces.update(parts)
     terms = {name: -float(np.sum(parts[name])) + 0.0 for name in TERMS}
     trace = np.sum([parts[name] for name in TERMS], axis=0)
     return terms, trace
@@ -150,13 +153,14 @@ def _growth(values: np.ndarray) -> np.ndarray:
 
 
 def wipe_reward(trace: WipeTrace, periodic: np.ndarray, smooth: Smoothness, settings: RewardSettings,
-                weights: RewardWeights) -> tuple[dict[str, float], np.ndarray]:
+                weights: RewardWeights, traces: dict | None = None) -> tuple[dict[str, float], np.ndarray]:
     """Reward terms and the per-step cost trace ``[T]`` of a simulated wipe.
 
     Args:
         trace: the simulation record (``T`` control steps; only the first ``trace.steps`` count).
         periodic: mask ``[T]`` of the steps in the periodic (wiping) phase.
         smooth: smoothness of the commanded motion.
+        traces: if given, filled with each term's cost trace ``{term: [T]}``.
     """
     count = len(trace.contact_force)
     live = np.arange(count) < trace.steps
@@ -191,13 +195,14 @@ def wipe_reward(trace: WipeTrace, periodic: np.ndarray, smooth: Smoothness, sett
         lost = periodic & ~live
         parts["contact_loss"] = parts["contact_loss"] + weights.contact_loss * lost / n_per
         parts["unstable"][last] = weights.unstable
-    return _terms(parts)
+    return _terms(parts, traces)
 
 
-def invalid_reward(severity: float, count: int, weights: RewardWeights) -> tuple[dict[str, float], np.ndarray]:
+def invalid_reward(severity: float, count: int, weights: RewardWeights, traces: dict | None = None
+                   ) -> tuple[dict[str, float], np.ndarray]:
     """Terms and a uniform cost trace ``[count]`` for parameters rejected before simulation (or an episode
     voided by penetration)."""
     severity = float(np.clip(severity, 0.0, 1.0))
     parts = {name: np.zeros(count) for name in TERMS}
     parts["invalid"] = np.full(count, weights.invalid * (1.0 + severity) / count)
-    return _terms(parts)
+    return _terms(parts, traces)

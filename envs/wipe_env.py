@@ -11,7 +11,8 @@ One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
    wrist-force adaptation of the pressing depth along the actual table normal (the table height is
    unknown to the controller; its tilt is known from the context); a cup may stand in the approach;
 5. the reward sums the terms of :mod:`rdmp_gym.envs.reward`, all in ``info["reward_terms"]``, and
-   ``info["cost_trace"]`` gives the per-control-step cost for PI² (it sums to ``-reward``);
+   ``info["cost_trace"]`` gives the per-control-step cost for PI² (it sums to ``-reward``;
+   ``info["cost_terms"]`` splits it by term);
    ``info["is_success"]``: coverage >= 0.95, force in band >= 90 % of the wiping phase, no collision
    (arm on the table, arm on the robot's body), the cup neither touched nor moved, a valid episode.
 
@@ -410,11 +411,13 @@ class ArmarWipeEnv(gym.Env):
                               limit_margin=self.limit_margin, callback=callback, fine_force=self.fine_force)
         self._dirt = trace.dirt
         info.update(self._statistics(trace, smooth))
+        traces: dict[str, np.ndarray] = {}
+        info["cost_terms"] = traces
         if trace.penetration > self.penetration_limit:
             logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, self.penetration_limit)
-            terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights)
+            terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights, traces)
             return self._finish(info, terms, cost, valid=False, reason="penetration", unstable=trace.unstable)
-        terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights)
+        terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
 
     def _statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
@@ -450,7 +453,9 @@ class ArmarWipeEnv(gym.Env):
         return stats
 
     def _invalid(self, info: dict, reason: str, severity: float) -> tuple[float, dict]:
-        terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights)
+        traces: dict[str, np.ndarray] = {}
+        info["cost_terms"] = traces
+        terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights, traces)
         info.update({"coverage": 0.0, "force_mean": 0.0, "force_sd": 0.0, "force_error_mean": 0.0,
                      "force_in_band_fraction": 0.0, "contact_fraction": 0.0, "max_force": 0.0, "max_wrist_force": 0.0,
                      "impact_force": 0.0, "jerk_ratio": float("nan"), "peak_joint_accel": float("nan"),
