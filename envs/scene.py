@@ -138,13 +138,15 @@ class WipeScene:
         self.obstacle_body = idx(mujoco.mjtObj.mjOBJ_BODY, "obstacle")
         self.obstacle_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "obstacle")
         free = idx(mujoco.mjtObj.mjOBJ_JOINT, "obstacle_free")
-        if m.jnt_type[free] != mujoco.mjtJoint.mjJNT_FREE or m.geom_type[self.obstacle_geom] != mujoco.mjtGeom.mjGEOM_CYLINDER:
+        if (m.jnt_type[free] != mujoco.mjtJoint.mjJNT_FREE
+                or m.geom_type[self.obstacle_geom] != mujoco.mjtGeom.mjGEOM_CYLINDER):
             raise ValueError("xml_file: 'obstacle_free' must be a free joint and geom 'obstacle' a cylinder")
         self.obstacle_qpos = int(m.jnt_qposadr[free])
         self.obstacle_dof = int(m.jnt_dofadr[free])
         self.obstacle_radius = float(m.geom_size[self.obstacle_geom, 0])
         self.obstacle_half_height = float(m.geom_size[self.obstacle_geom, 1])
-        self._obstacle_collision = (int(m.geom_contype[self.obstacle_geom]), int(m.geom_conaffinity[self.obstacle_geom]))
+        self._obstacle_collision = (int(m.geom_contype[self.obstacle_geom]),
+                                    int(m.geom_conaffinity[self.obstacle_geom]))
         self.obstacle_xy: np.ndarray | None = None
         # The table top as a rectangle in the table frame: (x_low, x_high, y_low, y_high) (m).
         top = m.geom_pos[self.table_geom], m.geom_size[self.table_geom]

@@ -57,9 +57,9 @@ def test_wear_needs_strokes_under_force_and_calibration_has_room(adaptive):
     adaptive.reset(seed=0, options=NOMINAL)
     half = u.scene.sponge_half
     dirt = DirtField(u._cells_world, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
-    pose = np.r_[u._cells_world[70], 0, 0, 0]                      # face on a cell, face normal -x = down
-    rot = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).T.ravel()
-    box = np.tile(pose[:3] + [0, 0, half[0]], (3, 1))
+    # the box's x axis points up (its face, the -x side, lies on the table), centred over cell 70
+    rot = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).ravel()
+    box = np.tile(u._cells_world[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
     rots = np.tile(rot, (3, 1))
     still = dirt.wear(np.full(3, 18.0), np.zeros(3), box, rots, half)
     assert still.max() == 0.0                                       # pressing without sliding removes nothing
