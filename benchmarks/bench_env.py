@@ -44,7 +44,8 @@ NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 
 # issue 8's "before" numbers (ArmarWipe-v0, from the issue text; item 4 re-measured, results/env_force_v0.npz)
 BEFORE = {
     "1_offtable_patch": "patch (-0.15, 0) 0.12 m: 84 of 144 cells in the air, coverage 1.0, reward 1.148",
-    "2_self_penetration": "patch (-0.15, 0.20): forearm 56 mm inside the torso, sponge 37 mm inside the platform; valid",
+    "2_self_penetration": ("patch (-0.15, 0.20): forearm 56 mm inside the torso, sponge 37 mm inside the "
+                           "platform; valid"),
     "3_hold_still": "0.10 m patch: coverage 0.80, reward 0.996 (imitation ~1.0)",
     "3_press_lift": "0.22 m patch, 3x3 grid: coverage 0.93, reward 0.874 vs imitation 0.651 / 0.796",
     "4_chatter": "level table: SD 5.0 N around 18.3 N, 20 single-step drops to 0 N per second",
@@ -207,10 +208,10 @@ def issue_items(env, contexts: int) -> dict:
     start = int(np.argmax(u.periodic))
     into = probes._blend(probes._imitation(u), np.tile([-0.30, 0.28, 0.15], (u.n_steps, 1)), start, 250)
     imitation = summary(*episode(env, NOMINAL))
+    edge = {**NOMINAL, "patch_centre": [-0.09, 0.2], "patch_size": [0.10, 0.10]}
     items["2_self_penetration"] = {"imitation": imitation,
                                    "reach_into_torso": summary(*path_episode(env, NOMINAL, lambda _: into)),
-                                   "edge_patch_-0.09_0.20": summary(*episode(env, {**NOMINAL, "patch_centre": [-0.09, 0.2],
-                                                                                  "patch_size": [0.10, 0.10]}))}
+                                   "edge_patch_-0.09_0.20": summary(*episode(env, edge))}
     small = {**NOMINAL, "patch_size": [0.10, 0.10]}
     items["3_hold_still"] = {"imitation": summary(*episode(env, small)),
                              "hold_still": summary(*path_episode(env, small, probes.hold_still))}

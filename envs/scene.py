@@ -44,8 +44,8 @@ _REQUIRED = {
     mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide", "obstacle_free"),
 }
 
-#: Where a parked (absent) obstacle waits: beside the scene, weightless, with its collisions off.
-OBSTACLE_PARKING = np.array([0.2, 1.5, 0.5])
+#: Where a parked (absent) obstacle waits: under the floor, out of sight, weightless, with its collisions off.
+OBSTACLE_PARKING = np.array([0.2, 1.5, -1.0])
 
 
 @dataclass(frozen=True)
