@@ -142,3 +142,28 @@ def test_a_hard_touchdown_is_charged_when_it_happens(env):
     assert np.count_nonzero(impact) == 1 and int(np.flatnonzero(impact)[0]) < k + 40
     assert info["reward_terms"]["impact"] < -0.1
     assert reward < reward0 - MARGIN
+
+
+@pytest.mark.slow
+def test_random_actions_lose_on_twenty_contexts():
+    """Item 7 in full (v0: random actions beat the imitation on 11 of 20 contexts; v1: on none)."""
+    environment = gym.make(ENV_ID, n_periods=4.0)
+    for seed in range(20):
+        reward0, _ = imitation(environment, {"obstacle": 0}, seed)
+        action = np.random.default_rng(seed).uniform(-1, 1, environment.action_space.shape).astype(np.float32)
+        environment.reset(seed=seed, options={"obstacle": 0})
+        _, reward, _, _, _ = environment.step(action)
+        assert reward < reward0 - MARGIN, seed
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("tilt", [(0.15, 0.0), (-0.15, 0.0), (0.0, 0.15), (0.0, -0.15), (0.15, 0.15),
+                                  (-0.15, -0.15), (0.15, -0.15), (-0.15, 0.15)])
+def test_coverage_over_the_full_tilt_range(tilt):
+    """Item 5 in full: action 0 keeps the coverage within 10 % of the level table at every tilt extreme."""
+    environment = gym.make(ENV_ID, n_periods=4.0)
+    options = {**NOMINAL, "patch_size": [0.12, 0.12]}
+    _, level = imitation(environment, options)
+    _, tilted = imitation(environment, {**options, "table_tilt": list(tilt)})
+    assert tilted["coverage"] >= 0.9 * level["coverage"]
+    assert tilted["force_in_band_fraction"] >= 0.95
