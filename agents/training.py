@@ -46,8 +46,8 @@ class TrainConfig:
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
-        workers: worker processes for the episodes (the black-box learners' numbers do not depend on it;
-            PPO steps one env per worker, so its numbers do).
+        workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
+            (PPO's parallel envs are its own setting ``envs``).
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
@@ -238,8 +238,8 @@ def _resolve_config(config: TrainConfig | None, run: RunDirectory, resume: bool)
     return replace(saved, updates=config.updates, workers=config.workers)
 
 
-def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, progress: bool = False
-          ) -> RunDirectory:
+def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, progress: bool = False,
+          backend: str = "local", ray_address: str | None = None) -> RunDirectory:
     """Train an agent and write the run directory ``out`` (see :mod:`rdmp_gym.agents.runs`).
 
     Args:
@@ -248,13 +248,14 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, 
         out: run directory.
         resume: continue from the run's last checkpoint.
         progress: show a progress bar.
+        backend, ray_address: where the episodes run (see :class:`Evaluator`); the numbers do not depend on it.
     Returns:
         the run directory.
     """
     run = RunDirectory(out)
     config = _resolve_config(config, run, resume)
     streams = _seed_streams(config.seed)
-    with Evaluator(config.task, config.workers) as evaluator:
+    with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
         initial = _initial_action(config, evaluator, streams["start"])
         eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
         observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
