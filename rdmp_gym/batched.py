@@ -50,13 +50,16 @@ def _log_gate(fading: Fading, distance: np.ndarray) -> np.ndarray:
 
 
 def _features(fading: Fading, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """``F [B, T, 8]`` of canonical states ``phi, r [B, T]``."""
-    features = np.empty((*phi.shape, 8))
-    cos, sin = np.cos(phi), np.sin(phi)
-    features[..., 0], features[..., 1], features[..., 2] = cos, sin, r * r
-    features[..., 3], features[..., 4], features[..., 5] = r * cos, r * sin, 1.0
-    features[..., 6] = _log_gate(fading, np.maximum(r - fading.mu1, 0.0))
-    features[..., 7] = _log_gate(fading, np.maximum(fading.mu2 - r, 0.0))
+    """``F [8, B, T]`` (feature-major, so every row is written contiguously) of canonical states ``phi, r [B, T]``."""
+    features = np.empty((8, *phi.shape))
+    np.cos(phi, out=features[0])
+    np.sin(phi, out=features[1])
+    np.multiply(r, r, out=features[2])
+    np.multiply(r, features[0], out=features[3])
+    np.multiply(r, features[1], out=features[4])
+    features[5] = 1.0
+    features[6] = _log_gate(fading, np.maximum(r - fading.mu1, 0.0))
+    features[7] = _log_gate(fading, np.maximum(fading.mu2 - r, 0.0))
     return features
 
 
@@ -77,15 +80,17 @@ def batched_forcing(basis: BasisSet, phi: np.ndarray, r: np.ndarray, weights: np
     if weights.ndim != 3 or weights.shape[0] != phi.shape[0] or weights.shape[2] != basis.n_basis:
         raise ValueError(f"weights: expected shape [{phi.shape[0]}, d, {basis.n_basis}], got {weights.shape}")
     batch, samples = phi.shape
-    dims = weights.shape[1]
-    matrix = exponent_matrix(basis)
-    features = _features(basis.fading, phi, r)
-    extended = np.concatenate([np.swapaxes(weights, 1, 2), np.ones((batch, basis.n_basis, 1))], axis=2)
-    sums = np.empty((batch, samples, dims + 1))                 # numerators [.., :d], denominator [.., d]
+    dims, size = weights.shape[1], basis.n_basis
+    matrix = np.ascontiguousarray(exponent_matrix(basis).T)                          # [D, 8]
+    features = _features(basis.fading, phi, r).reshape(8, batch * samples)
+    extended = np.concatenate([weights, np.ones((batch, 1, size))], axis=1)         # [B, d + 1, D]
+    sums = np.empty((batch, dims + 1, samples))             # numerators [:, :d], denominator [:, d]
     step = max(1, _CHUNK_SAMPLES // max(samples, 1))
     for start in range(0, batch, step):
-        block = slice(start, start + step)
-        activation = features[block] @ matrix                   # [b, T, D] log-activations
+        count = min(step, batch - start)
+        activation = matrix @ features[:, start * samples:(start + count) * samples]   # [D, count T] logs
         np.exp(activation, out=activation)
-        np.matmul(activation, extended[block], out=sums[block])
+        np.matmul(extended[start:start + count], activation.reshape(size, count, samples).transpose(1, 0, 2),
+                  out=sums[start:start + count])
+    sums = sums.transpose(0, 2, 1)
     return sums[..., :dims] / (sums[..., dims:] + NORMALISATION_EPSILON)
