@@ -3,11 +3,11 @@
 :meth:`BasisSet.forcing` evaluates one path at a time. Here all ``D`` log-activations of a rollout come
 from one small matrix product: with the per-sample features
 
-    F = [cos phi, sin phi, r^2, r cos phi, r sin phi, 1, log g(r), log a(r)]          [B, T, 8]
+    F = [cos phi, sin phi, r^2, r cos phi, r sin phi, 1, log g(r), log a(r)]          [8, B, T]
 
 the exponent of periodic function i is ``v_i cos c_i F_0 + v_i sin c_i F_1 - v_i F_5 + F_6`` and that of
 transient function j is ``-vbar_j (F_2 - 2 q_j . (F_3, F_4) + |q_j|^2 F_5) + F_7`` (the same expanded
-distance as ``BasisSet.activations``), so ``Psi = exp(F @ C)`` with a fixed ``C [8, D]``. A gate that
+distance as ``BasisSet.activations``), so ``Psi = exp(C^T F)`` with a fixed ``C [8, D]``. A gate that
 ``BasisSet`` floors to exactly 0 gets the log ``-1500``, whose exponential is exactly 0 too. The weights
 get one extra column of ones, so one product per rollout gives the numerator and the denominator of (5).
 Rollouts are processed a few at a time so that the ``[T, D]`` blocks stay in the core's cache.

@@ -130,3 +130,24 @@ def test_ppo_numbers_do_not_depend_on_the_worker_count():
         np.testing.assert_array_equal(serial.actions, parallel.actions)
         np.testing.assert_array_equal(serial.returns, parallel.returns)
     assert not np.array_equal(batches[0][0].actions, batches[0][1].actions)     # the policy or its samples moved
+
+
+def test_a_run_stopped_by_a_dead_worker_resumes_to_the_uninterrupted_numbers(tmp_path, monkeypatch):
+    config = TrainConfig(agent="pi2", updates=3, rollouts=4, seed=5, env_id=TRACKING_ID, env_kwargs=TRACKING,
+                         start="perturbed", options={"sigma": 0.1})
+    whole = train(config, tmp_path / "whole")
+    calls = {"count": 0}
+    run_batch = Evaluator.run
+
+    def dying(self, actions, seeds):
+        calls["count"] += 1
+        if calls["count"] == 4:            # the training episodes of the second update
+            raise WorkerError("evaluation: a worker process died")
+        return run_batch(self, actions, seeds)
+
+    monkeypatch.setattr(Evaluator, "run", dying)
+    with pytest.raises(WorkerError):
+        train(config, tmp_path / "broken")
+    monkeypatch.setattr(Evaluator, "run", run_batch)
+    resumed = train(None, tmp_path / "broken", resume=True)
+    assert _without_time(resumed.read_log()) == _without_time(whole.read_log())
