@@ -84,9 +84,23 @@ def main() -> None:
               f"{'' if target is None else f'{1e3 * target:.1f}':>10}  {'' if target is None else row['met']}")
     step_rate = next(r["calls_per_s"] for r in rows if "calls_per_s" in r)
     print(f"online step calls per second: {step_rate:,.0f}")
+    # own canonical paths vs one shared path, interleaved (a ratio that the machine's load hardly moves)
+    cpu: dict[str, list[float]] = {"shared": [], "own": []}
+    for _ in range(15):
+        for key, batch in (("shared", weights_only), ("own", with_initial)):
+            start = time.process_time()
+            dmp.rollout_batch(batch, t, groups)
+            cpu[key].append(time.process_time() - start)
+    ratio = np.array(cpu["own"]) / np.array(cpu["shared"])
+    interleaved = {"median_cpu_s": {key: float(np.median(values)) for key, values in cpu.items()},
+                   "ratio_median": float(np.median(ratio)), "ratio_range": [float(ratio.min()), float(ratio.max())]}
+    print(f"batch of 64 with perturbed initial conditions / weights only, interleaved CPU time: "
+          f"{interleaved['ratio_median']:.2f} (range {ratio.min():.2f}-{ratio.max():.2f}; "
+          f"{1e3 * interleaved['median_cpu_s']['own']:.1f} vs {1e3 * interleaved['median_cpu_s']['shared']:.1f} ms)")
     RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({"machine": platform.processor() or platform.machine(),
-                                   "python": platform.python_version(), "rows": rows}, indent=1))
+                                   "python": platform.python_version(), "rows": rows,
+                                   "own_paths_vs_shared_path": interleaved}, indent=1))
     print(f"wrote {RESULTS}")
 
 
