@@ -6,6 +6,7 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+import json
 import signal
 import subprocess
 import sys
@@ -15,7 +16,9 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator, WorkerError
+from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.tracking import TRACKING_ID
 from rdmp_gym.agents.training import TrainConfig, train
@@ -32,21 +35,33 @@ def _without_time(records):
 
 def test_ray_backend_gives_the_numbers_of_the_local_pool(tmp_path):
     ray = pytest.importorskip("ray")
-    context = gym.make(WIPE_ID, disable_env_checker=True, **FAST).reset(seed=3)[1]["context"].tolist()
+    context = gym.make(WIPE_ID, disable_env_checker=True, **FAST).reset(seed=3)[1]["context"]
     config = TrainConfig(agent="pi2", updates=2, rollouts=4, seed=1, workers=2, env_kwargs=FAST,
-                         reset_options={"context": context}, start="perturbed", options={"sigma": 0.3},
+                         reset_options={"context": context.tolist()}, start="perturbed", options={"sigma": 0.3},
                          eval_episodes=2)
     local = train(config, tmp_path / "local")
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    try:
-        distributed = train(config, tmp_path / "ray", backend="ray")
+    try:                          # the same run through the command line, on 2 Ray actors
+        status = main(["train", "--out", str(tmp_path / "ray"), "--backend", "ray", "--workers", "2",
+                       "--updates", "2", "--rollouts", "4", "--seed", "1", "--start", "perturbed",
+                       "--option", "sigma=0.3", "--eval-episodes", "2", "--n-periodic", "10", "--n-transient", "10",
+                       "--env-option", "n_periods=2", "--env-option", "control_rate=50",
+                       "--reset-option", f"context={json.dumps(context.tolist())}"])
     finally:
         ray.shutdown()
+    assert status == 0
+    distributed = RunDirectory(tmp_path / "ray")
     records = _without_time(local.read_log())
     assert [r["update"] for r in records] == [0, 1, 2]
     assert _without_time(distributed.read_log()) == records
     np.testing.assert_array_equal(local.load_best(), distributed.load_best())
     assert len({r["return_mean"] for r in records[1:]}) == 2      # the updates differ: a real search ran
+
+
+def test_the_ray_backend_without_ray_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)                # makes "import ray" fail
+    with pytest.raises(ImportError, match=r"rdmp-gym\[ray\]"):
+        Evaluator(TaskSpec(TRACKING_ID, TRACKING), 1, backend="ray")
 
 
 def test_a_bad_backend_is_refused():
