@@ -104,17 +104,19 @@ def _summary(batch: EpisodeBatch) -> dict[str, Any]:
 
 
 def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, workers: int = 1,
-                 policy: str = "best", video: bool = False, progress: bool = False) -> dict[str, Any]:
+                 policy: str = "best", video: bool = False, progress: bool = False, backend: str = "local",
+                 ray_address: str | None = None) -> dict[str, Any]:
     """Evaluate the run at ``path`` and the imitation on the same ``episodes`` reset seeds.
 
     Args:
         path: a run directory written by :func:`rdmp_gym.agents.training.train`.
         episodes: evaluation episodes per policy.
         seed: draws the reset seeds (contexts).
-        workers: worker processes.
+        workers: worker processes (or Ray actors).
         policy: ``best`` (``best_params.npy``) or ``last`` (the last checkpoint's policy; PPO: its network).
         video: also write ``best_episode.mp4`` (needs an env with ``record_episode``, e.g. ArmarWipe).
         progress: show a progress bar.
+        backend, ray_address: where the episodes run (see :class:`Evaluator`).
     Returns:
         the contents of ``evaluation.json``.
     """
@@ -126,7 +128,7 @@ def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, wor
     run.check_writable()             # before any episode is run
     spec = config.task
     seeds = np.random.default_rng(seed).integers(2**31 - 1, size=episodes)
-    with Evaluator(spec, workers) as evaluator:
+    with Evaluator(spec, workers, backend, ray_address) as evaluator:
         env = evaluator.env
         observations = np.stack([env.reset(seed=int(s), options=spec.options())[0] for s in seeds])
         trained = _trained_actions(run, config, policy, observations, evaluator.n_actions)

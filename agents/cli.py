@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .evaluation import WorkerError
 from .tasks import WIPE_ID
 
 __all__ = ["main"]
@@ -67,6 +68,15 @@ def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return kwargs
 
 
+def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="where the episodes run: local worker processes or Ray actors (pip install "
+                             "'rdmp-gym[ray]'); the numbers are the same (default %(default)s)")
+    parser.add_argument("--ray-address", default=None,
+                        help="Ray cluster to join with --backend ray (default: $RAY_ADDRESS, else a new local "
+                             "Ray instance with --workers CPUs)")
+
+
 def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool, eval_episodes: int
                             ) -> None:
     from .training import AGENTS, START_MODES
@@ -78,6 +88,7 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     parser.add_argument("--seed", type=int, default=0, help="run seed (default %(default)s)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="worker processes (default: all cores, %(default)s)")
+    _add_backend_arguments(parser)
     parser.add_argument("--option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                         help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
@@ -167,8 +178,10 @@ def _train_or_resume(args: argparse.Namespace, agent: str, out: Path | str) -> A
 
     if args.resume:
         changes, labels = _resume_changes(args)
-        return train(None, out, resume=True, changes=changes, labels=labels, progress=True)
-    return train(_train_config(args, agent), out, progress=True)
+        return train(None, out, resume=True, changes=changes, labels=labels, progress=True,
+                     backend=args.backend, ray_address=args.ray_address)
+    return train(_train_config(args, agent), out, progress=True, backend=args.backend,
+                 ray_address=args.ray_address)
 
 
 def _command_train(args: argparse.Namespace) -> None:
@@ -186,7 +199,7 @@ def _command_evaluate(args: argparse.Namespace) -> None:
     from .assessment import evaluate_run
 
     result = evaluate_run(args.run, args.episodes, seed=args.seed, workers=args.workers, policy=args.policy,
-                          video=args.video, progress=True)
+                          video=args.video, progress=True, backend=args.backend, ray_address=args.ray_address)
     _print_table(_evaluation_rows(result))
     print(f"wrote {Path(args.run) / 'evaluation.json'} and evaluation.png" +
           (f" and {result['video']}" if "video" in result else ""))
@@ -230,7 +243,8 @@ def _command_main(args: argparse.Namespace) -> None:
     print(f"[3/4] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
     run = _train_or_resume(args, "pi2", out / "train")
     print(f"[4/4] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
-    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True)
+    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True,
+                          backend=args.backend, ray_address=args.ray_address)
     _print_table(_evaluation_rows(result))
     summary = {"fit": str(out / "fit.png"), "figures": str(out / "figures"), "run": str(run.path),
                "learning_curve": str(run.curve_png),
@@ -257,6 +271,7 @@ def _parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy (default %(default)s)")
     evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
     evaluate.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes")
+    _add_backend_arguments(evaluate)
     evaluate.add_argument("--policy", choices=("best", "last"), default="best", help="which policy of the run")
     evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
     evaluate.set_defaults(handler=_command_evaluate)
@@ -293,7 +308,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         torch.set_num_threads(1)
         args.handler(args)
-    except (ValueError, TypeError, OSError, FloatingPointError) as error:
+    except (ValueError, TypeError, OSError, FloatingPointError, ImportError, WorkerError) as error:
         print(f"rdmp-gym {args.command}: error: {error}", file=sys.stderr)
         return 2
     return 0

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import io
 import math
-import multiprocessing
 from collections.abc import Mapping
 from typing import Any
 
@@ -28,7 +27,7 @@ from .options import from_options
 from .ppo_config import PPOConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent"]
+__all__ = ["PPOAgent", "parallel_envs"]
 
 
 class _EpisodeCollector(BaseCallback):
@@ -43,7 +42,8 @@ class _EpisodeCollector(BaseCallback):
         for action, reward, info in zip(self.locals["clipped_actions"], self.locals["rewards"],
                                         self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
-            self.metrics.append(episode_metrics(float(reward), info))
+            # float32 as PPO learns from it (DummyVecEnv keeps rewards in float32, SubprocVecEnv in float64)
+            self.metrics.append(episode_metrics(float(np.float32(reward)), info))
         return True
 
     def pop_batch(self) -> EpisodeBatch:
@@ -58,12 +58,18 @@ class _EpisodeCollector(BaseCallback):
         return batch
 
 
-def _vector_env(task: TaskSpec, workers: int) -> VecEnv:
-    makers = [task.make_with_options] * workers
-    if workers == 1:
+def parallel_envs(rollouts: int, envs: int) -> int:
+    """PPO's vector-env size: the largest divisor of ``rollouts`` not above the ``envs`` setting (so every
+    env takes the same number of steps per update). It depends on the settings only, not on the machine."""
+    return max(count for count in range(1, min(envs, rollouts) + 1) if rollouts % count == 0)
+
+
+def _vector_env(task: TaskSpec, envs: int, workers: int) -> VecEnv:
+    """``envs`` envs, in this process (``workers == 1``) or one subprocess each (the same numbers either way)."""
+    makers = [task.make_with_options] * envs
+    if workers == 1 or envs == 1:
         return DummyVecEnv(makers)
-    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
-    return SubprocVecEnv(makers, start_method=method)
+    return SubprocVecEnv(makers, start_method="spawn")
 
 
 class PPOAgent:
@@ -73,8 +79,8 @@ class PPOAgent:
         task: the env.
         initial_action: ``[n]`` the policy mean at the start.
         rollouts: episodes per update.
-        workers: at most this many parallel envs (``SubprocVecEnv`` if > 1): the largest count that
-            divides ``rollouts``, so every env takes the same number of steps per update.
+        workers: 1 steps the envs in this process; more runs each of the ``envs`` envs (see
+            :func:`parallel_envs`) in its own subprocess (``SubprocVecEnv``). The numbers do not depend on it.
         seed: seeds torch, the policy and the envs.
         options: fields of :class:`PPOConfig`.
     """
@@ -82,9 +88,9 @@ class PPOAgent:
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
                  options: Mapping[str, Any] | None = None) -> None:
         self.config = from_options(PPOConfig, options, "ppo")
-        envs = max(count for count in range(1, min(workers, rollouts) + 1) if rollouts % count == 0)
+        envs = parallel_envs(rollouts, self.config.envs)
         self.rollouts = rollouts
-        self.env = _vector_env(task, envs)
+        self.env = _vector_env(task, envs, workers)
         self.env.seed(seed)
         batch = self.config.batch_size or rollouts
         hidden = [self.config.hidden, self.config.hidden]

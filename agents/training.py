@@ -53,8 +53,8 @@ class TrainConfig:
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
-        workers: worker processes for the episodes (the black-box learners' numbers do not depend on it;
-            PPO steps one env per worker, so its numbers do).
+        workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
+            (PPO's parallel envs are its own setting ``envs``).
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
@@ -361,7 +361,8 @@ def _resume_session(run: RunDirectory, config: TrainConfig) -> None:
 
 def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
           changes: Mapping[str, Any] | None = None, labels: Mapping[str, str] | None = None,
-          progress: bool = False) -> RunDirectory:
+          progress: bool = False, backend: str = "local",
+          ray_address: str | None = None) -> RunDirectory:
     """Train an agent and write the run directory ``out`` (see :mod:`rdmp_gym.agents.runs`).
 
     Args:
@@ -374,6 +375,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
             ``workers`` may change, any other value that differs from the run's is a ``ValueError``.
         labels: names for ``changes`` keys in error messages (e.g. the command-line flags).
         progress: show a progress bar.
+        backend, ray_address: where the episodes run (see :class:`Evaluator`); the numbers do not depend on it.
     Returns:
         the run directory.
     """
@@ -384,7 +386,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
         config = _resumed_config(run, config, changes or {}, labels or {}) if resume \
             else replace(config, demo=str(Path(config.demo).resolve()) if config.demo else "")
         streams = _seed_streams(config.seed)
-        with Evaluator(config.task, config.workers) as evaluator:
+        with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
             initial = _initial_action(config, evaluator, streams["start"])
             eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
             observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .basis import BasisSet, Fading, periodic_width, transient_basis_along_path
+from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
 from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
@@ -259,10 +260,10 @@ class RhythmicDMP:
         canonical = replace(self.canonical, tempo=tempo)
         unique, inverse = np.unique(inits, axis=0, return_inverse=True)
         phis, radii = canonical.state(elapsed, unique[:, 0], unique[:, 1])              # [U, T] each
-        forcing = np.empty((weights.shape[0], t.size, self.n_dims))
-        for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
-            members = np.flatnonzero(inverse.ravel() == index)
-            forcing[members] = self.basis.forcing(phi, r, weights[members])
+        if unique.shape[0] == 1:              # one canonical path shared by the batch
+            forcing = self.basis.forcing(phis[0], radii[0], weights)
+        else:                                 # every rollout on its own path (perturbed initial conditions)
+            forcing = batched_forcing(self.basis, phis[inverse.ravel()], radii[inverse.ravel()], weights)
         forcing *= amplitudes[:, None, :]
         if transform is not None:
             forcing = forcing @ transform.T
