@@ -13,7 +13,7 @@ import numpy as np
 from .basis import BasisSet, Fading, periodic_width, transient_basis_along_path
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
-from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
+from .fitting import FIT_METHODS, fit_trajectory, fit_weights, forcing_target, second_differences, smooth_derivatives
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .transformation import TransformationSystem
@@ -155,7 +155,7 @@ class RhythmicDMP:
             alpha_z: float = 25.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
             beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
             delta: float = 1e-3, periodic_overlap: float = 0.5, transient_overlap: float = 0.5,
-            smoothing: float = 0.15, regularization: float = 1e-6) -> RhythmicDMP:
+            smoothing: float = 0.15, regularization: float = 1e-6, smoothness: float = 0.0, substeps: int = 4) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         Args:
@@ -216,14 +216,30 @@ class RhythmicDMP:
             transient_widths=np.concatenate([widths for _, widths in paths]),
             transient_sizes=tuple(sizes), fading=fading)
 
-        activations, targets, transients = [], [], []
-        for demo, (phi0, r0), length, phase in zip(demos, inits, lengths, entrance, strict=True):
-            Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
-            phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
-            activations.append(basis.activations(phi, r))
-            targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
-            transients.append(TransientStart(phi0, r0, length, phase, Y[0].copy(), Yd[0].copy()))
-        weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization)
+        differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes))
+        transients = []
+        if method == "trajectory":
+            fine_dt = min(demo.dt for demo in demos) / substeps
+            normalized = []
+            for demo, (phi0, r0) in zip(demos, inits, strict=True):
+                steps = round(demo.dt / fine_dt)
+                phi, r = canonical.state(np.arange((demo.n_samples - 1) * steps + 1) * demo.dt / steps, phi0, r0)
+                normalized.append(basis.normalized(phi, r))
+            system = TransformationSystem(canonical.omega, demos[0].dt / substeps, alpha_z)
+            weights, starts = fit_trajectory(normalized, [demo.Y for demo in demos], anchor, system, substeps,
+                                             differences, smoothness, regularization)
+            for (phi0, r0), length, phase, (y0, z0) in zip(inits, lengths, entrance, starts, strict=True):
+                transients.append(TransientStart(phi0, r0, length, phase, y0.copy(), z0 * canonical.omega))
+        else:
+            activations, targets = [], []
+            for demo, (phi0, r0), length, phase in zip(demos, inits, lengths, entrance, strict=True):
+                Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
+                phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
+                activations.append(basis.activations(phi, r))
+                targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
+                transients.append(TransientStart(phi0, r0, length, phase, Y[0].copy(), Yd[0].copy()))
+            weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization,
+                                  smoothness, differences)
         logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
                     len(demos), n_periodic, sizes, common_period, method)
         return cls(canonical, basis, weights.T, transients, anchor, alpha_z)

@@ -8,14 +8,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.signal import savgol_filter
 
 from .basis import normalize
+from .transformation import TransformationSystem
 
 __all__ = ["FIT_METHODS", "fit_weights", "forcing_target", "smooth_derivatives"]
 
-FIT_METHODS = ("lwr", "ridge")
+FIT_METHODS = ("lwr", "ridge", "trajectory")
 
 
 def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int = 5
@@ -41,8 +44,28 @@ def forcing_target(Y: np.ndarray, Yd: np.ndarray, Ydd: np.ndarray, anchor: np.nd
     return Ydd / omega**2 - alpha_z * (beta_z * (anchor - Y) - Yd / omega)
 
 
+def second_differences(sizes: tuple[int, ...], cyclic: tuple[bool, ...]) -> np.ndarray:
+    """Second-difference operator ``[R, D]`` over consecutive families of ``sizes`` weights (D = sum).
+
+    Row ``w[i-1] - 2 w[i] + w[i+1]`` for neighbours within one family; a cyclic family also wraps around.
+    """
+    rows = []
+    offset = 0
+    for size, wraps in zip(sizes, cyclic, strict=True):
+        centres = range(size) if wraps else range(1, size - 1)
+        for i in centres:
+            row = np.zeros(sum(sizes))
+            row[offset + (i - 1) % size] += 1.0
+            row[offset + i] -= 2.0
+            row[offset + (i + 1) % size] += 1.0
+            rows.append(row)
+        offset += size
+    return np.array(rows).reshape(-1, sum(sizes))
+
+
 def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridge",
-                regularization: float = 1e-6) -> np.ndarray:
+                regularization: float = 1e-6, smoothness: float = 0.0,
+                differences: np.ndarray | None = None) -> np.ndarray:
     """Weights ``W [D, d]`` from raw activations ``[L, D]`` and targets ``[L, d]``.
 
     ``regularization`` (ridge only) is relative to the mean diagonal of the normal matrix. A basis
@@ -57,6 +80,56 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
     if method == "ridge":
         normalized = normalize(activations)
         gram = normalized.T @ normalized
-        lam = regularization * max(float(np.mean(np.diag(gram))), 1e-300)
-        return np.linalg.solve(gram + lam * np.eye(gram.shape[0]), normalized.T @ target)
+        scale = max(float(np.mean(np.diag(gram))), 1e-300)
+        penalty = regularization * scale * np.eye(gram.shape[0])
+        if smoothness > 0.0 and differences is not None:
+            penalty = penalty + smoothness * scale * differences.T @ differences
+        return np.linalg.solve(gram + penalty, normalized.T @ target)
     raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
+
+
+def fit_trajectory(normalized: Sequence[np.ndarray], samples: Sequence[np.ndarray], anchor: np.ndarray,
+                   system: TransformationSystem, substeps: int, differences: np.ndarray,
+                   smoothness: float, regularization: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+    """Weights and start states that make the DMP's own rollout match the sampled positions.
+
+    The rollout is linear in the weights and the start state ``(y0, z0)``: for a fixed canonical path
+    ``y(t) = sum_b w_b R_b(t) + S(t) g + E_y(t) y0 + E_z(t) z0``, where ``R_b`` is the spring's response to
+    basis function b alone, ``S`` its response to the anchor and ``E`` the free response. One penalised
+    least-squares problem over all demonstrations gives the weights (shared) and each demonstration's start
+    (its own), without differentiating the noisy samples.
+
+    Args:
+        normalized: per demonstration, normalised activations ``[(L_k - 1) * substeps + 1, D]`` on a grid
+            ``substeps`` times finer than its samples.
+        samples: per demonstration, positions ``[L_k, d]``.
+        anchor: ``[d]``.
+        system: the transformation system discretised at the fine step.
+        substeps: fine steps per sample.
+        differences: ``[R, D]`` second-difference operator of :func:`second_differences`.
+        smoothness, regularization: penalties on ``differences @ w`` and on ``w``, relative to the mean
+            diagonal of the normal matrix of the weights.
+    Returns:
+        ``(W [D, d], starts [K, 2, d])`` with ``starts[k] = (y0, z0)``, ``z0 = yd0 / Omega``.
+    """
+    n_basis, n_demos = normalized[0].shape[1], len(samples)
+    unit = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])                                   # (y0, z0) unit states
+    rows, right = [], []
+    for k, (activation, Y) in enumerate(zip(normalized, samples, strict=True)):
+        fine_times = np.arange(activation.shape[0]) * system.dt
+        responses, _ = system.rollout(system.omega * activation, np.zeros(n_basis), np.zeros(n_basis))
+        free, _ = system.free_response(fine_times, unit)                                # [2, Lf, 1]
+        step, _ = system.rollout(system.input(np.ones(1), np.zeros((activation.shape[0], 1))),
+                                 np.zeros(1), np.zeros(1))
+        design = np.zeros((Y.shape[0], n_basis + 2 * n_demos))
+        design[:, :n_basis] = responses[::substeps]
+        design[:, n_basis + 2 * k: n_basis + 2 * k + 2] = free[:, ::substeps, 0].T
+        rows.append(design)
+        right.append(Y - step[::substeps] * anchor)
+    design, right = np.concatenate(rows), np.concatenate(right)
+    gram = design.T @ design
+    scale = max(float(np.mean(np.diag(gram)[:n_basis])), 1e-300)
+    penalty = np.zeros_like(gram)
+    penalty[:n_basis, :n_basis] = scale * (smoothness * differences.T @ differences + regularization * np.eye(n_basis))
+    solution = np.linalg.solve(gram + penalty, design.T @ right)
+    return solution[:n_basis], solution[n_basis:].reshape(n_demos, 2, -1)
