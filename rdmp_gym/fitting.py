@@ -4,6 +4,11 @@
   activation-weighted mean of the target, one basis function at a time.
 * ``ridge``: beyond the paper, one regularised least-squares problem on the normalised basis, so the
   mixture (5) itself (not each basis function separately) fits the target; all weights at once.
+* ``trajectory`` (the default of :meth:`RhythmicDMP.fit`): beyond the paper, the weights and the start
+  state that make the DMP's own rollout match the sampled positions, with a second-difference
+  smoothness penalty on neighbouring weights. It needs no derivatives of the noisy samples: the
+  target (10) multiplies position noise by ``alpha_z beta_z`` and the acceleration estimate amplifies it
+  further, and every forcing error above the spring's bandwidth reaches the acceleration unfiltered.
 """
 
 from __future__ import annotations
@@ -13,10 +18,9 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .basis import normalize
-from .transformation import TransformationSystem
+from .basis import NORMALISATION_EPSILON, normalize
 
-__all__ = ["FIT_METHODS", "fit_weights", "forcing_target", "smooth_derivatives"]
+__all__ = ["FIT_METHODS", "fit_trajectory", "fit_weights", "forcing_target", "second_differences", "smooth_derivatives"]
 
 FIT_METHODS = ("lwr", "ridge", "trajectory")
 
@@ -44,20 +48,24 @@ def forcing_target(Y: np.ndarray, Yd: np.ndarray, Ydd: np.ndarray, anchor: np.nd
     return Ydd / omega**2 - alpha_z * (beta_z * (anchor - Y) - Yd / omega)
 
 
-def second_differences(sizes: tuple[int, ...], cyclic: tuple[bool, ...]) -> np.ndarray:
+def second_differences(sizes: Sequence[int], cyclic: Sequence[bool], spacings: Sequence[float]) -> np.ndarray:
     """Second-difference operator ``[R, D]`` over consecutive families of ``sizes`` weights (D = sum).
 
-    Row ``w[i-1] - 2 w[i] + w[i+1]`` for neighbours within one family; a cyclic family also wraps around.
+    Row ``(w[i-1] - 2 w[i] + w[i+1]) (h_0 / h)^1.5`` for neighbours within one family (a cyclic family also
+    wraps around), ``h`` the family's spacing in time and ``h_0`` the first family's: the sum of squares
+    then approximates the same integral of the squared second time derivative of the weights for
+    every family, whatever its spacing.
     """
     rows = []
     offset = 0
-    for size, wraps in zip(sizes, cyclic, strict=True):
+    for size, wraps, spacing in zip(sizes, cyclic, spacings, strict=True):
         centres = range(size) if wraps else range(1, size - 1)
+        gain = (spacings[0] / spacing) ** 1.5
         for i in centres:
             row = np.zeros(sum(sizes))
-            row[offset + (i - 1) % size] += 1.0
-            row[offset + i] -= 2.0
-            row[offset + (i + 1) % size] += 1.0
+            row[offset + (i - 1) % size] += gain
+            row[offset + i] -= 2.0 * gain
+            row[offset + (i + 1) % size] += gain
             rows.append(row)
         offset += size
     return np.array(rows).reshape(-1, sum(sizes))
@@ -65,11 +73,13 @@ def second_differences(sizes: tuple[int, ...], cyclic: tuple[bool, ...]) -> np.n
 
 def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridge",
                 regularization: float = 1e-6, smoothness: float = 0.0,
-                differences: np.ndarray | None = None) -> np.ndarray:
-    """Weights ``W [D, d]`` from raw activations ``[L, D]`` and targets ``[L, d]``.
+                differences: np.ndarray | None = None, floor: float = NORMALISATION_EPSILON) -> np.ndarray:
+    """Weights ``W [D, d]`` from raw activations ``[L, D]`` and forcing targets ``[L, d]`` (eq. (10)).
 
-    ``regularization`` (ridge only) is relative to the mean diagonal of the normal matrix. A basis
-    function that is never active gets weight 0 under either method.
+    ``regularization`` and ``smoothness`` (ridge only) penalise ``w`` and ``differences @ w`` (see
+    :func:`second_differences`), relative to the mean diagonal of the normal matrix; ``floor`` is the
+    mixture's (see :class:`~rdmp_gym.basis.Fading`). A basis function that is never active gets weight 0
+    under either method.
     """
     if method == "lwr":
         mass = activations.sum(axis=0)                                          # [D]
@@ -78,7 +88,7 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
         weights[active] = (activations[:, active].T @ target) / mass[active, None]
         return weights
     if method == "ridge":
-        normalized = normalize(activations)
+        normalized = normalize(activations, floor)
         gram = normalized.T @ normalized
         scale = max(float(np.mean(np.diag(gram))), 1e-300)
         penalty = regularization * scale * np.eye(gram.shape[0])
@@ -88,48 +98,37 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
     raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
 
 
-def fit_trajectory(normalized: Sequence[np.ndarray], samples: Sequence[np.ndarray], anchor: np.ndarray,
-                   system: TransformationSystem, substeps: int, differences: np.ndarray,
-                   smoothness: float, regularization: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.ndarray],
+                   samples: Sequence[np.ndarray], differences: np.ndarray, smoothness: float,
+                   regularization: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
     """Weights and start states that make the DMP's own rollout match the sampled positions.
 
-    The rollout is linear in the weights and the start state ``(y0, z0)``: for a fixed canonical path
-    ``y(t) = sum_b w_b R_b(t) + S(t) g + E_y(t) y0 + E_z(t) z0``, where ``R_b`` is the spring's response to
-    basis function b alone, ``S`` its response to the anchor and ``E`` the free response. One penalised
-    least-squares problem over all demonstrations gives the weights (shared) and each demonstration's start
-    (its own), without differentiating the noisy samples.
+    The rollout is linear in the weights and in each demonstration's start: ``y(t) = sum_b w_b R_b(t) +
+    sum_c s_c S_c(t)`` (``R_b``: the path's response to basis function b alone, ``S_c``: to the start
+    values ``s_c``). One penalised least-squares problem over all demonstrations gives the weights (shared)
+    and each demonstration's start values (its own), without differentiating the noisy samples.
 
     Args:
-        normalized: per demonstration, normalised activations ``[(L_k - 1) * substeps + 1, D]`` on a grid
-            ``substeps`` times finer than its samples.
-        samples: per demonstration, positions ``[L_k, d]``.
-        anchor: ``[d]``.
-        system: the transformation system discretised at the fine step.
-        substeps: fine steps per sample.
+        responses: per demonstration k, ``[L_k, D]`` responses to each basis function at its samples.
+        start_columns: per demonstration, ``[L_k, C]`` responses to its C start values.
+        samples: per demonstration, ``[L_k, d]`` positions minus the part the anchor explains.
         differences: ``[R, D]`` second-difference operator of :func:`second_differences`.
         smoothness, regularization: penalties on ``differences @ w`` and on ``w``, relative to the mean
             diagonal of the normal matrix of the weights.
     Returns:
-        ``(W [D, d], starts [K, 2, d])`` with ``starts[k] = (y0, z0)``, ``z0 = yd0 / Omega``.
+        ``(W [D, d], starts [K, C, d])``.
     """
-    n_basis, n_demos = normalized[0].shape[1], len(samples)
-    unit = np.array([[[1.0], [0.0]], [[0.0], [1.0]]])                                   # (y0, z0) unit states
-    rows, right = [], []
-    for k, (activation, Y) in enumerate(zip(normalized, samples, strict=True)):
-        fine_times = np.arange(activation.shape[0]) * system.dt
-        responses, _ = system.rollout(system.omega * activation, np.zeros(n_basis), np.zeros(n_basis))
-        free, _ = system.free_response(fine_times, unit)                                # [2, Lf, 1]
-        step, _ = system.rollout(system.input(np.ones(1), np.zeros((activation.shape[0], 1))),
-                                 np.zeros(1), np.zeros(1))
-        design = np.zeros((Y.shape[0], n_basis + 2 * n_demos))
-        design[:, :n_basis] = responses[::substeps]
-        design[:, n_basis + 2 * k: n_basis + 2 * k + 2] = free[:, ::substeps, 0].T
+    n_basis, n_demos, n_start = responses[0].shape[1], len(samples), start_columns[0].shape[1]
+    rows = []
+    for k, (response, columns) in enumerate(zip(responses, start_columns, strict=True)):
+        design = np.zeros((response.shape[0], n_basis + n_start * n_demos))
+        design[:, :n_basis] = response
+        design[:, n_basis + n_start * k: n_basis + n_start * (k + 1)] = columns
         rows.append(design)
-        right.append(Y - step[::substeps] * anchor)
-    design, right = np.concatenate(rows), np.concatenate(right)
+    design, right = np.concatenate(rows), np.concatenate(samples)
     gram = design.T @ design
     scale = max(float(np.mean(np.diag(gram)[:n_basis])), 1e-300)
     penalty = np.zeros_like(gram)
     penalty[:n_basis, :n_basis] = scale * (smoothness * differences.T @ differences + regularization * np.eye(n_basis))
     solution = np.linalg.solve(gram + penalty, design.T @ right)
-    return solution[:n_basis], solution[n_basis:].reshape(n_demos, 2, -1)
+    return solution[:n_basis], solution[n_basis:].reshape(n_demos, n_start, -1)
