@@ -53,8 +53,11 @@ class TransientStart:
     start_velocity: np.ndarray
 
 
-SETTLED_STEP = 1e-3
-"""Step (in periods) of the finite differences of the forcing term in :func:`settled_state`."""
+RUN_UP_SETTLING = 16.7
+"""Run-up length in units of the spring's time constant ``2 / (alpha_z Omega)``: ``exp(-x) (1 + x) = 1e-6``."""
+
+RUN_UP_STEPS = 400
+"""Samples of the run-up that finds the state the forcing term leads to (see :meth:`RhythmicDMP.settled_start`)."""
 
 PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
                   "smoothness": 0.0, "floor": NORMALISATION_EPSILON}
@@ -93,22 +96,12 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
     return np.stack(shifts)
 
 
-def settled_state(forcing: np.ndarray, anchor: np.ndarray, step: float, omega: float, alpha_z: float
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """The state ``(y, yd)`` ``[..., d]`` that a smooth forcing term leads to, from its samples at ``0, h, 2h``
-    (``forcing [..., 3, d]``, ``h = step``) and the anchor ``[..., d]``.
-
-    The transformation system is ``y + a dy/dt + b d2y/dt2 = u`` with ``u = g + f / (alpha_z beta_z)``,
-    ``a = 1 / (beta_z Omega)``, ``b = 1 / (alpha_z beta_z Omega^2)``; its slow (particular) solution is the
-    series ``y = u - a du/dt + (a^2 - b) d2u/dt2 - ...``, which we take to second order. Starting there,
-    the spring has no fast free response of its own: this is what removes the spike at the start.
-    """
-    beta_z = alpha_z / 4.0
-    a, b = 1.0 / (beta_z * omega), 1.0 / (alpha_z * beta_z * omega**2)
-    u = forcing / (alpha_z * beta_z)
-    slope = (-3.0 * u[..., 0, :] + 4.0 * u[..., 1, :] - u[..., 2, :]) / (2.0 * step)
-    curvature = (u[..., 0, :] - 2.0 * u[..., 1, :] + u[..., 2, :]) / step**2
-    return anchor + u[..., 0, :] - a * slope + (a * a - b) * curvature, slope - a * curvature
+def _run_up_times(canonical: CanonicalSystem, r0: np.ndarray, omega: float, alpha_z: float) -> np.ndarray:
+    """``RUN_UP_STEPS + 1`` times from ``-RUN_UP_SETTLING`` spring time constants to 0, shortened where a path
+    from ``r0 [B]`` (below the limit cycle) cannot be followed back that far."""
+    length = RUN_UP_SETTLING * 2.0 / (alpha_z * omega)
+    length = min(length, 0.999 * float(np.min(canonical.backward_reach(np.asarray(r0, dtype=float)))))
+    return np.linspace(-length, 0.0, RUN_UP_STEPS + 1)
 
 
 @lru_cache(maxsize=64)
@@ -161,16 +154,17 @@ def _fit_trajectory(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence
     omega = canonical.omega
     responses, start_columns, samples = [], [], []
     for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
-        step = SETTLED_STEP * canonical.period
-        phi, r = canonical.state(np.arange(3) * step, phi0, r0)
-        settled_y, settled_yd = settled_state(basis.normalized(phi, r), np.zeros(basis.n_basis), step, omega, alpha_z)
+        run_up = _run_up_times(canonical, np.array([r0]), omega, alpha_z)
+        phi, r = canonical.state(run_up, phi0, r0)
+        run_up_system = _transformation(omega, float(run_up[1] - run_up[0]), alpha_z)
+        settled_y, settled_z = run_up_system.settled_state(np.zeros(basis.n_basis), basis.normalized(phi, r))
         fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
         phi, r = canonical.state(fine, phi0, r0)
         system = _transformation(omega, demo.dt / substeps, alpha_z)
         response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
-                                  settled_y, settled_yd / omega)[0][::substeps]         # [L, D]
+                                  settled_y, settled_z)[0][::substeps]                 # [L, D]
         (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
-        responses.append(response - fall[:, None] * settled_y - slope[:, None] * settled_yd)
+        responses.append(response - fall[:, None] * settled_y - slope[:, None] * (settled_z * omega))
         start_columns.append(np.stack([fall, slope], axis=1))
         samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
     weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
@@ -368,18 +362,20 @@ class RhythmicDMP:
 
     def _settled(self, canonical: CanonicalSystem, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """``(y, yd)`` ``[B, d]`` that the forcing term leads to at t = 0 (see :func:`settled_state`)."""
+        """``(y, yd)`` ``[B, d]`` at t = 0 after a run-up along the canonical paths (see :meth:`settled_start`)."""
         omega = canonical.omega * canonical.tempo
-        step = SETTLED_STEP * canonical.period / canonical.tempo
-        forcing = self._forcing(canonical, np.arange(3) * step, weights, inits, amplitudes, transform)
-        return settled_state(forcing, anchors, step, omega, self.alpha_z)
+        times = _run_up_times(canonical, inits[:, 1], omega, self.alpha_z)
+        system = _transformation(omega, float(times[1] - times[0]), self.alpha_z)
+        y, z = system.settled_state(anchors, self._forcing(canonical, times, weights, inits, amplitudes, transform))
+        return y, z * omega
 
     def settled_start(self, transient: int = 0, tempo: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term leads to at its start.
 
-        The slow solution of the spring under the forcing term (:func:`settled_state`), which has no fast
-        transient of its own. The smooth start (``start_blend=True``) blends from the requested start into
-        the motion from this state.
+        Found by running the spring along the canonical path extended backwards (a run-up of
+        ``RUN_UP_SETTLING`` time constants, so the response to any earlier state has decayed below 1e-6):
+        the particular solution, which has no fast transient of its own. The smooth start
+        (``start_blend=True``) blends from the requested start into the motion from this state.
         """
         k = self._check_transient(transient)
         canonical = replace(self.canonical, tempo=self._tempo(tempo))
