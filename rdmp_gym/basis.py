@@ -24,7 +24,8 @@ import numpy as np
 from .canonical import CanonicalSystem
 from .validation import check_positive
 
-__all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path", "von_mises"]
+__all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path",
+           "von_mises"]
 
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5) by default; keeps it finite off every support."""

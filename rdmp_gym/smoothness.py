@@ -100,7 +100,8 @@ class SmoothTestSignal:
         # d^n/dt^n cos(x) = cos(x + n pi/2) (h Omega)^n, likewise for sin.
         gain = (omega * harmonics) ** order
         shift = order * np.pi / 2.0
-        out = (np.cos(angle + shift) * gain) @ self.cos_coefficients + (np.sin(angle + shift) * gain) @ self.sin_coefficients
+        out = ((np.cos(angle + shift) * gain) @ self.cos_coefficients
+               + (np.sin(angle + shift) * gain) @ self.sin_coefficients)
         return out + (self.anchor if order == 0 else 0.0)
 
     def derivatives(self, t: np.ndarray, order: int = 3) -> list[np.ndarray]:
@@ -126,7 +127,8 @@ class SmoothTestSignal:
     def demonstration(self, duration: float, rate: float = 100.0, noise: float = 4e-4,
                       rng: np.random.Generator | int | None = 0) -> Demonstration:
         """Samples at ``rate`` Hz over ``[0, duration]`` with white noise of std ``noise`` (m)."""
-        t = check_time_grid(np.arange(int(np.floor(check_positive(duration, "duration") * rate + 1e-9)) + 1) / rate, "t")
+        n_samples = int(np.floor(check_positive(duration, "duration") * rate + 1e-9)) + 1
+        t = check_time_grid(np.arange(n_samples) / rate, "t")
         clean = self.derivatives(t, order=0)[0]
         generator = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         noisy = clean + noise * generator.standard_normal(clean.shape)
