@@ -53,12 +53,6 @@ class TransientStart:
     start_velocity: np.ndarray
 
 
-RUN_UP_SETTLING = 16.7
-"""Run-up length in units of the spring's time constant ``2 / (alpha_z Omega)``: ``exp(-x) (1 + x) = 1e-6``."""
-
-RUN_UP_STEPS = 400
-"""Samples of the run-up that finds the state the forcing term leads to (see :meth:`RhythmicDMP.settled_start`)."""
-
 PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
                   "smoothness": 0.0, "floor": NORMALISATION_EPSILON}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
@@ -94,14 +88,6 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
         profiles = gains @ start_blend_profiles(elapsed, float(length[row]))            # [2, T]
         shifts.append(profiles[0][:, None] * offset[row] + profiles[1][:, None] * velocity_offset[row])
     return np.stack(shifts)
-
-
-def _run_up_times(canonical: CanonicalSystem, r0: np.ndarray, omega: float, alpha_z: float) -> np.ndarray:
-    """``RUN_UP_STEPS + 1`` times from ``-RUN_UP_SETTLING`` spring time constants to 0, shortened where a path
-    from ``r0 [B]`` (below the limit cycle) cannot be followed back that far."""
-    length = RUN_UP_SETTLING * 2.0 / (alpha_z * omega)
-    length = min(length, 0.999 * float(np.min(canonical.backward_reach(np.asarray(r0, dtype=float)))))
-    return np.linspace(-length, 0.0, RUN_UP_STEPS + 1)
 
 
 @lru_cache(maxsize=64)
@@ -154,10 +140,9 @@ def _fit_trajectory(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence
     omega = canonical.omega
     responses, start_columns, samples = [], [], []
     for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
-        run_up = _run_up_times(canonical, np.array([r0]), omega, alpha_z)
-        phi, r = canonical.state(run_up, phi0, r0)
-        run_up_system = _transformation(omega, float(run_up[1] - run_up[0]), alpha_z)
-        settled_y, settled_z = run_up_system.settled_state(np.zeros(basis.n_basis), basis.normalized(phi, r))
+        phi, r = canonical.state(np.zeros(1), phi0, r0)
+        settled_y = basis.normalized(phi, r)[0] / (alpha_z * alpha_z / 4.0)              # [D], at rest
+        settled_z = np.zeros(basis.n_basis)
         fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
         phi, r = canonical.state(fine, phi0, r0)
         system = _transformation(omega, demo.dt / substeps, alpha_z)
@@ -362,20 +347,16 @@ class RhythmicDMP:
 
     def _settled(self, canonical: CanonicalSystem, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """``(y, yd)`` ``[B, d]`` at t = 0 after a run-up along the canonical paths (see :meth:`settled_start`)."""
-        omega = canonical.omega * canonical.tempo
-        times = _run_up_times(canonical, inits[:, 1], omega, self.alpha_z)
-        system = _transformation(omega, float(times[1] - times[0]), self.alpha_z)
-        y, z = system.settled_state(anchors, self._forcing(canonical, times, weights, inits, amplitudes, transform))
-        return y, z * omega
+        """``(y, yd)`` ``[B, d]``: the spring's equilibrium under the forcing term at t = 0, at rest."""
+        forcing = self._forcing(canonical, np.zeros(1), weights, inits, amplitudes, transform)[:, 0]
+        return anchors + forcing / (self.alpha_z * self.alpha_z / 4.0), np.zeros_like(anchors)
 
     def settled_start(self, transient: int = 0, tempo: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term leads to at its start.
-
-        Found by running the spring along the canonical path extended backwards (a run-up of
-        ``RUN_UP_SETTLING`` time constants, so the response to any earlier state has decayed below 1e-6):
-        the particular solution, which has no fast transient of its own. The smooth start
-        (``start_blend=True``) blends from the requested start into the motion from this state.
+        """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term holds at its start: the
+        spring's equilibrium ``g + f / (alpha_z beta_z)`` at rest (for a demonstration that starts at rest,
+        its start). From there the acceleration starts at 0 and follows the forcing term with no fast
+        transient of its own; the smooth start (``start_blend=True``) blends from the requested start
+        into the motion from this state.
         """
         k = self._check_transient(transient)
         canonical = replace(self.canonical, tempo=self._tempo(tempo))
