@@ -53,6 +53,10 @@ class TransientStart:
     start_velocity: np.ndarray
 
 
+SMOOTHNESS_REFERENCE = 40
+"""``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
+``period / 40``); other spacings get the penalty on the same time curvature."""
+
 PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
                   "smoothness": 0.0, "floor": NORMALISATION_EPSILON}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
@@ -130,32 +134,27 @@ def _transform_matrix(n_dims: int, scale: float | np.ndarray, rotation: float | 
     return matrix * scale
 
 
-def _fit_trajectory(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence[Demonstration],
-                    inits: Sequence[tuple[float, float]], lengths: Sequence[float], entrance: Sequence[float],
-                    anchor: np.ndarray, alpha_z: float, substeps: int, differences: np.ndarray, smoothness: float,
-                    regularization: float) -> tuple[np.ndarray, list[TransientStart]]:
-    """``method="trajectory"``: weights ``[D, d]`` and starts of the smooth-start rollout model
-    ``y = P(t) + (y0 - P(0)) P0(t) + (yd0 - dP/dt(0)) P1(t)`` (P: the settled motion, linear in the weights),
-    fitted to the samples; the responses are simulated ``substeps`` times finer than the samples."""
-    omega = canonical.omega
+def _trajectory_design(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence[Demonstration],
+                       inits: Sequence[tuple[float, float]], lengths: Sequence[float], anchor: np.ndarray,
+                       alpha_z: float, substeps: int) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """The smooth-start rollout model ``y = P(t) + (y0 - P(0)) P0(t) + yd0 P1(t)`` at each demonstration's
+    samples (P: the motion from the settled state, linear in the weights; P0, P1: the start-blend profiles),
+    as ``(responses [L_k, D], start_columns [L_k, 2], samples minus the anchor's part [L_k, d])`` per
+    demonstration. The basis responses are simulated ``substeps`` times finer than the samples."""
     responses, start_columns, samples = [], [], []
     for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
         phi, r = canonical.state(np.zeros(1), phi0, r0)
-        settled_y = basis.normalized(phi, r)[0] / (alpha_z * alpha_z / 4.0)              # [D], at rest
-        settled_z = np.zeros(basis.n_basis)
+        settled = basis.normalized(phi, r)[0] / (alpha_z * alpha_z / 4.0)                 # [D], at rest
         fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
         phi, r = canonical.state(fine, phi0, r0)
-        system = _transformation(omega, demo.dt / substeps, alpha_z)
+        system = _transformation(canonical.omega, demo.dt / substeps, alpha_z)
         response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
-                                  settled_y, settled_z)[0][::substeps]                 # [L, D]
+                                  settled, np.zeros(basis.n_basis))[0][::substeps]      # [L, D]
         (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
-        responses.append(response - fall[:, None] * settled_y - slope[:, None] * (settled_z * omega))
+        responses.append(response - fall[:, None] * settled)
         start_columns.append(np.stack([fall, slope], axis=1))
         samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
-    weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
-    transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
-                  for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
-    return weights, transients
+    return responses, start_columns, samples
 
 
 class RhythmicDMP:
@@ -180,7 +179,7 @@ class RhythmicDMP:
                  amplitude: np.ndarray | None = None) -> None:
         self.canonical = canonical
         self.basis = basis
-        self.weights = as_finite_array(weights, "weights", ndim=2)
+        self.weights = np.ascontiguousarray(as_finite_array(weights, "weights", ndim=2))
         self.transients = tuple(transients)
         self.anchor = as_finite_array(anchor, "anchor", ndim=1)
         self.alpha_z = check_positive(alpha_z, "alpha_z")
@@ -296,21 +295,27 @@ class RhythmicDMP:
 
         spacings = [common_period / n_periodic] + [(length - 0.5 * t_f) / max(m - 1, 1)
                                                    for length, m in zip(lengths, sizes, strict=True)]
-        differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes), spacings)
-        transients = []
+        differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes), spacings,
+                                         common_period / SMOOTHNESS_REFERENCE)
+        responses, start_columns, samples = _trajectory_design(canonical, basis, demos, inits, lengths, anchor,
+                                                               alpha_z, substeps)
         if method == "trajectory":
-            weights, transients = _fit_trajectory(canonical, basis, demos, inits, lengths, entrance, anchor, alpha_z,
-                                                  substeps, differences, smoothness, regularization)
+            weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness,
+                                             regularization)
         else:
             activations, targets = [], []
-            for demo, (phi0, r0), length, phase in zip(demos, inits, lengths, entrance, strict=True):
+            for demo, (phi0, r0) in zip(demos, inits, strict=True):
                 Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
                 phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
                 activations.append(basis.activations(phi, r))
                 targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
-                transients.append(TransientStart(phi0, r0, length, phase, Y[0].copy(), Yd[0].copy()))
             weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization,
                                   smoothness, differences, floor)
+            # the start (y0, yd0) that best explains the samples under the smooth start, given the weights
+            starts = np.stack([np.linalg.lstsq(columns, sample - response @ weights, rcond=None)[0]
+                               for response, columns, sample in zip(responses, start_columns, samples, strict=True)])
+        transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
+                      for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
         logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
                     len(demos), n_periodic, sizes, common_period, method)
         return cls(canonical, basis, weights.T, transients, anchor, alpha_z)

@@ -48,19 +48,20 @@ def forcing_target(Y: np.ndarray, Yd: np.ndarray, Ydd: np.ndarray, anchor: np.nd
     return Ydd / omega**2 - alpha_z * (beta_z * (anchor - Y) - Yd / omega)
 
 
-def second_differences(sizes: Sequence[int], cyclic: Sequence[bool], spacings: Sequence[float]) -> np.ndarray:
+def second_differences(sizes: Sequence[int], cyclic: Sequence[bool], spacings: Sequence[float],
+                       reference: float) -> np.ndarray:
     """Second-difference operator ``[R, D]`` over consecutive families of ``sizes`` weights (D = sum).
 
     Row ``(w[i-1] - 2 w[i] + w[i+1]) (h_0 / h)^1.5`` for neighbours within one family (a cyclic family also
-    wraps around), ``h`` the family's spacing in time and ``h_0`` the first family's: the sum of squares
-    then approximates the same integral of the squared second time derivative of the weights for
-    every family, whatever its spacing.
+    wraps around), ``h`` the family's spacing in time and ``h_0 = reference``: the sum of squares then
+    approximates the same integral of the squared second time derivative of the weights for every family,
+    whatever its spacing or number of basis functions.
     """
     rows = []
     offset = 0
     for size, wraps, spacing in zip(sizes, cyclic, spacings, strict=True):
         centres = range(size) if wraps else range(1, size - 1)
-        gain = (spacings[0] / spacing) ** 1.5
+        gain = (reference / spacing) ** 1.5
         for i in centres:
             row = np.zeros(sum(sizes))
             row[offset + (i - 1) % size] += gain
