@@ -94,6 +94,14 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
     return np.stack(shifts)
 
 
+def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tuple[np.ndarray, np.ndarray]:
+    """The state ``(y, yd)`` ``[..., d]`` that the forcing term ``[..., d]`` holds at the start: the spring's
+    equilibrium ``g + f / (alpha_z beta_z)``, at rest. From there the acceleration starts at 0 and the spring
+    follows the forcing term with no fast transient of its own (for a demonstration that starts at rest,
+    this is about its start)."""
+    return anchor + forcing / (alpha_z * alpha_z / 4.0), np.zeros_like(anchor + forcing)
+
+
 @lru_cache(maxsize=64)
 def _transformation(omega: float, dt: float, alpha_z: float) -> TransformationSystem:
     return TransformationSystem(omega, dt, alpha_z)
@@ -144,14 +152,14 @@ def _trajectory_design(canonical: CanonicalSystem, basis: BasisSet, demos: Seque
     responses, start_columns, samples = [], [], []
     for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
         phi, r = canonical.state(np.zeros(1), phi0, r0)
-        settled = basis.normalized(phi, r)[0] / (alpha_z * alpha_z / 4.0)                 # [D], at rest
+        settled, settled_yd = settled_state(basis.normalized(phi, r)[0], np.zeros(basis.n_basis), alpha_z)
         fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
         phi, r = canonical.state(fine, phi0, r0)
         system = _transformation(canonical.omega, demo.dt / substeps, alpha_z)
         response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
-                                  settled, np.zeros(basis.n_basis))[0][::substeps]      # [L, D]
+                                  settled, settled_yd / canonical.omega)[0][::substeps]  # [L, D]
         (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
-        responses.append(response - fall[:, None] * settled)
+        responses.append(response - fall[:, None] * settled - slope[:, None] * settled_yd)
         start_columns.append(np.stack([fall, slope], axis=1))
         samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
     return responses, start_columns, samples
@@ -242,7 +250,8 @@ class RhythmicDMP:
             periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
                 wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
             smoothing: Savitzky-Golay window (s) for the demonstration's derivatives (``lwr``, ``ridge``).
-            regularization: relative ridge penalty (default 1e-8 for ``trajectory``, 1e-6 otherwise).
+            regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the
+                forcing term stays gentle off the encoded paths; 1e-6 otherwise).
             smoothness: relative penalty on second differences of neighbouring weights (``ridge``,
                 ``trajectory``); 0 in :data:`PAPER_SETTINGS`.
             floor: added to the sum of activations in the mixture (5) (:class:`Fading`), so that the forcing
@@ -252,7 +261,7 @@ class RhythmicDMP:
         """
         demos = _as_demos(demos)
         if regularization is None:
-            regularization = 1e-8 if method == "trajectory" else 1e-6
+            regularization = 1e-4 if method == "trajectory" else 1e-6
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
         if int(n_periodic) < 2:
@@ -352,16 +361,15 @@ class RhythmicDMP:
 
     def _settled(self, canonical: CanonicalSystem, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """``(y, yd)`` ``[B, d]``: the spring's equilibrium under the forcing term at t = 0, at rest."""
+        """``(y, yd)`` ``[B, d]`` that the forcing term leads to at t = 0 (see :func:`settled_state`)."""
         forcing = self._forcing(canonical, np.zeros(1), weights, inits, amplitudes, transform)[:, 0]
-        return anchors + forcing / (self.alpha_z * self.alpha_z / 4.0), np.zeros_like(anchors)
+        return settled_state(forcing, anchors, self.alpha_z)
 
     def settled_start(self, transient: int = 0, tempo: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term holds at its start: the
-        spring's equilibrium ``g + f / (alpha_z beta_z)`` at rest (for a demonstration that starts at rest,
-        its start). From there the acceleration starts at 0 and follows the forcing term with no fast
-        transient of its own; the smooth start (``start_blend=True``) blends from the requested start
-        into the motion from this state.
+        """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term leads to at its start
+        (:func:`settled_state`; for a demonstration that starts at rest, about its start). From there the
+        acceleration starts at 0 and follows the forcing term with no fast transient of its own; the smooth
+        start (``start_blend=True``) blends from the requested start into the motion from this state.
         """
         k = self._check_transient(transient)
         canonical = replace(self.canonical, tempo=self._tempo(tempo))
