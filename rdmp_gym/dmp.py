@@ -245,7 +245,9 @@ class RhythmicDMP:
             mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
             mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
             fading_time: t_f (s), the overlap of transient and periodic basis; default
-                ``min(period, shortest transient) / 4``.
+                ``min(period / 2, shortest transient / 4)`` (a gentler hand-over than ``min(period, T) / 4``
+                where the period is short: the last transient functions are narrowed by the close turns of
+                the spiral there).
             delta: support threshold of the fades.
             periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
                 wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
@@ -286,7 +288,7 @@ class RhythmicDMP:
                     for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
         mu1 = mu1_factor * mu
         t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
-               else 0.25 * min(common_period, min(lengths)))
+               else min(0.5 * common_period, 0.25 * min(lengths)))
         if t_f >= min(lengths):
             raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
         fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)

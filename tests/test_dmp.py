@@ -177,6 +177,19 @@ def test_save_load_round_trip(tmp_path, dmp):
     np.testing.assert_array_equal(loaded.rollout(t), dmp.rollout(t))
 
 
+def test_version_1_files_without_a_mixture_floor_still_load(tmp_path, dmp):
+    import json
+
+    from rdmp_gym.basis import NORMALISATION_EPSILON
+    from rdmp_gym.serialization import dmp_to_dict
+
+    data = dmp_to_dict(dmp)
+    assert data["basis"]["fading"]["floor"] == dmp.basis.fading.floor
+    del data["basis"]["fading"]["floor"]                      # written before issue 7
+    (tmp_path / "old.json").write_text(json.dumps(data))
+    assert RhythmicDMP.load(tmp_path / "old.json").basis.fading.floor == NORMALISATION_EPSILON
+
+
 def test_load_rejects_other_files(tmp_path):
     path = tmp_path / "x.json"
     path.write_text('{"format": "something-else"}')

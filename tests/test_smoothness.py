@@ -73,10 +73,9 @@ def generator_signals():
 
 @pytest.mark.parametrize("index", range(6))
 def test_generator_signals(generator_signals, index):
-    """Own test signals (period 0.7-2 s, 1-3 harmonics, curved transient 1-2.5 s, noise 0.3-0.5 mm at 100 Hz).
-    The periodic part meets the issue's targets (jerk <= 2.5x: 2.1x on one signal); the transient meets the
-    position target but only looser acceleration bounds (<= 25 %, jerk <= 12x, peak <= 1.5x; the issue asks
-    15 % / 2x / 1.3x, met on the built-in styles, not yet on every signal: see the README)."""
+    """Own test signals (period 0.7-2 s, 1-3 harmonics, curved transient 1-2.5 s, noise 0.3-0.5 mm at 100 Hz):
+    the issue's targets, except the integrated squared jerk, held to 3x (measured up to 2.9x in the transient of
+    a 0.8 s pattern under a 2.2 s transient and 2.1x in the periodic part of a pure 1.1 s sinusoid)."""
     signal, duration, demo = generator_signals[index]
     t = np.arange(0.0, duration + 1e-9, DT)
     position, _, acceleration, jerk = signal.derivatives(t)
@@ -85,10 +84,9 @@ def test_generator_signals(generator_signals, index):
     periodic = motion_metrics(Y, (position, acceleration, jerk), DT, ~transient)
     approach = motion_metrics(Y, (position, acceleration, jerk), DT, transient)
     assert periodic["position"] < 0.003 and approach["position"] < 0.008
-    assert periodic["acceleration"] <= 0.10 and periodic["peak_acceleration_ratio"] <= 1.3
-    assert periodic["jerk_ratio"] <= 2.5
-    assert approach["acceleration"] <= 0.25 and approach["jerk_ratio"] <= 12.0
-    assert approach["peak_acceleration_ratio"] <= 1.5
+    assert periodic["acceleration"] <= 0.10 and approach["acceleration"] <= 0.15
+    assert periodic["peak_acceleration_ratio"] <= 1.3 and approach["peak_acceleration_ratio"] <= 1.3
+    assert periodic["jerk_ratio"] <= 3.0 and approach["jerk_ratio"] <= 3.0
 
 
 def _peak_acceleration(Y):
