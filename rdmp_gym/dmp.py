@@ -58,7 +58,7 @@ SMOOTHNESS_REFERENCE = 40
 ``period / 40``); other spacings get the penalty on the same time curvature."""
 
 PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
-                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON}
+                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25)}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
 (LWR (11), a stiff spring, narrow basis functions, the bare mixture (5)); roll out with
 ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
@@ -228,7 +228,8 @@ class RhythmicDMP:
             beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
             delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
             smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.1,
-            floor: float = SMOOTH_FLOOR, substeps: int = 4) -> RhythmicDMP:
+            floor: float = SMOOTH_FLOOR, substeps: int = 4,
+            fading_fractions: tuple[float, float] = (0.5, 0.25)) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         Args:
@@ -245,9 +246,7 @@ class RhythmicDMP:
             mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
             mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
             fading_time: t_f (s), the overlap of transient and periodic basis; default
-                ``min(period / 2, shortest transient / 4)`` (a gentler hand-over than ``min(period, T) / 4``
-                where the period is short: the last transient functions are narrowed by the close turns of
-                the spiral there).
+                ``min(a period, b shortest transient)`` with ``(a, b) = fading_fractions``.
             delta: support threshold of the fades.
             periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
                 wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
@@ -260,6 +259,9 @@ class RhythmicDMP:
                 term fades to 0 where no basis function is active.
             substeps: ``trajectory`` simulates each basis function's response this many times finer than the
                 samples.
+            fading_fractions: ``(a, b)`` of the default ``fading_time``; ``(0.5, 0.25)`` gives a gentler
+                hand-over than the earlier ``(0.25, 0.25)`` where the period is short (the last transient
+                functions are narrowed there by the close turns of the spiral).
         """
         demos = _as_demos(demos)
         if regularization is None:
@@ -288,7 +290,7 @@ class RhythmicDMP:
                     for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
         mu1 = mu1_factor * mu
         t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
-               else min(0.5 * common_period, 0.25 * min(lengths)))
+               else min(fading_fractions[0] * common_period, fading_fractions[1] * min(lengths)))
         if t_f >= min(lengths):
             raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
         fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
@@ -314,17 +316,20 @@ class RhythmicDMP:
             weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness,
                                              regularization)
         else:
-            activations, targets = [], []
+            activations, targets, starts = [], [], []
             for demo, (phi0, r0) in zip(demos, inits, strict=True):
                 Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
                 phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
                 activations.append(basis.activations(phi, r))
                 targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
+                starts.append(Y[0])
             weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization,
                                   smoothness, differences, floor)
-            # the start (y0, yd0) that best explains the samples under the smooth start, given the weights
-            starts = np.stack([np.linalg.lstsq(columns, sample - response @ weights, rcond=None)[0]
-                               for response, columns, sample in zip(responses, start_columns, samples, strict=True)])
+            # the demonstrated start (smoothed), and the start velocity that best explains the samples under
+            # the smooth start (a derivative estimate at the first sample is noisy)
+            starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
+                                           rcond=None)[0][0])
+                      for y0, response, columns, sample in zip(starts, responses, start_columns, samples, strict=True)]
         transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
                       for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
         logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",

@@ -160,6 +160,10 @@ def test_nearest_transient_from_the_current_state():
         assert stepper.transient == k
         online = [stepper.state[0]] + [stepper.step()[0] for _ in range(t.size - 1)]
         np.testing.assert_allclose(np.array(online), chosen, atol=1e-9)
+    y0 = dmp.starts[[2, 0]] + 0.01                                # each row picks its own transient
+    batch = dmp.rollout_batch(np.stack([dmp.anchor, dmp.anchor]), t, groups="anchor", y0=y0, transient="nearest")
+    for row, k in zip(batch, (2, 0), strict=True):
+        np.testing.assert_allclose(row, dmp.rollout(t, y0=y0[[2, 0].index(k)], transient=k), atol=1e-12)
     with pytest.raises(ValueError, match="transient"):
         dmp.rollout(t, transient="closest")
 
