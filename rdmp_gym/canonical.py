@@ -205,18 +205,6 @@ class CanonicalSystem:
         """``(phi(t), r(t))``, each ``[T]`` (scalar initial conditions) or ``[B, T]``."""
         return self.phase(t, phi0), self.radius(t, r0)
 
-    def backward_reach(self, r0: np.ndarray) -> np.ndarray:
-        """How far back in time (s, at this tempo) the path through ``r0`` (any shape) stays within the table
-        (``inf`` on the limit cycle; below it the path came from r near 0)."""
-        r0 = self._check_r0(r0)
-        table = self._table
-        reach = np.full(r0.shape, np.inf)
-        for sign in (1, -1):
-            mask = table.branch(r0) == sign
-            if np.any(mask):
-                reach[mask] = (table.max_travel(sign) - table.travel(r0[mask])) / self.tempo
-        return reach
-
     def time_between(self, r_from: float, r_to: float) -> float:
         """Time (s, at this tempo) the system needs to go from ``r_from`` to ``r_to`` on the same side of mu."""
         r_from_a, r_to_a = self._check_r0(np.array([r_from, r_to]))

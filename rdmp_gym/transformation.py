@@ -114,15 +114,6 @@ class TransformationSystem:
             responses.append(response)
         return responses[0], responses[1]
 
-    def settled_state(self, anchor: np.ndarray, forcing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The state ``(y, z)`` ``[..., d]`` at the last of the samples ``forcing [..., P, d]`` (spacing ``dt``)
-        when the system started at the equilibrium of the first sample, ``y = g + f / (alpha_z beta_z)``,
-        ``z = 0`` (anchor ``[..., d]``). Over a long enough run-up (several ``1 / (alpha_z Omega)``) this is
-        the particular solution: the state the forcing term itself leads to, whatever the start."""
-        y0 = anchor + forcing[..., 0, :] / (self.alpha_z * self.beta_z)
-        y, z = self.rollout(self.input(anchor, forcing), y0, np.zeros_like(y0))
-        return y[..., -1, :], z[..., -1, :]
-
     def rollout(self, u: np.ndarray, y0: np.ndarray, z0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Integrate a whole input sequence.
 
