@@ -41,8 +41,10 @@ class TransientStart:
         phi0, r0: initial condition of the canonical system, ``init_T(entrance_phase, mu1)``.
         length: transient length T_k of the demonstration (s).
         entrance_phase: phase at which the transient enters the periodic pattern (rad).
-        start: ``[d]`` position of the demonstration at its first sample.
-        start_velocity: ``[d]`` velocity of the demonstration at its first sample.
+        start: ``[d]`` start position of the demonstration (fitted with the weights by ``trajectory``; the
+            smoothed first sample otherwise).
+        start_velocity: ``[d]`` its start velocity (fitted under the smooth-start model: a derivative
+            estimate at the first noisy sample is off by up to 0.1 m/s).
     """
 
     phi0: float
@@ -650,8 +652,9 @@ class DMPStepper:
     Uses the same exact first-order-hold step as :meth:`RhythmicDMP.rollout`, so with no coupling
     both produce the same trajectory. A coupling term ``c [d]`` is added to the forcing term inside
     (4) and held over the step: ``dz/dt = Omega (alpha_z (beta_z (g - y) - z) + f + c)``. The
-    canonical system does not depend on ``y``, so the open-loop part of the input (anchor and forcing
-    term) is computed ahead in blocks of ``BLOCK`` samples; a step then costs one 2x2 update.
+    canonical system does not depend on ``y``, so the open-loop part of the input (anchor, moved by the
+    smooth start's offset, and forcing term) is computed ahead in blocks of ``BLOCK`` samples; a step then
+    costs one 2x2 update.
     """
 
     BLOCK = 256
