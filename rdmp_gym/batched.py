@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .basis import GATE_FLOOR, NORMALISATION_EPSILON, BasisSet, Fading
+from .basis import GATE_FLOOR, BasisSet, Fading
 
 __all__ = ["batched_forcing", "exponent_matrix"]
 
@@ -93,4 +93,4 @@ def batched_forcing(basis: BasisSet, phi: np.ndarray, r: np.ndarray, weights: np
         np.matmul(extended[start:start + count], activation.reshape(size, count, samples).transpose(1, 0, 2),
                   out=sums[start:start + count])
     sums = sums.transpose(0, 2, 1)
-    return sums[..., :dims] / (sums[..., dims:] + NORMALISATION_EPSILON)
+    return sums[..., :dims] / (sums[..., dims:] + basis.fading.floor)

@@ -8,7 +8,7 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
 * ``anchor``: ``[d]``
 * ``amplitude``: ``[d]`` (factors that scale the movement about the anchor)
 * ``basis``: ``periodic_centres [N]``, ``periodic_widths [N]``, ``transient_centres [M, 2]``,
-  ``transient_widths [M]``, ``transient_sizes [K]``, ``fading {mu1, mu2, k, delta}``
+  ``transient_widths [M]``, ``transient_sizes [K]``, ``fading {mu1, mu2, k, delta, floor}``
 * ``weights``: ``[d, D]`` (periodic columns first, then each transient's)
 * ``transients``: K objects ``{phi0, r0, length, entrance_phase, start [d], start_velocity [d]}``
 """
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .basis import BasisSet, Fading
+from .basis import NORMALISATION_EPSILON, BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
 
@@ -163,16 +163,17 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
         raise ValueError(f"dmp.basis.transient_sizes: they add up to {sum(sizes)}, but there are {m} transient "
                          "basis functions (transient_centres, transient_widths)")
     fading = _Reader(basis.field("fading"), "dmp.basis.fading")
-    fading.only(("mu1", "mu2", "k", "delta"))
+    fading.only(("mu1", "mu2", "k", "delta", "floor"))
     mu1, mu2 = fading.number("mu1", positive=True), fading.number("mu2", positive=True)
     if mu2 <= mu1:
         raise ValueError(f"dmp.basis.fading.mu2: must exceed mu1 = {mu1:g}, got {mu2:g}")
     delta = fading.number("delta", positive=True, default=1e-3)
     if delta >= 1.0:
         raise ValueError(f"dmp.basis.fading.delta: expected a value in (0, 1), got {delta:g}")
+    floor = fading.number("floor", positive=True, default=NORMALISATION_EPSILON)   # files before the floor: 1e-10
     basis_set = BasisSet(periodic_centres=centres, periodic_widths=widths, transient_centres=transient_centres,
                          transient_widths=transient_widths, transient_sizes=tuple(sizes),
-                         fading=Fading(mu1, mu2, fading.integer("k", low=1, default=4), delta))
+                         fading=Fading(mu1, mu2, fading.integer("k", low=1, default=4), delta, floor))
 
     weights = top.array("weights", (d, n + m))
     items = top.field("transients")

@@ -7,6 +7,7 @@ import numpy as np
 __all__ = [
     "as_finite_array",
     "check_count",
+    "check_nonnegative",
     "check_positive",
     "check_time_grid",
 ]
@@ -33,6 +34,15 @@ def as_finite_array(value: object, name: str, ndim: int | tuple[int, ...] | None
         bad = int(np.size(array) - np.count_nonzero(np.isfinite(array)))
         raise ValueError(f"{name}: contains {bad} NaN or infinite value(s)")
     return array
+
+
+def check_nonnegative(value: float, name: str) -> float:
+    """Return ``value`` as a float, raising ``ValueError`` unless it is a finite number >= 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
+    if not 0.0 <= float(value) < np.inf:
+        raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+    return float(value)
 
 
 def check_positive(value: float, name: str) -> float:
