@@ -7,6 +7,7 @@ Layout::
     checkpoint.pkl     state after the last completed update (written atomically)
     best_params.npy    [n] action of the best policy so far
     best_params.json   that action, its DMP parameters and its evaluation
+    dmp.json           the best policy's refined DMP (core format: gym.make(env_id, dmp=...), RhythmicDMP.load)
     learning_curve.png
 
 The log is appended before the checkpoint is replaced; on resume, lines beyond the checkpoint's

@@ -272,6 +272,13 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, 
     return run
 
 
+def _save_refined_dmp(env: Any, params: np.ndarray, path: Path) -> None:
+    """Write the env's DMP with the refined ``params [P]`` (its action groups) as ``dmp.json`` (core format),
+    for ``gym.make(env_id, dmp=path)`` or ``RhythmicDMP.load``; envs without a DMP write nothing."""
+    if hasattr(env, "dmp") and hasattr(env, "groups"):
+        env.dmp.with_params(params, env.groups).save(path)
+
+
 def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,
           observations: np.ndarray, resume: bool, progress: bool) -> None:
     state = run.load_checkpoint() if resume else None
@@ -300,6 +307,7 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
                     "eval_seed": int(eval_seeds[0])}
             params = evaluator.env.unwrapped.action_to_params(actions[0])
             run.save_best(actions[0], params, best)
+            _save_refined_dmp(evaluator.env.unwrapped, params, run.path / "dmp.json")
         record["best_eval_return"] = best["eval_return_mean"]
         record["time_s"] = round(time.perf_counter() - started, 3)
         run.append_log(record)

@@ -27,6 +27,7 @@ import gymnasium as gym
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .reward import TERMS, RewardWeights
 from .scene import ARM_JOINTS, TablePose, WipeScene
+from .tracking import TRACKING_ID, TrackingEnv
 from .wipe_env import ArmarWipeEnv
 
 __all__ = [
@@ -34,11 +35,13 @@ __all__ = [
     "CONTEXT_FIELDS",
     "ENV_ID",
     "TERMS",
+    "TRACKING_ID",
     "ArmarWipeEnv",
     "Context",
     "ContextSpec",
     "RewardWeights",
     "TablePose",
+    "TrackingEnv",
     "WipeScene",
 ]
 
@@ -46,3 +49,5 @@ ENV_ID = "rdmp_gym/ArmarWipe-v0"
 
 if ENV_ID not in gym.registry:
     gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv")
+if TRACKING_ID not in gym.registry:
+    gym.register(id=TRACKING_ID, entry_point="rdmp_gym.envs.tracking:TrackingEnv")

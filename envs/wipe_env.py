@@ -29,6 +29,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
 
@@ -59,12 +60,30 @@ def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> Rh
                            n_transient=n_transient, method=method)
 
 
+def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
+    """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against the workspace."""
+    if not isinstance(dmp, RhythmicDMP):
+        if not isinstance(dmp, (str, Path)):
+            raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
+        if not Path(dmp).is_file():
+            raise FileNotFoundError(f"dmp: no such file {dmp}")
+        dmp = RhythmicDMP.load(dmp)
+    if dmp.n_dims != 3:
+        raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
+    t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
+    check_frame(dmp.rollout(t), WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="dmp")
+    return dmp
+
+
 class ArmarWipeEnv(gym.Env):
     """Episodic wiping env; see the module docstring.
 
     Args:
         style: synthetic demonstration style 1..4 (1/2 circle, 3/4 figure-eight; 2/4 complex approach).
-        demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame (overrides ``style``).
+        demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame, in metres: x, y on
+            the table, z above its surface (overrides ``style``; checked against the workspace before fitting).
+        dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
+            imitation without fitting (overrides ``style``; excludes ``demonstration``).
         n_periodic, n_transient, fit_method: DMP fit settings.
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude).
@@ -95,6 +114,7 @@ class ArmarWipeEnv(gym.Env):
         self,
         style: int = 1,
         demonstration: Demonstration | None = None,
+        dmp: str | Path | RhythmicDMP | None = None,
         n_periodic: int = 40,
         n_transient: int = 40,
         fit_method: str = "ridge",
@@ -133,13 +153,18 @@ class ArmarWipeEnv(gym.Env):
         # --- the DMP and the action map
         if fit_method not in FIT_METHODS:
             raise ValueError(f"fit_method: expected one of {FIT_METHODS}, got {fit_method!r}")
-        if demonstration is not None:
+        if dmp is not None:
+            if demonstration is not None:
+                raise ValueError("dmp: give either dmp or demonstration, not both")
+            self.dmp = _saved_dmp(dmp)
+        elif demonstration is not None:
             if not isinstance(demonstration, Demonstration):
                 raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
                                  f"got {type(demonstration).__name__}")
             if demonstration.n_dims != 3:
                 raise ValueError("demonstration: expected 3 dimensions (x, y, z in the table frame), "
                                  f"got {demonstration.n_dims}")
+            demonstration.check_frame(WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="demonstration")
             self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
                                        method=fit_method)
         else:

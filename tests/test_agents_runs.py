@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import TaskSpec
-from rdmp_gym.agents.tracking import TRACKING_ID
+from rdmp_gym.envs.tracking import TRACKING_ID
 from rdmp_gym.agents.training import TrainConfig, train
 
 LOG_KEYS = {"update", "episodes", "eval_episodes", "exploration", "eval_return_mean", "eval_return_best",
