@@ -241,7 +241,6 @@ def _add_agents_commands(commands: Any) -> None:
     if missing is not None:
         for name, text in about.items():
             stub = commands.add_parser(name, help=f"{text} [needs the agents extra]", add_help=False)
-            stub.add_argument("arguments", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
             stub.set_defaults(handler=_needs_extra, missing=missing)
         return
 
@@ -295,7 +294,10 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``rdmp-gym``; returns the exit status."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args, unknown = parser.parse_known_args(argv)
+    if unknown and args.handler is not _needs_extra:   # the stand-ins take any arguments
+        parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:

@@ -19,6 +19,7 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
@@ -64,6 +65,12 @@ def _vector_env(task: TaskSpec, workers: int) -> VecEnv:
     return SubprocVecEnv(makers, start_method=method)
 
 
+def _silent_logger() -> Logger:
+    """A logger with no outputs: without one, every ``learn()`` leaves an empty ``SB3-<date>`` folder in
+    the temporary directory (SB3's default logger)."""
+    return Logger(folder=None, output_formats=[])
+
+
 def load_ppo_policy(model: bytes) -> PPO:
     """A PPO model saved in a checkpoint (``state["agent"]["model"]``), for prediction only."""
     return PPO.load(io.BytesIO(model), device="cpu")
@@ -98,6 +105,7 @@ class PPOAgent:
                          gae_lambda=1.0, seed=seed, device="cpu", verbose=0,
                          policy_kwargs={"net_arch": {"pi": hidden, "vf": hidden},
                                         "log_std_init": math.log(self.config.sigma)})
+        self.model.set_logger(_silent_logger())
         with torch.no_grad():
             self.model.policy.action_net.bias.copy_(torch.as_tensor(initial_action, dtype=torch.float32))
         self._collector = _EpisodeCollector()
@@ -131,6 +139,7 @@ class PPOAgent:
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.model = PPO.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
+        self.model.set_logger(_silent_logger())
 
     def close(self) -> None:
         self.env.close()

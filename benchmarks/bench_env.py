@@ -29,12 +29,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import JointTargetPlan
 
 import rdmp_gym  # noqa: F401  (registers the env)
-
-RESULTS = Path(__file__).resolve().parent / "results" / "env.json"
 
 
 def bare_stepping(u, q0: np.ndarray, ctrl: np.ndarray) -> tuple[float, float]:
@@ -69,8 +68,10 @@ def main() -> None:
     parser.add_argument("--contexts", type=int, default=20, help="seeded contexts for the quality statistics")
     parser.add_argument("--repeats", type=int, default=11, help="timing repetitions (median and minimum reported)")
     parser.add_argument("--n-periods", type=float, default=4.0)
-    parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--out", type=Path, default=None, help="output JSON (default: env.json, see --save)")
+    add_save_argument(parser)
     args = parser.parse_args()
+    args.out = args.out or results_dir(args.save) / "env.json"
 
     env = gym.make(ENV_ID, n_periods=args.n_periods)
     u = env.unwrapped

@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, segment, wiping_demonstration
 
 SIZES = (10, 14, 20, 27, 35, 40)
-RESULTS = Path(__file__).parent / "results" / "fidelity.json"
 
 
 def relative_rmse(Y: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> float:
@@ -28,7 +27,9 @@ def relative_rmse(Y: np.ndarray, reference: np.ndarray, mask: np.ndarray) -> flo
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
+    add_save_argument(parser)
     args = parser.parse_args()
+    RESULTS = results_dir(args.save) / "fidelity.json"
     rows = []
     for style in (1, 2, 3, 4):
         demo = wiping_demonstration(style, rng=args.seed + style)
@@ -60,7 +61,6 @@ def main() -> None:
     verdict = {m: all(r["periodic_rmse"] < 0.01 and r["transient_rmse"] < 0.02 for r in best if r["method"] == m)
                for m in ("lwr", "ridge")}
     print(f"targets at N = M = 40 (periodic < 1 %, transient < 2 %, all styles): {verdict}")
-    RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({"rows": rows, "targets_met": verdict}, indent=1))
     print(f"wrote {RESULTS}")
 

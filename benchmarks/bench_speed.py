@@ -14,17 +14,16 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")       # one core, before numpy is 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
+import argparse
 import json
 import platform
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, segment, wiping_demonstration
-
-RESULTS = Path(__file__).parent / "results" / "speed.json"
 
 
 def timed(function: Callable[[], object], repeats: int) -> tuple[float, float]:
@@ -39,6 +38,9 @@ def timed(function: Callable[[], object], repeats: int) -> tuple[float, float]:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    RESULTS = results_dir(parser.parse_args().save) / "speed.json"
     demo = wiping_demonstration(1, rng=0)
     seg = segment(demo)
     dmp = RhythmicDMP.fit(demo, 40, 40, segmentations=[seg])
@@ -80,7 +82,6 @@ def main() -> None:
               f"{'' if target is None else f'{1e3 * target:.1f}':>10}  {'' if target is None else row['met']}")
     step_rate = next(r["calls_per_s"] for r in rows if "calls_per_s" in r)
     print(f"online step calls per second: {step_rate:,.0f}")
-    RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({"machine": platform.processor() or platform.machine(),
                                    "python": platform.python_version(), "rows": rows}, indent=1))
     print(f"wrote {RESULTS}")

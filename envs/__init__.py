@@ -28,6 +28,7 @@ from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .reward import TERMS, RewardWeights
 from .scene import ARM_JOINTS, TablePose, WipeScene
 from .tracking import TRACKING_ID, TrackingEnv
+from .video import RecordEpisodeVideo
 from .wipe_env import ArmarWipeEnv
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "ArmarWipeEnv",
     "Context",
     "ContextSpec",
+    "RecordEpisodeVideo",
     "RewardWeights",
     "TablePose",
     "TrackingEnv",

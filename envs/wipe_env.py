@@ -42,6 +42,7 @@ from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, invalid_reward, wipe_reward
 from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
+from .viewer import HumanViewer
 from .wiping import DirtCells, WipeTrace, simulate_wipe
 
 __all__ = ["ArmarWipeEnv"]
@@ -103,12 +104,14 @@ class ArmarWipeEnv(gym.Env):
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
         max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid.
         xml_file: MJCF of the scene (default: the packaged ``armar3_wipe.xml``).
-        render_mode: ``None`` or ``"rgb_array"``; width, height, camera: of the rendered frames.
+        render_mode: ``None``, ``"rgb_array"`` (RGB frames), ``"depth_array"`` (depth in m) or ``"human"``
+            (MuJoCo's viewer, following every control step; needs a display); width, height, camera: of the
+            rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
 
     def __init__(
         self,
@@ -239,7 +242,8 @@ class ArmarWipeEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.control_rate / self.frame_stride))}
         self._render_args = (int(width), int(height), camera)
         self._renderer: SceneRenderer | None = None
-        if render_mode is not None or record_frames:
+        self._viewer = HumanViewer(self.scene) if render_mode == "human" else None
+        if render_mode in ("rgb_array", "depth_array") or record_frames:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.record_frames = bool(record_frames)
         self.frames: list[np.ndarray] = []
@@ -304,10 +308,18 @@ class ArmarWipeEnv(gym.Env):
         return self._observation(), reward, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """RGB frame ``[height, width, 3]`` uint8 of the current state (``render_mode="rgb_array"``)."""
+        """The current state: RGB frame ``[height, width, 3]`` uint8 (``"rgb_array"``), depth ``[height, width]``
+        float32 in m (``"depth_array"``), or None after updating the viewer (``"human"``)."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to the env")
             return None
+        if self._viewer is not None:
+            self._viewer.sync()
+            return None
+        if self.render_mode == "depth_array":
+            if self._renderer is None:
+                self._renderer = SceneRenderer(self.scene, *self._render_args)
+            return self._renderer.render_depth()
         return self._frame()
 
     def close(self) -> None:
@@ -315,6 +327,8 @@ class ArmarWipeEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+        if self._viewer is not None:
+            self._viewer.close()
 
     def record_episode(self, action: np.ndarray, path: str | Path, fps: float | None = None
                        ) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -386,7 +400,7 @@ class ArmarWipeEnv(gym.Env):
         self.scene.set_arm_state(solution.q[0])
         adaptation = ForceAdaptation(self.adaptation_settings, self.dt)
         dirt = DirtCells(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], self.force_band)
-        callback = self._capture if self.record_frames else None
+        callback = self._capture if self.record_frames or self._viewer is not None else None
         self._wiped = np.zeros(len(self._cells_world), dtype=bool)
         if callback is not None:
             self.frames.append(self._frame())
@@ -447,5 +461,7 @@ class ArmarWipeEnv(gym.Env):
                                      0.5 * self.cell_size, rot)
 
     def _capture(self, k: int, wiped: np.ndarray) -> None:
-        if (k + 1) % self.frame_stride == 0:
+        if self._viewer is not None:
+            self._viewer.sync()
+        if self.record_frames and (k + 1) % self.frame_stride == 0:
             self.frames.append(self._frame(wiped))
