@@ -34,8 +34,8 @@ __all__ = ["main"]
 logger = logging.getLogger(__name__)
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v0"
-#: Python modules of the ``agents`` extra; a missing one is reported as a missing extra.
-EXTRA_MODULES = ("gymnasium", "mujoco", "imageio", "cma", "tqdm", "stable_baselines3", "torch")
+#: Python modules of the optional extras; a missing one is reported as a missing extra, not a traceback.
+EXTRA_MODULES = ("gymnasium", "mujoco", "imageio", "cma", "tqdm", "stable_baselines3", "torch", "tensorboard")
 _EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
 
 

@@ -41,6 +41,7 @@ class PPOConfig:
         clip_range: PPO ratio clipping.
         ent_coef: entropy bonus.
         target_kl: early stop of an update's epochs at this approximate KL divergence; 0 = never.
+        tensorboard: write SB3's training statistics to ``<run>/tensorboard`` (needs the ``tensorboard`` extra).
     """
 
     sigma: float = 0.6
@@ -51,6 +52,7 @@ class PPOConfig:
     clip_range: float = 0.2
     ent_coef: float = 0.0
     target_kl: float = 0.05
+    tensorboard: bool = False
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)

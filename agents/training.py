@@ -210,11 +210,12 @@ def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Ge
 
 
 def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np.random.Generator],
-                initial: np.ndarray) -> Agent:
+                initial: np.ndarray, run_path: Path) -> Agent:
     if config.agent == "ppo":
         from .sb3 import PPOAgent
 
-        return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options)
+        return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options,
+                        log_dir=run_path)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights)
@@ -259,7 +260,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, 
         eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
         observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                  for s in eval_seeds])
-        agent = _make_agent(config, evaluator, streams, initial)
+        agent = _make_agent(config, evaluator, streams, initial, run.path)
         if not resume:
             run.create(config.to_dict())
         try:

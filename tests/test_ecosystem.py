@@ -2,6 +2,7 @@
 check, purely periodic demonstrations, the saved-DMP round trip, the vector-env recipe, videos of one-step
 episodes, the human/depth render modes, and housekeeping (registration, SB3 temp folders, outputs)."""
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -215,3 +216,23 @@ def test_examples_and_benchmarks_write_under_runs_unless_asked(tmp_path):
     for script in sorted((ROOT / "benchmarks").glob("bench_*.py")):
         text = script.read_text()
         assert "add_save_argument(parser)" in text and "results_dir(" in text, script.name
+
+
+def _ppo_config(**options):
+    return TrainConfig(agent="ppo", updates=1, rollouts=2, seed=0, env_id=TRACKING_ID,
+                       env_kwargs={"n_periodic": 8, "n_transient": 8, "duration": 3.0}, options=options)
+
+
+def test_ppo_tensorboard_logging_without_the_package_names_the_extra(tmp_path, monkeypatch):
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "tensorboard"
+                        else find_spec(name, *a))
+    with pytest.raises(ModuleNotFoundError, match=r"rdmp-gym\[tensorboard\]"):
+        train(_ppo_config(tensorboard=True), tmp_path / "run")
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.skipif(importlib.util.find_spec("tensorboard") is None, reason="needs the tensorboard extra")
+def test_ppo_tensorboard_logging_writes_into_the_run_directory(tmp_path):
+    run = train(_ppo_config(tensorboard=True), tmp_path / "run")
+    assert list((run.path / "tensorboard").glob("events.out.tfevents.*"))
