@@ -35,6 +35,7 @@ __all__ = [
     "ARM_JOINTS",
     "CONTEXT_FIELDS",
     "ENV_ID",
+    "STEP_ID",
     "TERMS",
     "TRACKING_ID",
     "ArmarWipeEnv",
@@ -53,3 +54,6 @@ if ENV_ID not in gym.registry:
     gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv")
 if TRACKING_ID not in gym.registry:
     gym.register(id=TRACKING_ID, entry_point="rdmp_gym.envs.tracking:TrackingEnv")
+STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
+if STEP_ID not in gym.registry:
+    gym.register(id=STEP_ID, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv")
