@@ -9,6 +9,6 @@ from stable_baselines3 import SAC
 import rdmp_gym  # noqa: F401  (registers the envs)
 
 env = gym.make("rdmp_gym/ArmarWipeStep-v1", n_periods=2)
-model = SAC("MlpPolicy", env, learning_starts=500, device="cpu", seed=0).learn(total_timesteps=2_000, progress_bar=False)
+model = SAC("MlpPolicy", env, learning_starts=500, device="cpu", seed=0).learn(total_timesteps=2_000)
 model.save("runs/examples/step_sac")
 print("mean reward of the last episodes:", [round(e["r"], 3) for e in list(model.ep_info_buffer)[-3:]])
