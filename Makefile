@@ -24,8 +24,10 @@ install: $(VENV)/.installed
 
 # A second `make run` continues the finished run in runs/main (--resume: nothing left to train) and redoes
 # the figures and the evaluation instead of refusing to overwrite it.
+RUN_OUT   ?= runs/main
+RUN_FLAGS ?=
 run: install
-	$(BIN)/rdmp-gym main --out runs/main $$(test -f runs/main/train/config.json && echo --resume)
+	$(BIN)/rdmp-gym main --out $(RUN_OUT) $(RUN_FLAGS) $$(test -f $(RUN_OUT)/train/config.json && echo --resume)
 
 test: install
 	$(BIN)/ruff check .

@@ -236,3 +236,18 @@ def test_ppo_tensorboard_logging_without_the_package_names_the_extra(tmp_path, m
 def test_ppo_tensorboard_logging_writes_into_the_run_directory(tmp_path):
     run = train(_ppo_config(tensorboard=True), tmp_path / "run")
     assert list((run.path / "tensorboard").glob("events.out.tfevents.*"))
+
+
+@pytest.mark.slow
+def test_make_run_can_be_run_twice(tmp_path):
+    out = tmp_path / "main"
+    tiny = ("--updates 1 --rollouts 2 --workers 1 --episodes 1 --env rdmp_gym/DMPTracking-v0 --n-periodic 8 "
+            "--n-transient 8 --duration 3")
+    command = ["make", "-s", "-o", ".venv/.installed", "run", f"RUN_OUT={out}", f"RUN_FLAGS={tiny}"]
+    first = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr[-2000:]
+    summary = (out / "summary.json").stat().st_mtime_ns
+    second = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert second.returncode == 0, second.stderr[-2000:]
+    assert (out / "summary.json").stat().st_mtime_ns > summary
+    assert len((out / "train" / "log.jsonl").read_text().splitlines()) == 2    # nothing trained twice
