@@ -86,6 +86,9 @@ def _add_task_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--style", type=int, help="built-in demonstration style 1-4 (default: the env's)")
     group.add_argument("--demo", default="", help="a CSV/NPZ demonstration to imitate instead of --style, in the "
                        "table frame in metres (x, y on the table, z above it) (default: none)")
+    group.add_argument("--time-column", default="t", help="name of the --demo CSV's time column (seconds)")
+    group.add_argument("--rate", type=float, default=None, help="resample --demo onto an even grid at this rate "
+                       "in Hz (default: keep the samples, which must be evenly spaced)")
     group.add_argument("--dmp", default="", help="a saved DMP (dmp.json, e.g. a run's refined DMP) to start from "
                        "instead of fitting (default: none)")
     group.add_argument("--groups", nargs="+", help="parameter groups to refine: periodic transient initial "
@@ -134,9 +137,24 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     _add_task_arguments(parser)
 
 
+def _prepare_demo(args: argparse.Namespace) -> None:
+    """With ``--time-column`` or ``--rate``, read ``--demo`` now and point ``args.demo`` at an even-grid copy
+    ``<out>/demo.npz`` (the run then holds the demonstration it was trained on)."""
+    if not args.demo or (args.time_column == "t" and args.rate is None):
+        return
+    from .imitation import load_demonstration
+
+    demo = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate)
+    folder = Path(args.out)
+    folder.mkdir(parents=True, exist_ok=True)
+    demo.to_npz(folder / "demo.npz")
+    args.demo, args.time_column, args.rate = str((folder / "demo.npz").resolve()), "t", None
+
+
 def _train_config(args: argparse.Namespace, agent: str) -> Any:
     from .training import TrainConfig
 
+    _prepare_demo(args)
     return TrainConfig(agent=agent, updates=args.updates, rollouts=args.rollouts, seed=args.seed,
                        workers=args.workers, env_id=args.env, env_kwargs=_env_kwargs(args),
                        reset_options=dict(args.reset_option) or None, options=dict(args.option),

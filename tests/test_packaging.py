@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from rdmp_gym.agents import cli
 
-from rdmp_gym import wiping_demonstration
+from rdmp_gym import Demonstration, wiping_demonstration
 
 ROOT = Path(__file__).resolve().parent.parent
 LAYERS = {"rdmp_gym": ROOT / "rdmp_gym", "rdmp_gym/envs": ROOT / "envs", "rdmp_gym/agents": ROOT / "agents"}
@@ -121,3 +121,17 @@ def test_a_non_episodic_env_is_a_clear_error(tmp_path, capsys):
                      "--out", str(tmp_path / "run")])
     err = capsys.readouterr().err
     assert code == 2 and "not an episodic DMP env" in err and "Traceback" not in err
+
+
+def test_train_takes_a_recording_with_a_time_column_and_uneven_stamps(tmp_path):
+    demo = wiping_demonstration(1, rng=0)
+    jitter = demo.t + np.random.default_rng(1).uniform(-2e-3, 2e-3, demo.t.size) * (np.arange(demo.t.size) > 0)
+    path = tmp_path / "recording.csv"
+    np.savetxt(path, np.column_stack([jitter, demo.Y]), delimiter=",", header="time,x,y,z", comments="")
+    out = tmp_path / "run"
+    code = cli.main(["train", "--env", "rdmp_gym/DMPTracking-v0", "--demo", str(path), "--time-column", "time",
+                     "--rate", "100", "--updates", "1", "--rollouts", "2", "--workers", "1", "--n-periodic", "8",
+                     "--n-transient", "8", "--duration", "3", "--out", str(out)])
+    assert code == 0
+    saved = Demonstration.from_npz(out / "demo.npz")
+    assert np.allclose(np.diff(saved.t), 0.01) and (out / "dmp.json").is_file()
