@@ -37,6 +37,8 @@ def test_wheel_holds_every_module_of_the_three_layers_the_xml_and_the_license(wh
     assert expected <= names, sorted(expected - names)
     assert "rdmp_gym/envs/assets/armar3_wipe.xml" in names
     assert any(name.endswith(".dist-info/licenses/LICENSE") for name in names)
+    metadata = zipfile.ZipFile(path).read(f"rdmp_gym-{cli.__version__}.dist-info/METADATA").decode()
+    assert f"Version: {cli.__version__}\n" in metadata and "License-Expression: BSD-3-Clause" in metadata
 
 
 def test_build_prints_no_setuptools_warning_and_the_metadata_is_clean(wheel):
