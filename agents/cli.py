@@ -29,13 +29,13 @@ import numpy as np
 
 from rdmp_gym import __version__
 
+from . import EXTRA_MODULES
+
 __all__ = ["main"]
 
 logger = logging.getLogger(__name__)
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v0"
-#: Python modules of the optional extras; a missing one is reported as a missing extra, not a traceback.
-EXTRA_MODULES = ("gymnasium", "mujoco", "imageio", "cma", "tqdm", "stable_baselines3", "torch", "tensorboard")
 _EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
 
 
