@@ -15,12 +15,15 @@ Examples::
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import importlib.util
 import json
 import logging
 import os
+import shutil
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -151,16 +154,17 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
 
 def _prepare_demo(args: argparse.Namespace) -> None:
     """With ``--time-column`` or ``--rate``, read ``--demo`` now and point ``args.demo`` at an even-grid copy
-    ``<out>/demo.npz`` (the run then holds the demonstration it was trained on)."""
+    in a temporary folder (removed at exit); the run copies it in as ``demo.npz``, so it holds the
+    demonstration it was trained on."""
     if not args.demo or (args.time_column == "t" and args.rate is None):
         return
     from .imitation import load_demonstration
 
     demo = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate)
-    folder = Path(args.out)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="rdmp-gym-demo-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     demo.to_npz(folder / "demo.npz")
-    args.demo, args.time_column, args.rate = str((folder / "demo.npz").resolve()), "t", None
+    args.demo, args.time_column, args.rate = str(folder / "demo.npz"), "t", None
 
 
 def _train_config(args: argparse.Namespace, agent: str) -> Any:
@@ -219,7 +223,7 @@ def _given_flags(argv: Sequence[str]) -> set[str]:
     for action in _all_actions(parser):
         if action.option_strings:
             action.default = argparse.SUPPRESS
-    return set(vars(parser.parse_args(argv)))
+    return set(vars(parser.parse_known_args(argv)[0]))
 
 
 def _resume_changes(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, str]]:
