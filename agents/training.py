@@ -5,7 +5,10 @@ context observations to actions with ``policy_actions``. :class:`ESAgent` wraps 
 (PI², PI^BB, CMA-ES); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
 
 Seeds: the run seed makes a ``SeedSequence`` whose children drive the learner, the training episodes'
-reset seeds, the perturbed start and the fixed evaluation seeds; the same config gives the same log.
+reset seeds (drawn from ``[0, 2**30)``), the perturbed start and the contexts that standardise a
+contextual learner's features; the same config gives the same log. The policy is evaluated after every
+update on the first ``eval_episodes`` validation contexts (:mod:`rdmp_gym.agents.protocol`), which no
+training episode uses; "best" is chosen there, never on the test contexts.
 """
 
 from __future__ import annotations
@@ -21,9 +24,10 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .evaluation import Evaluator
-from .learners import LEARNERS, EpisodeBatch, Learner, make_learner
+from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
 from .options import check_choice, check_range, from_options, to_options
 from .ppo_config import PPOConfig
+from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
 from .runs import RunDirectory
 from .tasks import WIPE_ID, TaskSpec
 
@@ -34,6 +38,7 @@ logger = logging.getLogger(__name__)
 AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig}
 AGENTS = tuple(AGENT_CONFIGS)
 START_MODES = ("imitation", "perturbed", "shrunk")
+_FEATURE_CONTEXTS = 64   # training contexts whose mean and spread standardise a contextual learner's features
 _SEED_LIMIT = 2**31 - 1
 
 
@@ -58,7 +63,8 @@ class TrainConfig:
         perturbation: size of the perturbed or shrunk start.
         demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
         eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
-        shared_context: all rollouts of one update use the same reset seed (same context).
+        shared_context: all rollouts of one update use the same reset seed (same context); the contextual
+            learners (``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context per rollout.
     """
 
     agent: str = "pi2"
@@ -145,15 +151,19 @@ class ESAgent:
         return self.learner.exploration
 
     def train_update(self) -> EpisodeBatch:
-        actions = self.learner.ask()
-        count = 1 if self.shared_context else actions.shape[0]
-        seeds = self.episode_rng.integers(_SEED_LIMIT, size=count)
-        batch = self.evaluator.run(actions, np.broadcast_to(seeds, (actions.shape[0],)).copy())
+        rollouts = self.learner.rollouts
+        count = 1 if self.shared_context and not self.learner.uses_context else rollouts
+        seeds = np.broadcast_to(self.episode_rng.integers(TRAIN_SEED_LIMIT, size=count), (rollouts,)).copy()
+        observations = None
+        if self.learner.uses_context:
+            observations = context_observations(self.evaluator.env, seeds, self.evaluator.spec.options())
+        actions = self.learner.ask(observations)
+        batch = self.evaluator.run(actions, seeds)
         self.learner.tell(batch)
         return batch
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
-        return np.repeat(self.learner.mean[None], len(observations), axis=0)
+        return self.learner.policy_actions(observations)
 
     def state_dict(self) -> dict[str, Any]:
         return {"learner": self.learner.state_dict(), "episode_rng": self.episode_rng.bit_generator.state}
@@ -186,7 +196,7 @@ def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
 
 
 def _seed_streams(seed: int) -> dict[str, np.random.Generator]:
-    names = ("learner", "episodes", "start", "evaluation")
+    names = ("learner", "episodes", "start", "features")
     children = np.random.SeedSequence(seed).spawn(len(names))
     return {name: np.random.default_rng(child) for name, child in zip(names, children, strict=True)}
 
@@ -217,7 +227,12 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
         return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
-    learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights)
+    space = None
+    if config.agent in CONTEXTUAL:
+        seeds = streams["features"].integers(TRAIN_SEED_LIMIT, size=_FEATURE_CONTEXTS)
+        space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, seeds, config.task.options()))
+    learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights,
+                           space)
     return ESAgent(learner, evaluator, streams["episodes"], config.shared_context)
 
 
@@ -256,7 +271,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, 
     streams = _seed_streams(config.seed)
     with Evaluator(config.task, config.workers) as evaluator:
         initial = _initial_action(config, evaluator, streams["start"])
-        eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
+        eval_seeds = validation_seeds(config.eval_episodes)
         observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                  for s in eval_seeds])
         agent = _make_agent(config, evaluator, streams, initial)
