@@ -27,7 +27,7 @@ from .evaluation import Evaluator
 from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
 from .options import check_choice, check_range, from_options, to_options
 from .ppo_config import PPOConfig
-from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
+from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
 from .runs import RunDirectory
 from .tasks import WIPE_ID, TaskSpec
 
@@ -63,6 +63,7 @@ class TrainConfig:
         perturbation: size of the perturbed or shrunk start.
         demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
         eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
+        eval_every: evaluate the policy every this many updates (and after the last one).
         shared_context: all rollouts of one update use the same reset seed (same context); the contextual
             learners (``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context per rollout.
     """
@@ -81,6 +82,7 @@ class TrainConfig:
     demo: str = ""
     eval_episodes: int = 1
     shared_context: bool = True
+    eval_every: int = 1
 
     def __post_init__(self) -> None:
         check_choice(self.agent, "agent", AGENTS)
@@ -90,6 +92,7 @@ class TrainConfig:
         check_range(self.workers, "workers", 1, None)
         check_range(self.perturbation, "perturbation", 0.0, 1.0)
         check_range(self.eval_episodes, "eval_episodes", 1, None)
+        check_range(self.eval_every, "eval_every", 1, None)
         check_choice(self.start, "start", START_MODES)
         for name in ("env_kwargs", "options"):
             if not isinstance(getattr(self, name), Mapping):
@@ -187,8 +190,9 @@ def _nanmean(values: np.ndarray) -> float:
 
 
 def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
-    """Mean/best return, mean coverage, force-in-band fraction and valid fraction of a batch."""
+    """Mean/best return, mean coverage, force-in-band fraction, success rate and valid fraction of a batch."""
     return {f"{prefix}return_mean": _number(np.mean(batch.returns)),
+            f"{prefix}success": _number(np.mean(success(batch))),
             f"{prefix}return_best": _number(np.max(batch.returns)),
             f"{prefix}coverage": _number(_nanmean(batch.coverage)),
             f"{prefix}force_in_band": _number(_nanmean(batch.force_in_band)),
@@ -303,13 +307,21 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
 
     def evaluate_and_log(batch: EpisodeBatch | None) -> None:
         nonlocal best
-        actions = agent.policy_actions(observations)
-        policy = evaluator.run(actions, eval_seeds)
         record: dict[str, Any] = {"update": update, "episodes": episodes,
-                                  "eval_episodes": (update + 1) * len(eval_seeds),
-                                  "exploration": _number(agent.exploration), **batch_summary(policy, "eval_")}
+                                  "exploration": _number(agent.exploration)}
         if batch is not None:
             record.update(batch_summary(batch, ""))
+        if update % config.eval_every and update < config.updates:
+            record["best_eval_return"] = None if best is None else best["eval_return_mean"]
+            record["time_s"] = round(time.perf_counter() - started, 3)
+            run.append_log(record)
+            run.save_checkpoint({"agent": agent.state_dict(), "update": update, "episodes": episodes,
+                                 "best": best, "elapsed": record["time_s"]})
+            return
+        actions = agent.policy_actions(observations)
+        evaluations = 1 + update // config.eval_every + (1 if update % config.eval_every else 0)
+        record["eval_episodes"] = evaluations * len(eval_seeds)
+        record.update(batch_summary(evaluator.run(actions, eval_seeds), "eval_"))
         if best is None or record["eval_return_mean"] > best["eval_return_mean"]:
             best = {**{k: v for k, v in record.items() if k.startswith("eval_")}, "update": update,
                     "eval_seed": int(eval_seeds[0])}

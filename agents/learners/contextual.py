@@ -38,7 +38,7 @@ from .base import EpisodeBatch, Learner, cost_weights
 from .smooth import SmoothNoise, block_layout, reflect
 
 __all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
-           "ContextualSearch", "RandomReturnConfig", "SearchSpace"]
+           "ContextualSearch", "RandomReturnConfig", "SearchSpace", "policy_from_state"]
 
 WEIGHTINGS = ("reps", "pibb", "pi2")
 _BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
@@ -71,9 +71,9 @@ class ContextualConfig:
     h: float = 10.0
     contextual: bool = True
     groups: str = ""
-    control_cost: float = 0.05
-    reuse: int = 2
-    gain_prior: float = 0.3
+    control_cost: float = 0.02
+    reuse: int = 4
+    gain_prior: float = 0.05
     adapt_rate: float = 0.2
     min_sigma: float = 0.02
     max_sigma: float = 0.6
@@ -365,3 +365,19 @@ class ContextualSearch(Learner):
         self._buffer = [{key: np.asarray(buffer[key], dtype=np.float64)[end - size:end] for key in _BUFFER_KEYS}
                         for size, end in zip(np.asarray(buffer["sizes"]), ends, strict=True)]
         self._pending = None
+
+
+def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.ndarray:
+    """``[E, n]`` the policy actions of a :class:`ContextualSearch` state (``state_dict()``) for
+    observations ``[E, o]``, without rebuilding the learner."""
+    gains = np.asarray(state["gains"], dtype=np.float64)
+    center = np.asarray(state["context_center"], dtype=np.float64)
+    scale = np.asarray(state["context_scale"], dtype=np.float64)
+    obs = np.asarray(observations, dtype=np.float64)
+    if obs.ndim != 2 or obs.shape[1] != center.size:
+        raise ValueError(f"observations: expected shape [E, {center.size}], got {obs.shape}")
+    used = scale > 0
+    x = np.ones((obs.shape[0], 1))
+    if gains.shape[1] > 1:
+        x = np.concatenate([x, (obs[:, used] - center[used]) / scale[used]], axis=1)
+    return reflect(x @ gains.T)
