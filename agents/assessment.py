@@ -23,7 +23,7 @@ from .learners import CONTEXTUAL
 from .learners.contextual import policy_from_state
 from .options import check_choice
 from .plots import plot_policy_comparison
-from .protocol import PolicyScores, context_observations, evaluate_actions, interval, path_jerk, test_seeds
+from .protocol import PolicyScores, context_observations, evaluate_actions, final_test_seeds, interval, path_jerk
 from .runs import RunDirectory
 from .training import TrainConfig
 
@@ -101,7 +101,7 @@ def _summary(scores: PolicyScores) -> dict[str, Any]:
 def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, policy: str = "last",
                  video: bool = False, progress: bool = False) -> dict[str, Any]:
     """Evaluate the run at ``path`` and the imitation on the first ``episodes`` test contexts
-    (:func:`rdmp_gym.agents.protocol.test_seeds`: never used in training or selection).
+    (:func:`rdmp_gym.agents.protocol.final_test_seeds`: never used in training or selection).
 
     Args:
         path: a run directory written by :func:`rdmp_gym.agents.training.train`.
@@ -122,7 +122,7 @@ def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, poli
     run = RunDirectory(path)
     config = TrainConfig.from_dict(run.read_config())
     spec = config.task
-    seeds = test_seeds(episodes)
+    seeds = final_test_seeds(episodes)
     with Evaluator(spec, workers) as evaluator:
         env = evaluator.env
         observations = context_observations(env, seeds, spec.options())

@@ -4,7 +4,7 @@ Contexts are reset seeds. Training draws its seeds from ``[0, 2**30)``; the vali
 "best" selection and the held-out learning curves) and the test set (the final numbers) are fixed
 seeds above that, disjoint from each other and from training:
 
-    validation_seeds(n) = 2**30 + 500_000 + [0, n)        test_seeds(n) = 2**30 + [0, n)
+    validation_seeds(n) = 2**30 + 500_000 + [0, n)        final_test_seeds(n) = 2**30 + [0, n)
 
 Success of an episode: ``info["is_success"]`` where the env gives it; otherwise (ArmarWipe-v0) the same
 definition, coverage >= 0.95 and force in band >= 0.9 of the wiping time and a valid (simulated) plan.
@@ -30,8 +30,21 @@ from scipy import stats
 
 from .learners.base import EpisodeBatch
 
-__all__ = ["COVERAGE_TARGET", "FORCE_TARGET", "TRAIN_SEED_LIMIT", "Interval", "PolicyScores", "context_observations",
-           "evaluate_actions", "interval", "iqm", "path_jerk", "success", "test_seeds", "validation_seeds"]
+__all__ = [
+    "COVERAGE_TARGET",
+    "FORCE_TARGET",
+    "TRAIN_SEED_LIMIT",
+    "Interval",
+    "PolicyScores",
+    "context_observations",
+    "evaluate_actions",
+    "final_test_seeds",
+    "interval",
+    "iqm",
+    "path_jerk",
+    "success",
+    "validation_seeds",
+]
 
 COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
 TRAIN_SEED_LIMIT = 2**30
@@ -44,7 +57,7 @@ def _count(n: int, name: str) -> int:
     return int(n)
 
 
-def test_seeds(n: int) -> np.ndarray:
+def final_test_seeds(n: int) -> np.ndarray:
     """``[n]`` the reset seeds of the test contexts (never used in training or selection)."""
     return TRAIN_SEED_LIMIT + np.arange(_count(n, "n"), dtype=np.int64)
 
@@ -76,7 +89,7 @@ def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] |
     env.reset(seed=int(seed), options=None if options is None else dict(options))
     base = env.unwrapped
     path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
-    dt = float(getattr(base, "dt", 0.0) or 1.0 / base.control_rate)
+    dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
     jerk = np.diff(path, n=3, axis=0) / dt**3
     return float(np.sum(jerk**2) * dt)
 

@@ -47,9 +47,9 @@ from rdmp_gym.agents.protocol import (
     PolicyScores,
     context_observations,
     evaluate_actions,
+    final_test_seeds,
     interval,
     path_jerk,
-    test_seeds,
 )
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
@@ -209,7 +209,7 @@ def main() -> None:
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
     spec = TaskSpec(args.env_id, env_kwargs)
-    seeds = test_seeds(args.test_contexts)
+    seeds = final_test_seeds(args.test_contexts)
     scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
     runs = []
     try:
@@ -230,7 +230,7 @@ def main() -> None:
     rows = _summary(runs, imitation.to_dict())
     settings = {key: value for key, value in vars(args).items() if key not in ("option", "env_option", "replot")}
     settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
-                     "test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
+                     "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
     _print(rows, settings)
     RESULTS.mkdir(parents=True, exist_ok=True)
     document = {"settings": settings, "summary": rows, "imitation": imitation.to_dict(), "runs": runs}

@@ -2,7 +2,7 @@
 
 Policy: ``u = W x(s) + ε``, ``x(s) = [1, φ(s)]`` with standardised context features ``φ(s) [F]`` (the
 observation minus its centre, over its scale), ``W = [θ̄, K]`` ``[n, F + 1]``; the executed action is
-``reflect(u)`` in ``[-1, 1]`` (:func:`~rdmp_gym.agents.learners.smooth.reflect`; nothing is clipped).
+``squash(u)`` in ``(-1, 1)`` (:func:`~rdmp_gym.agents.learners.smooth.squash`, monotone; nothing is clipped).
 ``ε`` is smooth per weight block (:class:`~rdmp_gym.agents.learners.smooth.SmoothNoise`) with one
 standard deviation per block. Each update keeps the last ``reuse`` batches and weights their samples:
 
@@ -35,7 +35,7 @@ from scipy.optimize import minimize
 
 from ..options import check_choice, check_range
 from .base import EpisodeBatch, Learner, cost_weights
-from .smooth import SmoothNoise, block_layout, reflect
+from .smooth import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
            "ContextualSearch", "RandomReturnConfig", "SearchSpace", "policy_from_state"]
@@ -65,16 +65,16 @@ class ContextualConfig:
     """
 
     sigma: float = 0.3
-    length: float = 3.0
+    length: float = 5.0
     weighting: str = "reps"
-    epsilon: float = 0.5
+    epsilon: float = 1.0
     h: float = 10.0
     contextual: bool = True
     groups: str = ""
-    control_cost: float = 0.02
+    control_cost: float = 0.05
     reuse: int = 4
-    gain_prior: float = 0.05
-    adapt_rate: float = 0.2
+    gain_prior: float = 0.3
+    adapt_rate: float = 0.5
     min_sigma: float = 0.02
     max_sigma: float = 0.6
     random_returns: bool = False
@@ -200,7 +200,7 @@ def _reps_weights(returns: np.ndarray, features: np.ndarray, epsilon: float) -> 
 
 
 class ContextualSearch(Learner):
-    """Contextual policy search with smooth exploration, reflected bounds and sample reuse.
+    """Contextual policy search with smooth exploration, smoothly bounded actions and sample reuse.
 
     Args:
         initial_mean: ``[n]`` start action (the policy for every context at first).
@@ -235,7 +235,7 @@ class ContextualSearch(Learner):
         self.scale = scale
         n_features = 1 + int(self._used.sum()) if self.config.contextual else 1
         self.gains = np.zeros((self.n_params, n_features))        # W = [θ̄, K]
-        self.gains[:, 0] = self._mean
+        self.gains[:, 0] = unsquash(self._mean)
         self.sigmas = np.full(self.noise.n_blocks, self.config.sigma)
         self.time_weights = None
         if self.config.weighting == "pi2":
@@ -269,7 +269,7 @@ class ContextualSearch(Learner):
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         """``[E, n]`` the policy's action for each context (no exploration)."""
-        return reflect(self.features(observations) @ self.gains.T)
+        return squash(self.features(observations) @ self.gains.T)
 
     def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         if observations is None:
@@ -280,13 +280,13 @@ class ContextualSearch(Learner):
         noise = self.noise.sample(self.sigmas, self.rollouts, self.rng)
         u = x @ self.gains.T + noise
         self._pending = {"u": u, "noise": noise, "x": x}
-        return reflect(u)
+        return squash(u)
 
     # ------------------------------------------------------------------ update
     def _update(self, batch: EpisodeBatch) -> None:
         if self._pending is None:
             raise RuntimeError("tell: call ask() first")
-        if not np.allclose(reflect(self._pending["u"]), batch.actions, rtol=0, atol=1e-6):
+        if not np.allclose(squash(self._pending["u"]), batch.actions, rtol=0, atol=1e-6):
             raise ValueError("batch.actions: not the actions returned by the last ask()")
         costs = batch.costs + self.config.control_cost * self.noise.control_cost(batch.actions)
         traces = np.asarray(batch.cost_traces, dtype=np.float64)
@@ -303,7 +303,7 @@ class ContextualSearch(Learner):
             new = self._pi2_fit(data, new)
         self.gains = np.where(self._explored[:, None], new, self.gains)
         self._adapt(episode, data["noise"])
-        self._mean = reflect(self.gains[:, 0])
+        self._mean = squash(self.gains[:, 0])
 
     def _episode_weights(self, costs: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``[N]`` one weight per sample (REPS, or PI^BB over a ridge baseline; PI²'s episode level too)."""
@@ -380,4 +380,4 @@ def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.
     x = np.ones((obs.shape[0], 1))
     if gains.shape[1] > 1:
         x = np.concatenate([x, (obs[:, used] - center[used]) / scale[used]], axis=1)
-    return reflect(x @ gains.T)
+    return squash(x @ gains.T)

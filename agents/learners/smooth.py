@@ -1,4 +1,4 @@
-"""Smooth exploration, its control cost and reflected bounds for DMP weight vectors.
+"""Smooth exploration, its control cost and smooth bounds for DMP weight vectors.
 
 A DMP's weights of one degree of freedom are neighbours along the phase (periodic weights, on a
 circle) or along the transient's path (a chain). Isotropic noise on them is white noise along the
@@ -9,9 +9,12 @@ control cost ``½ aᵀ R a`` is what the learners add to the episode cost. ``λ 
 the noise correlated over about ``length`` neighbouring weights; ``length = 0`` gives isotropic noise.
 Single parameters (initial conditions, amplitude factors) are explored independently.
 
-Bounds: learners search an unbounded vector ``u`` and execute ``reflect(u)`` in ``[-1, 1]``
-(identity inside the box, a mirror at its faces), so no sample is clipped and the update sees exactly
-the function of ``u`` that was evaluated.
+Bounds: learners search an unbounded vector ``u`` and execute ``squash(u)`` in ``(-1, 1)`` (the
+identity for ``|u| <= 0.8``, a smooth monotone saturation beyond), so no sample is clipped and the update
+sees exactly the function of ``u`` that was evaluated. A monotone map keeps one optimum in ``u``;
+reflection at the faces (tried first) makes a mirror optimum beyond a face, and on a quadratic with its
+optimum within about one exploration width of a face the mean settled between the two (0.87-0.97 for an
+optimum at 0.7 with ``sigma`` 0.6 after 50 updates, test_agents_contextual.py's toy).
 """
 
 from __future__ import annotations
@@ -20,13 +23,27 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["SmoothNoise", "block_layout", "difference_matrix", "reflect"]
+__all__ = ["KNEE", "SmoothNoise", "block_layout", "difference_matrix", "squash", "unsquash"]
+
+#: |u| below which :func:`squash` is the identity (the imitation's neighbourhood is searched unchanged)
+KNEE = 0.8
 
 
-def reflect(u: np.ndarray) -> np.ndarray:
-    """Fold ``u`` (any shape) into ``[-1, 1]`` by mirroring at the faces (a triangle wave of period 4)."""
-    folded = np.mod(np.asarray(u, dtype=np.float64) + 1.0, 4.0)
-    return np.where(folded > 2.0, 4.0 - folded, folded) - 1.0
+def squash(u: np.ndarray, knee: float = KNEE) -> np.ndarray:
+    """Map ``u`` (any shape) into ``(-1, 1)``: the identity for ``|u| <= knee``, then a smooth (C¹),
+    monotone ``tanh`` saturation toward the faces."""
+    u = np.asarray(u, dtype=np.float64)
+    size = np.abs(u)
+    outer = knee + (1.0 - knee) * np.tanh((size - knee) / (1.0 - knee))
+    return np.sign(u) * np.where(size <= knee, size, outer)
+
+
+def unsquash(a: np.ndarray, knee: float = KNEE) -> np.ndarray:
+    """Inverse of :func:`squash` for ``a`` in ``[-1, 1]`` (a face itself maps to ``|u| = knee + 10 (1 - knee)``)."""
+    a = np.asarray(a, dtype=np.float64)
+    size = np.minimum(np.abs(a), knee + (1.0 - knee) * np.tanh(10.0))
+    inner = knee + (1.0 - knee) * np.arctanh((np.maximum(size, knee) - knee) / (1.0 - knee))
+    return np.sign(a) * np.where(size <= knee, size, inner)
 
 
 def difference_matrix(size: int, circular: bool) -> np.ndarray:
