@@ -50,6 +50,12 @@ def trained_actions(run: RunDirectory, config: TrainConfig, policy: str, observa
         model = load_ppo_policy(state["agent"]["model"])
         actions, _ = model.predict(observations.astype(np.float32), deterministic=True)
         return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+    if config.agent == "sac":
+        from .sb3 import load_sac_policy
+
+        actions, _ = load_sac_policy(state["agent"]["model"]).predict(observations.astype(np.float32),
+                                                                       deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
     if config.agent in CONTEXTUAL:
         return policy_from_state(state["agent"]["learner"], observations)
     return np.repeat(np.asarray(state["agent"]["learner"]["mean"])[None], len(observations), axis=0)

@@ -1,8 +1,8 @@
-"""stable-baselines3 PPO on the same episodic env: a contextual bandit, one step per episode.
+"""stable-baselines3 PPO and SAC on the same episodic env: a contextual bandit, one step per episode.
 
-Settings: see :mod:`rdmp_gym.agents.ppo_config`.
+Settings: see :mod:`rdmp_gym.agents.ppo_config` and :mod:`rdmp_gym.agents.sac_config`.
 
-``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
+``PPOAgent`` and ``SACAgent`` implement the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
 random streams restart).
 """
@@ -17,28 +17,31 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3 import PPO
+from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
 from .options import from_options
 from .ppo_config import PPOConfig
+from .sac_config import SACConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent", "load_ppo_policy"]
+__all__ = ["PPOAgent", "SACAgent", "load_ppo_policy", "load_sac_policy"]
 
 
 class _EpisodeCollector(BaseCallback):
-    """Collects the executed actions and episode metrics of one PPO rollout phase."""
+    """Collects the executed actions and episode metrics of one rollout phase (``key``: the name of the
+    executed actions among the algorithm's locals: ``clipped_actions`` for PPO, ``actions`` for SAC)."""
 
-    def __init__(self) -> None:
+    def __init__(self, key: str = "clipped_actions") -> None:
         super().__init__()
+        self.key = key
         self.actions: list[np.ndarray] = []
         self.metrics: list[dict[str, Any]] = []
 
     def _on_step(self) -> bool:
-        for action, reward, info in zip(self.locals["clipped_actions"], self.locals["rewards"],
+        for action, reward, info in zip(self.locals[self.key], self.locals["rewards"],
                                         self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
             self.metrics.append(episode_metrics(float(reward), info))
@@ -131,6 +134,75 @@ class PPOAgent:
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         self.model = PPO.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def load_sac_policy(model: bytes) -> SAC:
+    """A SAC model saved in a checkpoint (``state["agent"]["model"]``), for prediction only."""
+    return SAC.load(io.BytesIO(model), device="cpu")
+
+
+class SACAgent:
+    """SAC with ``rollouts`` environment steps (episodes) and their gradient steps per update.
+
+    Args:
+        task: the env.
+        initial_action: ``[n]`` the policy mean at the start (in ``(-1, 1)``).
+        rollouts: episodes per update.
+        seed: seeds torch, the policy and the env.
+        options: fields of :class:`SACConfig`.
+    """
+
+    def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, seed: int,
+                 options: Mapping[str, Any] | None = None) -> None:
+        self.config = from_options(SACConfig, options, "sac")
+        self.rollouts = rollouts
+        self.env = DummyVecEnv([task.make_with_options])
+        self.env.seed(seed)
+        hidden = [self.config.hidden, self.config.hidden]
+        self.model = SAC("MlpPolicy", self.env, learning_rate=self.config.learning_rate,
+                         buffer_size=self.config.buffer_size, learning_starts=0, batch_size=self.config.batch_size,
+                         gamma=0.0, train_freq=(rollouts, "step"), gradient_steps=self.config.gradient_steps * rollouts,
+                         seed=seed, device="cpu", verbose=0,
+                         policy_kwargs={"net_arch": hidden})
+        start = np.arctanh(np.clip(np.asarray(initial_action, dtype=np.float64), -0.999, 0.999))
+        actor = self.model.actor
+        with torch.no_grad():    # mean at the start action and std = sigma for every context, at first
+            actor.mu.weight.mul_(0.01)
+            actor.mu.bias.copy_(torch.as_tensor(start, dtype=torch.float32))
+            actor.log_std.weight.mul_(0.01)
+            actor.log_std.bias.fill_(math.log(self.config.sigma))
+        self._collector = _EpisodeCollector("actions")
+
+    @property
+    def exploration(self) -> float:
+        """Mean standard deviation of the pre-squash Gaussian for a zero context."""
+        with torch.no_grad():
+            features = self.model.actor.extract_features(torch.zeros((1, *self.env.observation_space.shape)),
+                                                         self.model.actor.features_extractor)
+            log_std = self.model.actor.log_std(self.model.actor.latent_pi(features))
+        return float(torch.exp(log_std).mean())
+
+    def train_update(self) -> EpisodeBatch:
+        self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
+            raise FloatingPointError("sac: the policy diverged (NaN or inf weights); lower learning_rate "
+                                     "(--option learning_rate=...)")
+        return self._collector.pop_batch()
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+
+    def state_dict(self) -> dict[str, Any]:
+        buffer = io.BytesIO()
+        self.model.save(buffer)
+        return {"model": buffer.getvalue()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.model = SAC.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
 
     def close(self) -> None:
         self.env.close()

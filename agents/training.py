@@ -29,13 +29,15 @@ from .options import check_choice, check_range, from_options, to_options
 from .ppo_config import PPOConfig
 from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
 from .runs import RunDirectory
+from .sac_config import SACConfig
 from .tasks import WIPE_ID, TaskSpec
 
 __all__ = ["AGENTS", "ESAgent", "TrainConfig", "batch_summary", "train"]
 
 logger = logging.getLogger(__name__)
 
-AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig}
+AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig,
+                                  "sac": SACConfig}
 AGENTS = tuple(AGENT_CONFIGS)
 START_MODES = ("imitation", "perturbed", "shrunk")
 _FEATURE_CONTEXTS = 64   # training contexts whose mean and spread standardise a contextual learner's features
@@ -47,7 +49,8 @@ class TrainConfig:
     """Everything that defines a training run (stored as ``config.json``).
 
     Attributes:
-        agent: ``pi2``, ``pibb``, ``cmaes`` or ``ppo``.
+        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``creps``, ``cpibb``, ``cpi2``, ``pi2``, ``pibb``,
+            ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``.
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
@@ -229,6 +232,10 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
         from .sb3 import PPOAgent
 
         return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options)
+    if config.agent == "sac":
+        from .sb3 import SACAgent
+
+        return SACAgent(config.task, initial, config.rollouts, config.seed, config.options)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     space = None

@@ -167,3 +167,19 @@ def test_contextual_training_run_on_the_tracking_task(tmp_path, agent):
     result = evaluate_run(run.path, 3)
     assert result["policy"] == "last" and len(result["trained"]["jerk_ratio"]) == 3
     assert result["imitation"]["jerk_ratio_mean"] == pytest.approx(1.0)
+
+
+def test_sac_trains_on_the_one_step_task(tmp_path):
+    import torch
+
+    torch.set_num_threads(1)
+    config = TrainConfig(agent="sac", updates=2, rollouts=4, seed=0, env_id=TRACKING_ID, eval_episodes=2,
+                         env_kwargs={"n_periodic": 10, "n_transient": 10, "duration": 4.0, "context_range": 0.03},
+                         options={"sigma": 0.05, "batch_size": 4})
+    records = train(config, tmp_path / "sac").read_log()
+    assert [r["episodes"] for r in records] == [0, 4, 8]
+    assert records[0]["exploration"] == pytest.approx(0.05, rel=1e-3)
+    assert all(np.isfinite(r["eval_return_mean"]) and np.isfinite(r["return_mean"]) for r in records[1:])
+    from rdmp_gym.agents.assessment import evaluate_run
+
+    assert np.isfinite(evaluate_run(tmp_path / "sac", 2)["trained"]["return_mean"])
