@@ -29,7 +29,8 @@ def test_registered_and_spaces(env):
     assert isinstance(u, ArmarWipeEnv)
     assert env.action_space.dtype == np.float32
     assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
-    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")),)
+    # the DMP's parameters plus the one-dimensional approach lift (last)
+    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")) + 1,)
     space = env.observation_space
     assert space.dtype == np.float32 and space.shape == (13,)
     assert np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
@@ -89,7 +90,12 @@ def test_action_param_mapping(env):
     env.reset(seed=0)
     assert u.action_to_params(zero(env)) == pytest.approx(u.dmp.get_params(u.groups))
     a = np.random.default_rng(2).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    a[-1] = 0.0                 # the approach dimension: params_to_action expresses every theta without it
     assert u.params_to_action(u.action_to_params(a)) == pytest.approx(a, abs=1e-5)
+    b = np.random.default_rng(3).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    theta = u.action_to_params(b)
+    # with the approach moved, the same theta needs no approach (may lie beyond the box: the map's own inverse)
+    assert u.action_map.to_params(u.params_to_action(theta)) == pytest.approx(theta, rel=1e-5, abs=1e-6)
     weights = u.action_time_weights()
     assert weights.shape == (u.n_steps, env.action_space.shape[0])
     assert weights.min() >= 0.0 and weights.max() <= 1.0
@@ -98,6 +104,7 @@ def test_action_param_mapping(env):
     early, late = slice(0, 20), slice(-20, None)
     assert weights[early, part["transient:0"]].sum() > weights[early, part["periodic"]].sum()
     assert weights[late, part["periodic"]].sum() > weights[late, part["transient:0"]].sum()
+    assert weights[0, -1] == 0.0 and weights[:, -1].max() == 1.0 and weights[late, -1].sum() == 0.0   # approach
 
 
 def test_bad_actions_raise(env):
