@@ -31,7 +31,8 @@ __all__ = ["DEFAULT_SCALES", "ActionMap"]
 #: Default fractions. Chosen so that a uniformly random action stays a plausible wiping motion: with
 #: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
 #: 16 random actions), while coordinated actions still change the pattern's amplitude by ~20 %.
-#: ``approach``: 6 cm of lift at +1, what clears the corridor's 8 cm cup in the nominal context.
+#: ``approach``: 6 cm of lift at +1, which clears the corridor's 8 cm cup in the nominal context within
+#: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.approach`).
 DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06}
 
 

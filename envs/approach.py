@@ -5,6 +5,9 @@ to the spring and the smooth start) a transient weight moves the path by only ``
 at the default scales, all transient height weights at +1 lift the approach by about 2 mm, while a cup
 (8 cm tall) in the corridor needs 4-6 cm. Larger per-weight scales would give the lift, but make uniformly
 random actions rough (independent weights at 28x the scale: jerk ratio up to 95, 19 rad/s²).
+The default lift, 6 cm at ``a = +1`` (``scales={"approach": ...}``), clears the cup in the nominal context
+and is the largest whole centimetre that keeps the peak joint acceleration under ARMAR-III's 10 rad/s²
+there (7 cm: 11.7 rad/s²). ``a = -1`` lowers the approach by as much (it then hits the cup harder).
 
 So the env offers a coordinated, low-dimensional direction in the DMP's own parameters: a fixed
 combination ``delta`` of the transient's height weights whose rollout lifts the approach by a smooth
@@ -23,9 +26,11 @@ from rdmp_gym import RhythmicDMP
 
 __all__ = ["LIFT_PROFILE", "approach_direction", "lift_profile"]
 
-#: The bump as fractions of the transient's length: rise over [0, 0.25], hold to 0.62, fall to 0 at 0.85.
-#: The imitation passes the corridor's cup at 0.35-0.72 of the transient and touches down at 0.87.
-LIFT_PROFILE = (0.25, 0.62, 0.85)
+#: The bump as fractions of the transient's length: rise over [0, 0.35], hold to 0.6, fall to 0 at 0.88.
+#: The imitation passes the corridor's cup at 0.36-0.71 of the transient and touches down at 0.87. This
+#: gentle bump lifts 6 cm with a jerk ratio of 2.0 and 5.8 rad/s² peak joint acceleration (nominal
+#: context); a steeper one, (0.25, 0.62, 0.85), cleared no more cups with 4.4 and 8.2 rad/s².
+LIFT_PROFILE = (0.35, 0.6, 0.88)
 
 
 def _quintic(x: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
   core of issue 7): the smooth core's wide basis and soft spring low-pass random weights, so a uniformly
   random action is now 7-25x as jerky as the imitation (was 30-45x) while its amplitude can still buy
   coverage; at 0.25 it costs 0.5-0.8, 0.39-0.65 more than a smooth action with the same coverage (20
-  contexts), while the smooth 6 cm lift over a cup (4.4x) costs 0.37 against the cup's ~0.9;
+  contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17 against the cup's ~0.9;
 - ``joint_accel``: ``-w`` x ``min(1, max(0, a_peak - a_max) / a_max)``, a_peak the peak commanded joint
   acceleration (a_max = 10 rad/s², ARMAR-III's joint limit), charged at the step of the peak;
 - ``arm_collision``: ``-w`` x fraction of steps with a robot geom other than the sponge on the table;

@@ -121,8 +121,9 @@ def test_alternating_weights_lose(env):
     """Item 7: alternating +-1 actions (v0: 0.964 vs 0.974).
 
     The smooth core's wide, overlapping basis averages neighbouring weights, so alternating weights no
-    longer make a violent path (peak joint acceleration 12 rad/s², was 83; jerk ratio 20, was 256): it
-    is a rough, shrunken wipe (coverage 0.65 vs 0.72), charged for its jerk (``jerk_ratio > 5``).
+    longer make a violent path (peak joint acceleration 8.8 rad/s², was 83; jerk ratio 15, was 256): it
+    is a rough, shrunken wipe with a lowered approach (coverage 0.66 vs 0.72), charged for its jerk
+    (``jerk_ratio > 5``), and its joints accelerate more than twice as hard as the imitation's (3.0 rad/s²).
     """
     reward0, info0 = imitation(env, {"obstacle": 0})
     action = np.where(np.arange(env.action_space.shape[0]) % 2 == 0, 1.0, -1.0).astype(np.float32)
@@ -138,7 +139,7 @@ def test_knocking_the_cup_loses_and_the_approach_matters(env):
 
     The raised approach is an action: the ``approach`` dimension at +1 (a smooth 6 cm lift of the DMP's
     own transient, see ``envs/approach.py``) clears the cup with success, where the imitation fails.
-    It pays for its extra jerk (4.4x the imitation's: -0.37) and still wins by 0.57 (0.81 vs 0.24).
+    It pays for its extra jerk (2.0x the imitation's: -0.17) and wins by 0.76 (1.00 vs 0.24).
     """
     options = {**NOMINAL, "obstacle": 1}
     obs, _ = env.reset(seed=0, options=options)
@@ -156,7 +157,7 @@ def test_knocking_the_cup_loses_and_the_approach_matters(env):
     _, lifted, _, _, info = env.step(lift)
     assert info["obstacle_touch_steps"] == 0 and info["obstacle_shift"] < 0.005 and info["is_success"] is True
     assert info["reward_terms"]["smoothness"] < 0                           # the lift is not free ...
-    assert lifted > knocked + MARGIN                                        # ... but pays off clearly
+    assert lifted > knocked + 2 * MARGIN                                    # ... but pays off clearly
 
 
 def test_a_hard_touchdown_is_charged_when_it_happens(env):
