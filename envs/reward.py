@@ -19,8 +19,9 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
   spread over the steps in proportion to the squared jerk at each. Weight 0.25 (0.1 before the smooth
   core of issue 7): the smooth core's wide basis and soft spring low-pass random weights, so a uniformly
   random action is now 7-25x as jerky as the imitation (was 30-45x) while its amplitude can still buy
-  coverage; at 0.25 it costs 0.5-0.8, 0.39-0.65 more than a smooth action with the same coverage (20
-  contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17 against the cup's ~0.9;
+  coverage; at 0.25 it costs 0.49-0.80 and such an action scores at least 0.49 below its smooth twin
+  with the same coverage (20 contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17
+  against the cup's ~0.9;
 - ``joint_accel``: ``-w`` x ``min(1, max(0, a_peak - a_max) / a_max)``, a_peak the peak commanded joint
   acceleration (a_max = 10 rad/s², ARMAR-III's joint limit), charged at the step of the peak;
 - ``arm_collision``: ``-w`` x fraction of steps with a robot geom other than the sponge on the table;
