@@ -2,7 +2,8 @@
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
-1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a``;
+1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a`` (plus, for
+   the last dimension, ``approach``, a fixed direction that lifts the approach: :mod:`rdmp_gym.envs.approach`);
 2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
    the sponge path ``P [T, 3]`` in the table frame (x, y on the table, z above it);
 3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat on the

@@ -205,10 +205,30 @@ def test_reset_options(env):
     ({"context_ranges": {"patch_centre": (-0.1, 0.0)}}, "context_ranges"),     # patches over the table edge
     ({"obstacle": "yes"}, "obstacle"),
     ({"wear_rate": 0.0}, "wear_rate"),
+    ({"groups": ("periodic", "approach")}, "groups"),                          # the approach moves transient weights
+    ({"scales": {"approach": 0.0}}, "scales"),
 ])
 def test_bad_constructor_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
         ArmarWipeEnv(**FAST, **kwargs)
+
+
+def test_the_approach_dimension_lifts_the_approach_smoothly(env):
+    """The approach dimension at +1 lifts the DMP's own path by the smooth bump (6 cm), leaves the start and
+    the wiping untouched and needs no more joint acceleration than ARMAR-III allows (10 rad/s²)."""
+    from rdmp_gym.envs.approach import lift_profile
+
+    u = env.unwrapped
+    env.reset(seed=0)
+    a = zero(env)
+    a[-1] = 1.0
+    lift = u.rollout_path(u.action_to_params(a)) - u.rollout_path(u.action_map.theta0)
+    target = 0.06 * lift_profile(u.times, u.dmp.transients[0].length)
+    assert np.abs(lift[:, 2] - target).max() < 1e-3 and lift[:, 2].max() > 0.058
+    assert np.abs(lift[:, :2]).max() < 1e-9                              # only the height moves
+    assert np.abs(lift[0]).max() < 1e-9 and np.abs(lift[u.periodic]).max() < 1e-3
+    _, _, _, _, info = env.step(a)
+    assert info["valid"] and info["peak_joint_accel"] < 10.0 and info["jerk_ratio"] < 3.0
 
 
 def test_variants_frame_skip_xml_groups_demonstration():
