@@ -2,7 +2,8 @@
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
-1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a``;
+1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a`` (plus, for
+   the last dimension, ``approach``, a fixed direction that lifts the approach: :mod:`rdmp_gym.envs.approach`);
 2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
    the sponge path ``P [T, 3]`` in the table frame (x, y on the table, z above it);
 3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat on the
@@ -39,6 +40,7 @@ from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
 
 from .action import ActionMap
+from .approach import approach_direction, lift_profile
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
@@ -94,10 +96,12 @@ class ArmarWipeEnv(gym.Env):
             the table, z above its surface (overrides ``style``; checked against the workspace before fitting).
         dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
             imitation without fitting (overrides ``style``; excludes ``demonstration``).
-        n_periodic, n_transient, fit_method: DMP fit settings.
+        n_periodic, n_transient, fit_method: DMP fit settings (default the core's ``"trajectory"`` fit: the
+            smoothest imitation, half the jerk of ``"ridge"``; see the README).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
-            amplitude).
-        scales: per-group action scales (see :mod:`rdmp_gym.envs.action`).
+            amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
+            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``).
+        scales: per-group action scales (see :mod:`rdmp_gym.envs.action`; ``approach``: lift in m at +1).
         n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
         control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
         timestep: physics step (s; default the model's 2 ms).
@@ -134,8 +138,8 @@ class ArmarWipeEnv(gym.Env):
         dmp: str | Path | RhythmicDMP | None = None,
         n_periodic: int = 40,
         n_transient: int = 40,
-        fit_method: str = "ridge",
-        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude"),
+        fit_method: str = "trajectory",
+        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude", "approach"),
         scales: Mapping[str, float] | None = None,
         n_periods: float = 4.0,
         duration: float | None = None,
@@ -192,8 +196,10 @@ class ArmarWipeEnv(gym.Env):
             if isinstance(style, bool) or style not in (1, 2, 3, 4):
                 raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
             self.dmp = _fit_style(int(style), int(n_periodic), int(n_transient), str(fit_method))
-        self.action_map = ActionMap(self.dmp, groups, scales)
-        self.groups = self.action_map.groups
+        groups = (groups,) if isinstance(groups, str) else tuple(groups)
+        #: the DMP parameter groups in the action (the ``approach`` dimension, if any, comes after them)
+        self.groups = tuple(group for group in groups if group != "approach")
+        self._approach = "approach" in groups
         # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
         # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
         self._anchor_z = float(self.dmp.anchor[2])
@@ -224,6 +230,11 @@ class ArmarWipeEnv(gym.Env):
         self.periodic = self.times >= transient
         if not self.periodic.any():
             raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
+
+        directions = {}
+        if self._approach:
+            directions["approach"] = approach_direction(self.dmp, self.groups, self.times, height=1.0)
+        self.action_map = ActionMap(self.dmp, self.groups, scales, directions)
 
         band = tuple(float(f) for f in force_band)
         if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
@@ -285,17 +296,22 @@ class ArmarWipeEnv(gym.Env):
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
-        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[P]`` (clipped to
-        [-1, 1] as in :meth:`step`; NaN or a wrong shape raise ValueError)."""
+        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[n_action]`` (clipped to
+        [-1, 1] as in :meth:`step`; NaN or a wrong shape raise ValueError). ``n_action = P + 1`` with the
+        ``approach`` dimension (last), else P."""
         return self.action_map.to_params(self._check_action(action))
 
     def params_to_action(self, theta: np.ndarray) -> np.ndarray:
-        """The action ``[P]`` (float32, unclipped) that maps to ``theta [P]``."""
+        """An action ``[n_action]`` (float32, unclipped) that maps to ``theta [P]`` (0 in the approach dimension)."""
         return self.action_map.to_action(theta)
 
     def action_time_weights(self) -> np.ndarray:
         """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
-        return self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+        weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+        if self._approach:                   # the approach dimension acts where it lifts the path
+            lift = lift_profile(self.times, self.dmp.transients[0].length)
+            weights = np.c_[weights, lift / lift.max()]
+        return weights
 
     def _check_action(self, action: Any) -> np.ndarray:
         try:
