@@ -263,7 +263,7 @@ def simulate_wipe(
         ctrl = None
     q_rows, ndq_rows = list(plan.q), list(plan.normal_dq)
     offset_step = np.empty(len(ids))
-    multiply, subtract = np.multiply, np.subtract
+    multiply, subtract, dot = np.multiply, np.subtract, np.dot
     # the admittance law of ForceAdaptation.update, inlined (same operations in the same order)
     law = adaptation.settings
     adapt = law.enabled
@@ -306,7 +306,7 @@ def simulate_wipe(
             step(m, d, frame_skip)
         if first_contact < 0 and sensordata[a] > 0:
             first_contact = k
-        measured = bias_n - float(normal @ (ft_rot @ sensordata[force_adr]))
+        measured = bias_n - float(dot(normal, dot(ft_rot, sensordata[force_adr])))   # = normal @ (R @ f)
         wrist_force[k] = measured
         depth_trace[k] = depth
         concatenate(sources, out=record[k])
