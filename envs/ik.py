@@ -102,7 +102,8 @@ class PathIK:
         jac_pos, jac_rot = state.jacobian()
         up = state.rot[:, :, 0]
         e_pos = targets - state.pos
-        r = np.cross(up, normal)
+        r = np.stack([up[:, 1] * normal[2] - up[:, 2] * normal[1], up[:, 2] * normal[0] - up[:, 0] * normal[2],
+                      up[:, 0] * normal[1] - up[:, 1] * normal[0]], axis=1)             # np.cross(up, normal)
         error = np.concatenate([e_pos, (r @ basis.T) * rot_weight[:, None]], axis=1)      # [B, 5]
         jac_r = np.einsum("kj,bjn->bkn", basis, jac_rot) * rot_weight[:, None, None]
         jac = np.concatenate([jac_pos, jac_r], axis=1)                                   # [B, 5, n]

@@ -261,9 +261,8 @@ def simulate_wipe(
     ctrl = d.ctrl[ctrl_index]             # a view when the arm actuators are consecutive
     if not np.shares_memory(ctrl, d.ctrl):
         ctrl = None
-    q_rows, ndq_rows = list(plan.q), list(plan.normal_dq)
-    offset_step = np.empty(len(ids))
-    multiply, subtract, dot = np.multiply, np.subtract, np.dot
+    q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
+    add_scaled, dot = mujoco.mju_addScl, np.dot     # q - depth ndq, elementwise as numpy rounds it (no FMA)
     # the admittance law of ForceAdaptation.update, inlined (same operations in the same order)
     law = adaptation.settings
     adapt = law.enabled
@@ -288,11 +287,10 @@ def simulate_wipe(
             rate = min(max_rate, max(-max_rate, rate))
             offset = min(max_offset, max(min_offset, offset + rate * dt))
         depth = preload + offset
-        multiply(ndq_rows[k], depth, out=offset_step)
         if ctrl is None:
-            d.ctrl[ctrl_index] = q_rows[k] - offset_step
+            d.ctrl[ctrl_index] = q_rows[k] - depth * ndq_rows[k]
         else:
-            subtract(q_rows[k], offset_step, out=ctrl)
+            add_scaled(ctrl, q_rows[k], ndq_rows[k], -depth)
         if fine is not None or (first_contact >= 0 and k < first_contact + fine_window):
             top = 0.0
             for i in range(frame_skip):

@@ -273,3 +273,14 @@ def test_the_imitation_path_is_the_rollout_of_theta0(adaptive):
         assert np.abs(u.imitation_path() - direct).max() < 1e-12
         assert np.sum(Smoothness.jerk_squared(u.imitation_path(), u.dt)) == pytest.approx(
             np.sum(Smoothness.jerk_squared(direct, u.dt)), rel=1e-10)
+
+
+def test_servo_targets_are_rounded_as_numpy_rounds_them():
+    """simulate_wipe writes ``q - depth * normal_dq`` with ``mujoco.mju_addScl`` (no fused multiply-add)."""
+    import mujoco
+    rng = np.random.default_rng(0)
+    out = np.zeros(10)
+    for _ in range(2000):
+        q, direction, depth = rng.normal(size=10), rng.normal(size=10), 0.05 * rng.normal()
+        mujoco.mju_addScl(out, q, direction, -depth)
+        assert np.array_equal(out, q - depth * direction)
