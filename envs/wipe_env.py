@@ -293,6 +293,7 @@ class ArmarWipeEnv(gym.Env):
         self._cells_world = np.zeros((0, 3))
         self._dirt = np.zeros(0)
         self._imitation_jerk: float | None = None
+        self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
@@ -407,6 +408,28 @@ class ArmarWipeEnv(gym.Env):
         return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
                                       y0=self.context.sponge_start, anchor=anchor, start_blend=True)[0]
 
+    def imitation_path(self) -> np.ndarray:
+        """The imitation's path ``[T_ctrl, 3]`` in this episode's context (``rollout_path(theta0)`` to round-off).
+
+        With the parameters fixed, the rollout is affine in the start and the anchor (a linear transformation
+        system, a start offset blended out linearly), so the env rolls out the imitation once for a reference
+        context and once per unit shift of the 5 context numbers it depends on (start x, y, z; anchor x, y),
+        and each context's path is that affine combination: no DMP rollout per episode.
+        """
+        if self.context is None:
+            raise RuntimeError("call reset() before imitation_path()")
+        if self._imitation_paths is None:
+            shifts = np.zeros((6, 5))
+            shifts[1:] = _IMITATION_SHIFT * np.eye(5)
+            anchors = np.c_[shifts[:, 3:], np.full(6, self._anchor_z)]
+            theta = np.broadcast_to(self.action_map.theta0, (6, self.action_map.theta0.size))
+            paths = self.dmp.rollout_batch(theta, self.times, groups=self.groups, y0=shifts[:, :3], anchor=anchors,
+                                           start_blend=True)
+            self._imitation_paths = (paths[0], (paths[1:] - paths[0]) / _IMITATION_SHIFT)
+        base, unit = self._imitation_paths
+        shift = np.r_[self.context.sponge_start, self.context.patch_centre]
+        return base + np.tensordot(shift, unit, axes=1)
+
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,
         bypassing the DMP (for tests and hand-made motions). Returns (reward, info)."""
@@ -426,8 +449,7 @@ class ArmarWipeEnv(gym.Env):
         """Jerk of the commanded path relative to the imitation's in this context, and joint accelerations."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
         if self._imitation_jerk is None:
-            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.rollout_path(self.action_map.theta0),
-                                                                        self.dt)))
+            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.imitation_path(), self.dt)))
         ratio = float(np.sum(jerk_sq)) / max(self._imitation_jerk, 1e-12)
         return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
 
@@ -551,6 +573,10 @@ class ArmarWipeEnv(gym.Env):
             self._viewer.sync()
         if self.record_frames and (k + 1) % self.frame_stride == 0:
             self.frames.append(self._frame(dirt_left()))
+
+
+#: Shift (m) of each context number for the affine basis of :meth:`ArmarWipeEnv.imitation_path`.
+_IMITATION_SHIFT = 0.1
 
 
 def deprecated_v0(**kwargs: Any) -> ArmarWipeEnv:
