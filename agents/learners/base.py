@@ -73,7 +73,8 @@ def check_state_like(value: Any, template: Any, path: str) -> None:
 
     Dicts need the same keys; arrays the same shape except along the first axis (which may grow, e.g. a
     history; an empty template array fixes no shape) and the same kind (float arrays finite); numbers,
-    strings, bools, lists and Generators their own kind. List lengths and first-axis lengths are left to the owner's checks.
+    strings, bools, lists and Generators their own kind. List lengths and first-axis lengths are left to
+    the owner's checks.
     """
     def fail(expected: str) -> None:
         raise ValueError(f"{path}: expected {expected}, got {type(value).__name__}")
