@@ -31,7 +31,8 @@ import numpy as np
 from .controller import ForceAdaptation, JointTargetPlan
 from .scene import WipeScene
 
-__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "cells_under_sponge", "contact_summary", "simulate_wipe"]
+__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "arm_table_penetration", "cells_under_sponge",
+           "contact_summary", "simulate_wipe"]
 
 #: Time after the first sponge contact (s) in which the peak normal force is the impact.
 IMPACT_WINDOW = 0.2
@@ -167,7 +168,7 @@ def contact_summary(scene: WipeScene, normal: np.ndarray) -> tuple[float, bool]:
     return total, arm
 
 
-def _arm_table_penetration(scene: WipeScene) -> float:
+def arm_table_penetration(scene: WipeScene) -> float:
     """Deepest penetration (m, >= 0) of a robot geom other than the sponge into the table, now."""
     d = scene.data
     deepest = 0.0
@@ -292,7 +293,7 @@ def simulate_wipe(
                 if sensordata[adr] > 0:
                     penetration = max(penetration, -float(sensordata[adr + 1]))
         if robot_found[k] - contact[k, 0] > 0.5:
-            penetration = max(penetration, _arm_table_penetration(scene))
+            penetration = max(penetration, arm_table_penetration(scene))
         obstacle_found[k] = sensordata[obstacle_adr] > 0
         obstacle_pos[k] = d.qpos[obstacle_qpos]
         joint_pos[k] = d.qpos[qpos_adr]
