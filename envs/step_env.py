@@ -60,15 +60,16 @@ class ArmarWipeStepEnv(gym.Env):
 
     Args:
         max_shift: equilibrium shift (m) of the DMP for a full action, per axis.
-        ik_iterations: most damped-least-squares iterations of the IK per control step; each target is solved
-            from the IK's posture, as the episodic path IK solves its knots (a warm start drifts in the null space).
+        ik_iterations: damped-least-squares iterations of the IK per control step, a fixed count from the IK's
+            posture (as the episodic path IK solves its knots; a warm start drifts in the null space, and
+            stopping at a tolerance after a varying count makes the joint targets jump between steps).
         **kwargs: keywords of :class:`ArmarWipeEnv` (style, demonstration, dmp, n_periods, duration, control_rate,
             target_force, force_band, reward_weights, adaptation, context_ranges, obstacle, render_mode, ...).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
 
-    def __init__(self, max_shift: float = 0.02, ik_iterations: int = 60, **kwargs: Any) -> None:
+    def __init__(self, max_shift: float = 0.02, ik_iterations: int = 30, **kwargs: Any) -> None:
         super().__init__()
         if isinstance(max_shift, bool) or not isinstance(max_shift, (int, float, np.number)) or not (
                 np.isfinite(max_shift) and max_shift >= 0.0):
@@ -200,7 +201,7 @@ class ArmarWipeStepEnv(gym.Env):
         solution = self.task.ik.solve(self.task.scene.to_world(target[None]), self._normal,
                                       rot_weight=np.array([weight]), q_init=q_init, stride=1,
                                       coarse_iterations=self.ik_iterations, fine_iterations=1,
-                                      min_iterations=min(6, self.ik_iterations))
+                                      min_iterations=self.ik_iterations)
         return solution.q[0], solution.normal_dq[0]
 
     def _simulate(self, k: int, depth: float) -> bool:

@@ -77,17 +77,18 @@ def test_given_the_episodic_joint_path_the_return_is_the_episodic_reward_exactly
     assert step_info["is_success"] == info["is_success"]
 
 
-@pytest.mark.parametrize("seed", [3, 7])
+@pytest.mark.parametrize("seed", [3, 5])
 def test_zero_action_reproduces_the_episodic_imitation(seed):
-    """With its own online IK (one point at a time from the posture, as the path IK's knots; the path IK
-    interpolates between knots with a spline) the joints differ by ~2 mrad: reward within 0.02, coverage
-    within 0.01 on contexts without the cup (a cup contact amplifies such differences, see the README)."""
+    """With its own online IK (each target from the posture with a fixed iteration count; the path IK solves
+    knots and splines between them) the joints differ in the null space, the sponge barely: reward and
+    coverage within 0.003 on contexts without the cup (measured <= 0.0015 on seeds 0-7; a contact with the
+    cup amplifies the joint differences, see the README)."""
     _, reward, info = _episodic(seed, obstacle=False)
     step_env = gym.make(STEP_ID, obstacle=False, **KWARGS)
     total, _, step_info, terminated = _episode(step_env, np.zeros(3, np.float32), seed)
     assert not terminated
-    assert total == pytest.approx(reward, abs=0.02)
-    assert step_info["coverage"] == pytest.approx(info["coverage"], abs=0.01)
+    assert total == pytest.approx(reward, abs=0.003)
+    assert step_info["coverage"] == pytest.approx(info["coverage"], abs=0.003)
     assert step_info["jerk_ratio"] == pytest.approx(1.0, abs=1e-9)   # the online DMP is the imitation's path
     assert isinstance(step_info["is_success"], bool) and "cost_trace" in step_info
 
