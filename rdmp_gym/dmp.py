@@ -232,9 +232,9 @@ class RhythmicDMP:
             alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
             beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
             delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
-            smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.1,
+            smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.3,
             floor: float = SMOOTH_FLOOR, substeps: int = 4,
-            fading_fractions: tuple[float, float] = (0.5, 0.25), turn_height: float = 0.1) -> RhythmicDMP:
+            fading_fractions: tuple[float, float] = (0.5, 0.25), turn_height: float = 0.3) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         Args:
