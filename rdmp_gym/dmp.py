@@ -259,7 +259,8 @@ class RhythmicDMP:
             regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the
                 forcing term stays gentle off the encoded paths; 1e-6 otherwise).
             smoothness: relative penalty on second differences of neighbouring weights (``ridge``,
-                ``trajectory``); 0 in :data:`PAPER_SETTINGS`.
+                ``trajectory``); 0 in :data:`PAPER_SETTINGS`. 0.3 holds the periodic acceleration error of a small
+                pure sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %).
             floor: added to the sum of activations in the mixture (5) (:class:`Fading`), so that the forcing
                 term fades to 0 where no basis function is active.
             substeps: ``trajectory`` simulates each basis function's response this many times finer than the
