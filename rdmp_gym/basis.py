@@ -111,7 +111,7 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
 
     Centres sit on the canonical path at times spaced uniformly in ``[0, span]``. Each width makes a
     basis function cross its neighbours at height ``overlap`` (midway to them), but is narrowed where
-    needed so that the support (level ``delta``) does not reach the next turn of the spiral.
+    needed so that its value on the next turn of the spiral (one period later) stays below ``delta``.
 
     Returns:
         ``(centres [M, 2], widths [M])``.

@@ -29,10 +29,12 @@ _WINDOW = Polynomial([0, 0, 0, 0, 256]) * Polynomial([1, -1]) ** 4
 
 
 def finite_derivatives(Y: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Velocity, acceleration and jerk of ``Y [T, d]`` on an even grid (second-order central differences)."""
-    velocity = np.gradient(Y, dt, axis=0)
-    acceleration = np.gradient(velocity, dt, axis=0)
-    return velocity, acceleration, np.gradient(acceleration, dt, axis=0)
+    """Velocity, acceleration and jerk of ``Y [T, d]`` on an even grid (second-order central differences, and
+    second-order one-sided ones at both ends: first-order ends, applied three times, make the jerk of the last
+    samples wrong by about ``acceleration / dt``, as much as the whole integrated jerk of a smooth signal)."""
+    velocity = np.gradient(Y, dt, axis=0, edge_order=2)
+    acceleration = np.gradient(velocity, dt, axis=0, edge_order=2)
+    return velocity, acceleration, np.gradient(acceleration, dt, axis=0, edge_order=2)
 
 
 def motion_metrics(Y: np.ndarray, reference: tuple[np.ndarray, np.ndarray, np.ndarray], dt: float,

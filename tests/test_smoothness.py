@@ -59,23 +59,25 @@ def test_paper_settings_show_the_ripple_the_defaults_remove():
     assert motion_metrics(paper, reference, DT, periodic)["jerk_ratio"] > 100.0
 
 
+N_GENERATOR_SIGNALS = 24
+
+
 @pytest.fixture(scope="module")
 def generator_signals():
-    """Six signals drawn in sequence from seed 0 (the ones the README's table reports)."""
+    """Signals drawn in sequence from seed 0 (the first six are the ones the README's table reports)."""
     rng = np.random.default_rng(0)
     signals = []
-    for _ in range(6):
+    for _ in range(N_GENERATOR_SIGNALS):
         signal = random_test_signal(rng)
         duration = signal.transient_length + max(6 * signal.period, 5.0)
         signals.append((signal, duration, signal.demonstration(duration, noise=rng.uniform(3e-4, 5e-4), rng=rng)))
     return signals
 
 
-@pytest.mark.parametrize("index", range(6))
+@pytest.mark.parametrize("index", range(N_GENERATOR_SIGNALS))
 def test_generator_signals(generator_signals, index):
     """Own test signals (period 0.7-2 s, 1-3 harmonics, curved transient 1-2.5 s, noise 0.3-0.5 mm at 100 Hz):
-    the issue's targets, except the integrated squared jerk, held to 3x (measured up to 2.9x in the transient of
-    a 0.8 s pattern under a 2.2 s transient and 2.1x in the periodic part of a pure 1.1 s sinusoid)."""
+    every issue-7 target, jerk <= 2x included."""
     signal, duration, demo = generator_signals[index]
     t = np.arange(0.0, duration + 1e-9, DT)
     position, _, acceleration, jerk = signal.derivatives(t)
@@ -86,7 +88,40 @@ def test_generator_signals(generator_signals, index):
     assert periodic["position"] < 0.003 and approach["position"] < 0.008
     assert periodic["acceleration"] <= 0.10 and approach["acceleration"] <= 0.15
     assert periodic["peak_acceleration_ratio"] <= 1.3 and approach["peak_acceleration_ratio"] <= 1.3
-    assert periodic["jerk_ratio"] <= 3.0 and approach["jerk_ratio"] <= 3.0
+    assert periodic["jerk_ratio"] <= 2.0 and approach["jerk_ratio"] <= 2.0
+
+
+def test_jerk_metric_is_exact_at_the_ends_of_the_grid():
+    """The jerk of the last samples must not blow up: a reproduction equal to the reference has ratio 1, and one
+    ending mid-cycle is measured like the same reproduction on a longer grid."""
+    signal = random_test_signal(np.random.default_rng(1), harmonics=1)
+    t = np.arange(0.0, signal.transient_length + 3.3 * signal.period, DT)
+    position, _, acceleration, jerk = signal.derivatives(t)
+    everywhere = np.ones(t.size, dtype=bool)
+    assert motion_metrics(position, (position, acceleration, jerk), DT, everywhere)["jerk_ratio"] == \
+        pytest.approx(1.0, abs=0.01)
+    longer = signal.derivatives(np.arange(t.size + 50) * DT, order=0)[0]
+    _, longer_acceleration, longer_jerk = finite_derivatives(longer, DT)
+    on_longer = motion_metrics(position, (position, acceleration, jerk), DT, everywhere,
+                               longer_acceleration[: t.size], longer_jerk[: t.size])
+    assert motion_metrics(position, (position, acceleration, jerk), DT, everywhere)["jerk_ratio"] == \
+        pytest.approx(on_longer["jerk_ratio"], rel=0.01)
+
+
+def test_narrow_transient_functions_at_close_turns_raise_the_jerk():
+    """The cause of a 2.9x jerk (issue 7): a 0.8 s pattern under a 2.2 s transient, whose last transient functions
+    were narrowed to 1e-3 at the next, close turn of the spiral; the default ``turn_height`` keeps them wide."""
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        signal = random_test_signal(rng)
+        duration = signal.transient_length + max(6 * signal.period, 5.0)
+        demo = signal.demonstration(duration, noise=rng.uniform(3e-4, 5e-4), rng=rng)
+    t = np.arange(0.0, duration + 1e-9, DT)
+    reference = tuple(signal.derivatives(t)[i] for i in (0, 2, 3))
+    transient = t < signal.transient_length
+    narrow = motion_metrics(RhythmicDMP.fit(demo, turn_height=1e-3).rollout(t), reference, DT, transient)
+    wide = motion_metrics(RhythmicDMP.fit(demo).rollout(t), reference, DT, transient)
+    assert narrow["jerk_ratio"] > 2.0 > 1.5 > wide["jerk_ratio"]
 
 
 def _peak_acceleration(Y):
