@@ -31,6 +31,9 @@ __all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "TransientStart", "sta
 
 logger = logging.getLogger(__name__)
 
+#: the speed factors ``tempo`` a rollout accepts
+TEMPO_RANGE = (1e-6, 1e6)
+
 GroupSelection = str | Iterable[str] | None
 _MIN_TRANSIENT = 0.05  # shortest transient that fit() encodes, as a fraction of the period
 
@@ -364,8 +367,15 @@ class RhythmicDMP:
         return int(transient)
 
     def _tempo(self, tempo: float | None) -> float:
-        """The requested tempo, or the canonical system's when ``None``."""
-        return self.canonical.tempo if tempo is None else check_positive(tempo, "tempo")
+        """The requested tempo, or the canonical system's when ``None`` (a speed factor within
+        ``TEMPO_RANGE``: beyond it the timescales over- or underflow float64)."""
+        if tempo is None:
+            return self.canonical.tempo
+        tempo = check_positive(tempo, "tempo")
+        if not TEMPO_RANGE[0] <= tempo <= TEMPO_RANGE[1]:
+            low, high = TEMPO_RANGE
+            raise ValueError(f"tempo: expected a speed factor in [{low:g}, {high:g}], got {tempo!r}")
+        return tempo
 
     def _vector(self, value: object, default: np.ndarray, name: str, batch: int) -> np.ndarray:
         """``value`` (``[d]`` or ``[B, d]``, or None for ``default``) broadcast to ``[B, d]``."""
