@@ -16,6 +16,7 @@ from .demonstrations import Demonstration
 from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
+from .stopping import Ending, StopPlan, plan_stop
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_positive, check_time_grid
 
@@ -108,11 +109,12 @@ class RhythmicDMP:
         alpha_z: damping gain of the transformation system (``beta_z = alpha_z / 4``).
         amplitude: ``[d]`` factors that scale the movement about the anchor (forcing term and default
             start); ones by default. A learnable parameter group, like the weights.
+        ending: the encoded end of the movement (:mod:`rdmp_gym.stopping`), or ``None``.
     """
 
     def __init__(self, canonical: CanonicalSystem, basis: BasisSet, weights: np.ndarray,
                  transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0,
-                 amplitude: np.ndarray | None = None) -> None:
+                 amplitude: np.ndarray | None = None, ending: Ending | None = None) -> None:
         self.canonical = canonical
         self.basis = basis
         self.weights = as_finite_array(weights, "weights", ndim=2)
@@ -127,7 +129,11 @@ class RhythmicDMP:
             raise ValueError(f"weights: expected shape {(self.anchor.size, basis.n_basis)}, got {self.weights.shape}")
         if len(self.transients) != len(basis.transient_sizes):
             raise ValueError(f"transients: expected {len(basis.transient_sizes)}, got {len(self.transients)}")
-        self.layout = ParameterLayout(self.n_dims, basis.n_periodic, basis.transient_sizes)
+        if ending is not None and (not isinstance(ending, Ending) or ending.goal.size != self.anchor.size):
+            raise ValueError(f"ending: expected an Ending with a goal of {self.anchor.size} values")
+        self.ending = ending
+        self.layout = ParameterLayout(self.n_dims, basis.n_periodic, basis.transient_sizes,
+                                      0 if ending is None else ending.weights.size)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -247,12 +253,14 @@ class RhythmicDMP:
 
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                   amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
-                  transform: np.ndarray | None, start_offset: np.ndarray | None = None, fade_length: float = 1.0
+                  transform: np.ndarray | None, start_offset: np.ndarray | None = None, fade_length: float = 1.0,
+                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
         anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. The forcing term is
         multiplied by ``M diag(amplitude)``. A ``start_offset [B, d]`` moves the anchor at the start and fades
-        out over ``fade_length`` seconds (``start_blend``)."""
+        out over ``fade_length`` seconds (``start_blend``). A ``stop`` (with ``stop_weights [B, d, S]``) ends
+        the movement at ``stop.goal [B, d]``."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -262,12 +270,20 @@ class RhythmicDMP:
         forcing = np.empty((weights.shape[0], t.size, self.n_dims))
         for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
             members = np.flatnonzero(inverse.ravel() == index)
-            forcing[members] = self.basis.forcing(phi, r, weights[members])
+            if stop is None:
+                forcing[members] = self.basis.forcing(phi, r, weights[members])
+            else:
+                forcing[members] = self.ending.forcing(self.basis, phi, r, (elapsed - stop.exit_time) * tempo,
+                                                       stop.rotation, weights[members], stop_weights[members])
         forcing *= amplitudes[:, None, :]
         if transform is not None:
             forcing = forcing @ transform.T
+        base = anchors
         if start_offset is not None:
             anchors = anchors[:, None, :] + start_fade(elapsed, fade_length)[:, None] * start_offset[:, None, :]
+        if stop is not None:
+            blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[:, None]
+            anchors = (anchors if anchors.ndim == 3 else anchors[:, None, :]) + blend * (stop.goal - base)[:, None, :]
         omega = canonical.omega * tempo
         system = _transformation(omega, dt, self.alpha_z)
         y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
@@ -293,7 +309,8 @@ class RhythmicDMP:
     def rollout(self, t: np.ndarray, transient: int = 0, y0: np.ndarray | None = None,
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
                 scale: float | np.ndarray = 1.0, rotation: float | np.ndarray | None = None,
-                tempo: float | None = None, start_blend: bool = False, return_velocity: bool = False
+                tempo: float | None = None, start_blend: bool = False, return_velocity: bool = False,
+                stop_at: float | None = None, exit_phase: float | None = None, goal: np.ndarray | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Reproduce the movement: transient ``transient`` from its own initial condition, then the cycle.
 
@@ -315,6 +332,11 @@ class RhythmicDMP:
                 spring closes the gap within about ``4 / (alpha_z Omega)`` seconds. The periodic part
                 is the same either way.
             return_velocity: also return velocities.
+            stop_at: end the movement: a stop requested at this time (s after ``t[0]``) leaves the cycle at the
+                next demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at the goal (needs a DMP
+                fitted with :func:`rdmp_gym.stopping.fit_ending`).
+            goal: ``[d]`` rest position of the stop (default: the demonstrated one, moved and transformed with
+                the anchor like the periodic part).
         Returns:
             positions ``[T, d]`` (and velocities ``[T, d]``).
         """
@@ -326,27 +348,54 @@ class RhythmicDMP:
         amplitudes = self.amplitude[None]
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend, transform)
         inits = np.array([[start.phi0, start.r0]])
+        stop = self._stop_plan(stop_at, exit_phase, goal, start.phi0, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
-                               offset, start.length / tempo)
+                               offset, start.length / tempo, stop,
+                               None if stop is None else self.ending.weights[None])
         return (y[0], yd[0]) if return_velocity else y[0]
+
+    def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, phi0: float, tempo: float,
+                   anchors: np.ndarray, amplitudes: np.ndarray, transform: np.ndarray | None = None
+                   ) -> StopPlan | None:
+        """The stop requested by ``stop_at`` (``None``: no stop); default goals ``[B, d]`` move with the anchors."""
+        if stop_at is None:
+            if exit_phase is not None or goal is not None:
+                raise ValueError("stop_at: exit_phase and goal need a stop time")
+            return None
+        if self.ending is None:
+            raise ValueError("stop_at: this DMP encodes no end of the movement; fit it with "
+                             "rdmp_gym.stopping.fit_ending")
+        relative = amplitudes * (self.ending.goal - self.anchor)
+        if transform is not None:
+            relative = relative @ transform.T
+        goals = self._vector(goal, anchors + relative, "goal", anchors.shape[0])
+        return plan_stop(self.ending, stop_at, phi0, self.canonical.omega * tempo, goals, exit_phase)
+
+    def with_ending(self, ending: Ending | None) -> RhythmicDMP:
+        """A copy of this DMP with another end of the movement (``None`` removes it)."""
+        return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
+                           self.amplitude, ending)
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
                       transient: int = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
                       anchor: np.ndarray | None = None, tempo: float | None = None,
-                      start_blend: bool = False) -> np.ndarray:
+                      start_blend: bool = False, stop_at: float | None = None,
+                      exit_phase: float | None = None, goal: np.ndarray | None = None) -> np.ndarray:
         """Roll out B parameter vectors at once (the selected ``groups`` of each; the rest as fitted).
 
         Args:
             thetas: ``[B, P]`` parameter vectors, P = ``self.layout.size(groups)``.
             t: ``[T]`` evenly spaced times.
             groups: which parameter groups ``thetas`` holds (see :mod:`rdmp_gym.parameters`).
-            transient, y0, yd0, anchor, tempo, start_blend: as in :meth:`rollout`; y0/yd0/anchor may be ``[B, d]``.
+            transient, y0, yd0, anchor, tempo, start_blend, stop_at, exit_phase, goal: as in :meth:`rollout`;
+                y0/yd0/anchor/goal may be ``[B, d]``. The stop starts at the same time for all B (their phases
+                differ only where ``initial`` is selected; the exit follows transient ``transient``'s fitted phase).
         Returns:
             ``[B, T, d]`` positions.
         """
         k = self._check_transient(transient)
         thetas = as_finite_array(thetas, "thetas", ndim=2)
-        weights, inits, anchors, amplitudes = self._decode(thetas, groups)
+        weights, inits, anchors, amplitudes, stop_weights = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:
             if "anchor" in self.layout.resolve(groups):
@@ -354,8 +403,9 @@ class RhythmicDMP:
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
         tempo = self._tempo(tempo)
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend)
+        stop = self._stop_plan(stop_at, exit_phase, goal, self.transients[k].phi0, tempo, anchors, amplitudes)
         return self._simulate(t, weights, inits[:, k], anchors, amplitudes, y0, yd0, tempo, None,
-                              offset, self.transients[k].length / tempo)[0]
+                              offset, self.transients[k].length / tempo, stop, stop_weights)[0]
 
     def start(self, dt: float, transient: int = 0, y0: np.ndarray | None = None,
               yd0: np.ndarray | None = None, anchor: np.ndarray | None = None,
@@ -393,6 +443,8 @@ class RhythmicDMP:
                 parts.append(np.array([start.phi0, start.r0]))
             elif name == "anchor":
                 parts.append(self.anchor.copy())
+            elif name == "stop":
+                parts.append(self.ending.weights.ravel())
             else:
                 parts.append(self.amplitude.copy())
         return np.concatenate(parts)
@@ -402,9 +454,9 @@ class RhythmicDMP:
         return slice(offset, offset + self.basis.transient_sizes[k])
 
     def _decode(self, thetas: np.ndarray, groups: GroupSelection
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors and
-        amplitudes ``[B, d]``."""
+        amplitudes ``[B, d]``, stop weights ``[B, d, S]`` (``None`` without an ending)."""
         slices = self.layout.slices(groups)
         expected = self.layout.size(groups)
         if thetas.shape[-1] != expected:
@@ -415,6 +467,7 @@ class RhythmicDMP:
         inits = np.repeat(np.array([[[s.phi0, s.r0] for s in self.transients]]), batch, axis=0)
         anchors = np.repeat(self.anchor[None], batch, axis=0)
         amplitudes = np.repeat(self.amplitude[None], batch, axis=0)
+        stop_weights = None if self.ending is None else np.repeat(self.ending.weights[None], batch, axis=0)
         for name, part in slices.items():
             values = thetas[:, part]
             if name == "periodic":
@@ -427,18 +480,21 @@ class RhythmicDMP:
                 inits[:, int(name[8:])] = values
             elif name == "anchor":
                 anchors = values.copy()
+            elif name == "stop":
+                stop_weights = values.reshape(batch, self.n_dims, -1)
             else:
                 amplitudes = values.copy()
-        return weights, inits, anchors, amplitudes
+        return weights, inits, anchors, amplitudes, stop_weights
 
     def with_params(self, theta: np.ndarray, groups: GroupSelection = None) -> RhythmicDMP:
         """A new DMP whose selected groups are replaced by ``theta [P]``."""
         theta = as_finite_array(theta, "theta", ndim=1)
-        weights, inits, anchors, amplitudes = self._decode(theta[None], groups)
+        weights, inits, anchors, amplitudes, stop_weights = self._decode(theta[None], groups)
         transients = [replace(start, phi0=float(phi0), r0=float(r0))
                       for start, (phi0, r0) in zip(self.transients, inits[0], strict=True)]
+        ending = None if self.ending is None else self.ending.with_weights(stop_weights[0])
         return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z,
-                           amplitudes[0])
+                           amplitudes[0], ending)
 
     def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0
                            ) -> np.ndarray:
@@ -446,7 +502,7 @@ class RhythmicDMP:
 
         A weight's entry is its basis function's normalised activation along the path of transient
         ``transient``; the initial condition of that transient, the anchor and the amplitude act throughout (1);
-        another transient's initial condition does not act (0).
+        another transient's initial condition does not act (0), nor do the stop weights (they act only after a stop).
         """
         k = self._check_transient(transient)
         start = self.transients[k]
@@ -459,7 +515,7 @@ class RhythmicDMP:
             elif name.startswith("transient:"):
                 block = activation[:, self._transient_columns(int(name[10:]))]
             else:
-                acts = not name.startswith("initial:") or int(name[8:]) == k
+                acts = name != "stop" and (not name.startswith("initial:") or int(name[8:]) == k)
                 columns.append(np.full((phi.size, self.layout.sizes[name]), float(acts)))
                 continue
             columns.append(np.tile(block, (1, self.n_dims)))
@@ -507,6 +563,7 @@ class DMPStepper:
         self.steps = 0
         self.y, self.z = y0, yd0 / self.omega
         self._block_index, self._block = -1, np.empty((0, dmp.n_dims))
+        self.stop: StopPlan | None = None
 
     @property
     def time(self) -> float:
@@ -520,9 +577,15 @@ class DMPStepper:
             start = self.dmp.transients[self.transient]
             times = (index * self.BLOCK + np.arange(self.BLOCK)) * self.dt
             phi, r = self.canonical.state(times, start.phi0, start.r0)
-            fade = start_fade(times, self.fade_length)[:, None]
-            self._block = (self.dmp.alpha_z * self.system.beta_z * (self.anchor + fade * self.start_offset)
-                           + self.dmp.amplitude * self.dmp.basis.forcing(phi, r, self.dmp.weights))
+            anchor = self.anchor + start_fade(times, self.fade_length)[:, None] * self.start_offset
+            if self.stop is None:
+                forcing = self.dmp.basis.forcing(phi, r, self.dmp.weights)
+            else:
+                tau = (times - self.stop.exit_time) * self.canonical.tempo
+                forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, self.dmp.weights,
+                                                  self.dmp.ending.weights)
+                anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - self.anchor)
+            self._block = (self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing)
             self._block_index = index
         return self._block[offset]
 
@@ -530,6 +593,18 @@ class DMPStepper:
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Current ``(y [d], yd [d])`` (copies)."""
         return self.y.copy(), self.z * self.omega
+
+    def request_stop(self, exit_phase: float | None = None, goal: np.ndarray | None = None) -> float:
+        """End the movement: leave the cycle at the next demonstrated exit phase (or ``exit_phase``, rad) from
+        now on and come to rest at ``goal [d]`` (default: the demonstrated goal, moved with the anchor).
+        Returns the exit time (s since the start). Needs a DMP fitted with :func:`rdmp_gym.stopping.fit_ending`."""
+        if self.stop is not None:
+            raise ValueError("request_stop: a stop has already been requested")
+        start = self.dmp.transients[self.transient]
+        self.stop = self.dmp._stop_plan(self.time, exit_phase, goal, start.phi0, self.canonical.tempo,
+                                        self.anchor[None], self.dmp.amplitude[None])
+        self._block_index = -1      # the open-loop input from now on includes the stop
+        return self.stop.exit_time
 
     def step(self, coupling: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Advance by ``dt``; returns the new ``(y [d], yd [d])``."""

@@ -23,8 +23,9 @@ from .plots import (
     plot_multiple_transients,
     plot_reproductions,
 )
+from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["write_paper_figures"]
+__all__ = ["BEYOND_PAPER_FIGURES", "write_paper_figures", "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -76,6 +77,54 @@ def write_paper_figures(out_dir: str | Path, seed: int = 0) -> list[Path]:
     return written
 
 
+def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
+    """``beyond_stop.png``: start, wiping and stop from one DMP (issue 13), with its canonical path."""
+    demo = ending_demonstration(1, rng=seed)
+    dmp = fit_ending(demo, n_periodic=30, periodic_overlap=0.9, smoothing=0.3, regularization=1e-4)
+    t = np.arange(0.0, demo.t[-1] + 1.0, 1e-3)
+    request = 5.5
+    stopped = dmp.rollout(t, stop_at=request)
+    free = dmp.rollout(t)
+    start = dmp.transients[0]
+    plan = plan_stop(dmp.ending, request, start.phi0, dmp.canonical.omega, dmp.ending.goal[None])
+    fig = plt.figure(figsize=(13, 7))
+    grid = fig.add_gridspec(3, 3)
+    for dim, label in enumerate("xyz"):
+        ax = fig.add_subplot(grid[dim, :2])
+        ax.plot(demo.t, demo.Y[:, dim], ".", color="0.6", ms=2, label="demonstration")
+        ax.plot(t, free[:, dim], "--", color="tab:blue", lw=1, label="DMP, no stop")
+        ax.plot(t, stopped[:, dim], color="tab:red", lw=1.5, label="DMP, stop requested")
+        ax.axvline(request, color="k", lw=0.8, ls=":")
+        ax.axvline(plan.exit_time, color="k", lw=0.8)
+        ax.set_ylabel(f"{label} [m]")
+        if dim == 0:
+            ax.legend(fontsize=8, loc="upper left", ncol=3)
+            ax.set_title("start, wiping and stop from one DMP (dotted: request, solid: exit at the demonstrated phase)")
+    ax.set_xlabel("t [s]")
+    plane = fig.add_subplot(grid[:2, 2])
+    phi, r = dmp.canonical.state(t, start.phi0, start.r0)
+    tau = t - plan.exit_time
+    r_stop = np.where(tau >= 0, r * dmp.ending.radius_factor(tau), r)
+    plane.plot(r_stop * np.cos(phi), r_stop * np.sin(phi), lw=1, color="tab:red")
+    plane.plot(*dmp.ending.centres.T, "k.", ms=4, label="stop centres")
+    plane.plot(*dmp.basis.transient_centres.T, "x", color="0.5", ms=3, label="start centres")
+    plane.set(aspect="equal", xlim=(-2.5, 2.5), ylim=(-2.5, 2.5), title="canonical path: in, around, out")
+    plane.legend(fontsize=7)
+    top = fig.add_subplot(grid[2, 2])
+    top.plot(demo.Y[:, 0], demo.Y[:, 1], ".", color="0.6", ms=2)
+    top.plot(stopped[:, 0], stopped[:, 1], color="tab:red", lw=1)
+    top.plot(*dmp.ending.goal[:2], "k*", ms=8)
+    top.set(aspect="equal", xlabel="x [m]", ylabel="y [m]")
+    fig.tight_layout()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out / "beyond_stop.png")
+
+
+BEYOND_PAPER_FIGURES = [write_stop_figure]
+"""Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
+
+
 def main(argv: list[str] | None = None) -> None:
     """Command-line entry: ``python -m rdmp_gym.figures --out DIR``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -85,6 +134,8 @@ def main(argv: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     for path in write_paper_figures(args.out, args.seed):
         print(path)
+    for write in BEYOND_PAPER_FIGURES:
+        print(write(args.out, args.seed))
 
 
 if __name__ == "__main__":

@@ -11,6 +11,8 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
   ``transient_widths [M]``, ``transient_sizes [K]``, ``fading {mu1, mu2, k, delta}``
 * ``weights``: ``[d, D]`` (periodic columns first, then each transient's)
 * ``transients``: K objects ``{phi0, r0, length, entrance_phase, start [d], start_velocity [d]}``
+* ``stop`` (optional, absent for a DMP without an end of the movement): ``{exit_phase, length, blend_start,
+  goal [d], centres [S, 2], widths [S], weights [d, S], fading {nu1, nu2, k, delta}}``
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 from .basis import BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
+from .stopping import Ending
 
 __all__ = ["FORMAT", "VERSION", "dmp_from_dict", "dmp_to_dict", "load_dmp", "save_dmp"]
 
@@ -34,7 +37,7 @@ VERSION = 1
 def dmp_to_dict(dmp: RhythmicDMP) -> dict:
     """A JSON-ready dictionary of every number that defines ``dmp``."""
     basis = dmp.basis
-    return {
+    data = {
         "format": FORMAT,
         "version": VERSION,
         "canonical": asdict(dmp.canonical),
@@ -54,6 +57,9 @@ def dmp_to_dict(dmp: RhythmicDMP) -> dict:
                         "start": s.start.tolist(), "start_velocity": s.start_velocity.tolist()}
                        for s in dmp.transients],
     }
+    if dmp.ending is not None:
+        data["stop"] = dmp.ending.to_dict()
+    return data
 
 
 def dmp_from_dict(data: dict) -> RhythmicDMP:
@@ -76,7 +82,8 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
                                      np.array(s["start_velocity"], dtype=float)) for s in data["transients"]]
         return RhythmicDMP(CanonicalSystem(**data["canonical"]), basis_set, np.array(data["weights"], dtype=float),
                            transients, np.array(data["anchor"], dtype=float), data["transformation"]["alpha_z"],
-                           np.array(data["amplitude"], dtype=float))
+                           np.array(data["amplitude"], dtype=float),
+                           Ending.from_dict(data["stop"]) if "stop" in data else None)
     except KeyError as error:
         raise ValueError(f"path: DMP file is missing the field {error.args[0]!r}") from error
 
