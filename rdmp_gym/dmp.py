@@ -606,8 +606,14 @@ class DMPStepper:
         self._block_index = -1      # the open-loop input from now on includes the stop
         return self.stop.exit_time
 
-    def step(self, coupling: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Advance by ``dt``; returns the new ``(y [d], yd [d])``."""
+    def step(self, coupling: np.ndarray | object | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Advance by ``dt``; returns the new ``(y [d], yd [d])``.
+
+        ``coupling``: ``c [d]`` in the units of the forcing term, or an object with a method
+        ``acceleration(y, yd) -> [d]`` (m/s^2, e.g. :class:`rdmp_gym.coupling.ObstacleAvoidance`), applied as
+        ``c = acceleration / Omega^2`` at the current state."""
+        if hasattr(coupling, "acceleration"):
+            coupling = coupling.acceleration(*self.state) / self.omega**2
         c = np.zeros(self.dmp.n_dims) if coupling is None else as_finite_array(coupling, "coupling", ndim=1)
         if c.size != self.dmp.n_dims:
             raise ValueError(f"coupling: expected {self.dmp.n_dims} values, got {c.size}")
