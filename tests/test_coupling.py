@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
@@ -12,7 +12,7 @@ from rdmp_gym.coupling import ObstacleAvoidance, avoiding_rollout
 vectors = st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3).map(np.array)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200, deadline=None, database=None, derandomize=True)
 @given(vectors, vectors, vectors)
 def test_steering_turns_away_without_doing_work(y, v, obstacle):
     term = ObstacleAvoidance(obstacle, gamma=50.0, beta=3.0)
@@ -23,9 +23,12 @@ def test_steering_turns_away_without_doing_work(y, v, obstacle):
     assert np.linalg.norm(p) <= 50.0 * np.linalg.norm(v) / (3.0 * np.e) + 1e-9       # gamma |v| max theta e^-b theta
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100, deadline=None, database=None, derandomize=True)
 @given(vectors, vectors, vectors, st.integers(0, 2**31 - 1), vectors)
 def test_steering_is_equivariant_under_rigid_motions(y, v, obstacle, seed, shift):
+    # away from the singular states (on the obstacle, heading exactly at it), where round-off decides
+    offset = obstacle - y
+    assume(np.linalg.norm(offset) > 1e-3 and np.linalg.norm(np.cross(offset, v)) > 1e-6)
     rotation = Rotation.random(random_state=seed).as_matrix()
     p = ObstacleAvoidance(obstacle, distance_scale=0.3).acceleration(y, v)
     moved = ObstacleAvoidance(rotation @ obstacle + shift, distance_scale=0.3).acceleration(
