@@ -25,7 +25,7 @@ from .plots import (
 )
 from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["BEYOND_PAPER_FIGURES", "write_paper_figures", "write_stop_figure"]
+__all__ = ["BEYOND_PAPER_FIGURES", "write_paper_figures", "write_rhythm_figure", "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -121,7 +121,44 @@ def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
     return _save(fig, out / "beyond_stop.png")
 
 
-BEYOND_PAPER_FIGURES = [write_stop_figure]
+def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
+    """``beyond_rhythm.png``: the DMP's frequency and phase lock onto a partner whose frequency steps by +-30 %."""
+    from .frequency import follow_rhythm
+
+    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=seed), n_periodic=30, periodic_overlap=0.9, smoothing=0.3,
+                          regularization=1e-4)
+    dt, step = 2e-3, 10.0
+    t = np.arange(round(30.0 / dt)) * dt
+    fig, axes = plt.subplots(3, 2, figsize=(13, 8))
+    for column, factor in enumerate((1.3, 0.7)):
+        omega = np.where(t < step, dmp.canonical.omega, factor * dmp.canonical.omega)
+        psi = dmp.transients[0].phi0 + np.concatenate([[0.0], np.cumsum(omega[:-1]) * dt])
+        u = (0.05 * np.cos(psi) + 0.01 * np.cos(2.0 * psi + 0.3)
+             + 1e-3 * np.random.default_rng(seed).standard_normal(t.size))
+        out = follow_rhythm(dmp, u, dt)
+        fixed = dmp.transients[0].phi0 + dmp.canonical.omega * t
+        axes[0, column].plot(t, omega, "k", lw=1, label="partner")
+        axes[0, column].plot(t, out["oscillator"], color="0.7", lw=0.6, label="oscillator Omega_A")
+        axes[0, column].plot(t, out["frequency"], "tab:red", lw=1.5, label="DMP (smoothed)")
+        axes[0, column].set(ylabel="frequency [rad/s]", title=f"partner's frequency steps by {factor - 1:+.0%}")
+        axes[1, column].plot(t, np.angle(np.exp(1j * (out["phase"] - psi))), "tab:red", lw=1, label="adaptive")
+        axes[1, column].plot(t, np.angle(np.exp(1j * (fixed - psi))), "tab:blue", lw=1, ls="--", label="fixed")
+        axes[1, column].set(ylabel="phase - partner [rad]", ylim=(-np.pi, np.pi))
+        late = t > 24.0
+        axes[2, column].plot(t[late], u[late], "k", lw=1, label="partner x")
+        axes[2, column].plot(t[late], out["y"][late, 0], "tab:red", lw=1.5, label="DMP x (adaptive)")
+        axes[2, column].plot(t[late], dmp.rollout(t)[late, 0], "tab:blue", lw=1, ls="--", label="DMP x (fixed)")
+        axes[2, column].set(xlabel="t [s]", ylabel="x [m]")
+        for ax in axes[:, column]:
+            ax.axvline(step, color="k", lw=0.6, ls=":")
+            ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    out_path = Path(out_dir)
+    out_path.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out_path / "beyond_rhythm.png")
+
+
+BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure]
 """Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
 
 
