@@ -67,8 +67,8 @@ def main() -> None:
             fixed_phase = dmp.transients[0].phi0 + dmp.canonical.omega * t
             rows.append({"model": "fixed", "factor": factor, "seed": seed,
                          **measure(t, omega, psi, fixed_phase, np.full(t.size, dmp.canonical.omega))})
-    print(f"{'model':<9} {'step':>5} {'lock-in s (mean, max)':>22} {'steady change rad':>17} {'steady |error| rad':>18} "
-          f"{'peak acc / f^2':>14}")
+    print(f"{'model':<9} {'step':>5} {'lock-in s (mean, max)':>22} {'steady change rad':>17} "
+          f"{'steady |error| rad':>18} {'peak acc / f^2':>14}")
     summary = {}
     for model in ("adaptive", "fixed"):
         for factor in (1.3, 0.7):

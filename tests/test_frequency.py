@@ -59,7 +59,7 @@ def test_locks_onto_a_frequency_step_where_the_fixed_dmp_drifts(wiping, factor):
 
 def test_transient_and_stop_still_work_at_another_tempo():
     dmp = fit_ending(ending_demonstration(1, rng=0), **SMOOTH)
-    t, omega, psi, u = partner(dmp, 16.0, 1.2, 0.0)              # faster from the very start
+    t, _, _, u = partner(dmp, 16.0, 1.2, 0.0)              # faster from the very start
     out = follow_rhythm(dmp, u, DT, stop_at=11.0)
     assert np.linalg.norm(out["y"][0] - dmp.transients[0].start) < 1e-3
     # the start keeps its shape in space: every sample of the first 2 s lies near the plain start's path
