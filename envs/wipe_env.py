@@ -36,6 +36,7 @@ from .action import ActionMap
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .ik import IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
@@ -78,6 +79,9 @@ class ArmarWipeEnv(gym.Env):
         reward_weights: ``{term: weight}`` overrides (see :mod:`rdmp_gym.envs.reward`).
         adaptation: adapt the pressing depth from the wrist force (``False``: feed-forward preload only).
         admittance_gain: depth rate per newton of force error (m/(N s)).
+        force_learning: also learn the pressing depth as a periodic function of the DMP's phase and feed it
+            forward on the next periods (Gams et al. 2010; :mod:`rdmp_gym.envs.force_learning`); ``True`` or a
+            ``ForceProfileSettings``.
         context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.context`).
         cell_size: dirt cell side (m).
         limit_margin: distance to a joint limit (rad) that counts as "at the limit".
@@ -111,6 +115,7 @@ class ArmarWipeEnv(gym.Env):
         reward_weights: Mapping[str, float] | None = None,
         adaptation: bool = True,
         admittance_gain: float = 0.004,
+        force_learning: bool | ForceProfileSettings = False,
         context_ranges: Mapping[str, tuple] | None = None,
         cell_size: float = 0.01,
         limit_margin: float = 0.02,
@@ -183,6 +188,11 @@ class ArmarWipeEnv(gym.Env):
         self.force_band = band
         self.adaptation_settings = ForceAdaptationSettings(target_force=target_force, enabled=bool(adaptation),
                                                            gain=float(admittance_gain))
+        if not isinstance(force_learning, (bool, ForceProfileSettings)):
+            raise ValueError("force_learning: expected a bool or a ForceProfileSettings, "
+                             f"got {type(force_learning).__name__}")
+        self.force_learning = (ForceProfileSettings() if force_learning is True
+                               else force_learning or None)
         self.reward_settings = RewardSettings(target_force=target_force,
                                               force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1])
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
@@ -359,7 +369,9 @@ class ArmarWipeEnv(gym.Env):
 
         plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper)
         self.scene.set_arm_state(solution.q[0])
-        adaptation = ForceAdaptation(self.adaptation_settings, self.dt)
+        adaptation = (ForceAdaptation(self.adaptation_settings, self.dt) if self.force_learning is None
+                      else ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period,
+                                                self.dmp.transients[0].phi0, self.force_learning))
         dirt = DirtCells(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], self.force_band)
         callback = self._capture if self.record_frames else None
         self._wiped = np.zeros(len(self._cells_world), dtype=bool)

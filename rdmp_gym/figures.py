@@ -25,7 +25,8 @@ from .plots import (
 )
 from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["BEYOND_PAPER_FIGURES", "write_paper_figures", "write_rhythm_figure", "write_stop_figure"]
+__all__ = ["BEYOND_PAPER_FIGURES", "write_force_figure", "write_paper_figures", "write_rhythm_figure",
+           "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -158,7 +159,48 @@ def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
     return _save(fig, out_path / "beyond_rhythm.png")
 
 
-BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure]
+def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
+    """``beyond_force.png``: force-profile learning on a tilted table in the MuJoCo env (needs the ``envs``
+    extra; returns ``None`` without it)."""
+    try:
+        import gymnasium as gym
+
+        from .envs import ENV_ID
+        from .envs.force_learning import period_force_errors
+    except ImportError:
+        logger.info("beyond_force.png skipped: gymnasium and mujoco are not installed")
+        return None
+    tilt = [-0.138, -0.145]
+    fig, (trace, bars) = plt.subplots(1, 2, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1]})
+    errors = {}
+    for name, flag, color in (("admittance", False, "tab:blue"), ("learned profile", True, "tab:red")):
+        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag)
+        env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
+                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08]})
+        info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
+        inner = env.unwrapped
+        window = max(round(0.1 / inner.dt), 1)
+        smooth = np.convolve(info["force_trace"], np.ones(window) / window, mode="same")
+        trace.plot(inner.times, smooth, color=color, lw=1, label=name)
+        errors[name] = period_force_errors(info["force_trace"], inner.dt, inner.dmp.transients[0].length,
+                                           inner.dmp.period, inner.reward_settings.target_force)
+        env.close()
+    trace.axhline(18.0, color="k", lw=0.8, ls="--")
+    trace.set(xlabel="t [s]", ylabel="contact force, 0.1 s mean [N]", ylim=(0, 40),
+              title=f"table tilted by ({tilt[0]}, {tilt[1]}) rad")
+    trace.legend(fontsize=8)
+    width = 0.4
+    for offset, (name, values) in zip((-width / 2, width / 2), errors.items(), strict=True):
+        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name)
+    bars.set(xlabel="period", ylabel="mean |F - 18 N| [N]", title="force error period by period")
+    bars.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out / "beyond_force.png")
+
+
+BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure, write_force_figure]
 """Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
 
 
@@ -172,7 +214,9 @@ def main(argv: list[str] | None = None) -> None:
     for path in write_paper_figures(args.out, args.seed):
         print(path)
     for write in BEYOND_PAPER_FIGURES:
-        print(write(args.out, args.seed))
+        path = write(args.out, args.seed)
+        if path is not None:
+            print(path)
 
 
 if __name__ == "__main__":
