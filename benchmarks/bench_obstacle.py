@@ -58,9 +58,41 @@ def main() -> None:
               f"{1e3 * r['free_clearance']:>8.2f} {1e3 * r['clearance']:>10.2f} {r['peak_acc']:>8.2f} "
               f"{1e3 * r['far_change']:>13.3f} {r['jerk_ratio']:>9.2f}")
     print(f"free path: peak acceleration {free_peak:.2f} m/s^2")
+    env_rows = env_baseline()
     RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"rows": rows}, indent=1))
+    RESULTS.write_text(json.dumps({"rows": rows, "env": env_rows}, indent=1))
     print(f"wrote {RESULTS}")
+
+
+def env_baseline() -> list[dict]:
+    """The baseline in the MuJoCo env (no obstacle body yet): reward, coverage and clearance vs the imitation,
+    default context (12 cm patch), obstacle at 4 angles on the wiped circle, gamma 1e5, lambda 2 cm."""
+    import gymnasium as gym
+    from rdmp_gym.envs import ENV_ID
+    from rdmp_gym.envs.obstacle_baseline import run_avoiding
+
+    env = gym.make(ENV_ID, n_periods=4.0)
+    options = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0],
+               "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08]}
+    env.reset(seed=0, options=options)
+    inner = env.unwrapped
+    free = inner.rollout_path(inner.action_map.theta0)
+    _, imitation_reward, _, _, imitation = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    out = []
+    for angle in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
+        obstacle = 0.05 * np.array([np.cos(angle), np.sin(angle)])
+        env.reset(seed=0, options=options)
+        reward, info = run_avoiding(env, obstacle)
+        out.append({"angle": angle, "imitation_reward": imitation_reward, "imitation_coverage": imitation["coverage"],
+                    "imitation_clearance": float(np.linalg.norm(free[:, :2] - obstacle, axis=1).min()),
+                    "reward": reward, "coverage": info["coverage"], "clearance": info["obstacle_clearance"],
+                    "valid": info["valid"]})
+    print(f"{'env: angle':>10} {'imitation reward/cov/clear mm':>30} {'baseline reward/cov/clear mm':>30}")
+    for r in out:
+        print(f"{np.degrees(r['angle']):>10.0f} {r['imitation_reward']:>12.3f} {r['imitation_coverage']:>6.3f} "
+              f"{1e3 * r['imitation_clearance']:>9.2f} {r['reward']:>12.3f} {r['coverage']:>6.3f} "
+              f"{1e3 * r['clearance']:>9.2f}")
+    return out
 
 
 if __name__ == "__main__":

@@ -81,3 +81,24 @@ def test_wiping_circle_steers_around_an_obstacle_on_its_path(wiping):
         c = term.acceleration(*b.state) / b.omega**2
         other = b.step(c)
     np.testing.assert_array_equal(state[0], other[0])
+
+
+def test_env_baseline_keeps_clear_of_the_obstacle_and_still_wipes():
+    gym = pytest.importorskip("gymnasium")
+    from rdmp_gym.envs import ENV_ID
+    from rdmp_gym.envs.obstacle_baseline import run_avoiding
+
+    env = gym.make(ENV_ID, n_periods=3.0)
+    options = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
+               "sponge_start": [-0.07, 0.10, 0.08]}
+    env.reset(seed=0, options=options)
+    inner = env.unwrapped
+    free = inner.rollout_path(inner.action_map.theta0)
+    obstacle = np.array([0.05, 0.0])                                      # on the wiped circle
+    assert np.linalg.norm(free[:, :2] - obstacle, axis=1).min() < 1e-3
+    _, info = run_avoiding(env, obstacle)
+    assert info["valid"] and not info["unstable"]
+    assert info["obstacle_clearance"] > 8e-3
+    assert info["coverage"] >= 0.9
+    with pytest.raises(ValueError, match="obstacle_xy"):
+        run_avoiding(env, [0.0, np.nan])
