@@ -52,6 +52,9 @@ __all__ = ["Ending", "StopFading", "StopPlan", "StopSegmentation", "ending_demon
 
 logger = logging.getLogger(__name__)
 
+_HEAD_SHARES = (2.0 / 3.0, 0.75, 0.85)
+"""Shares of the time to rest tried, in order, as the part of the demonstration that :func:`segment` sees."""
+
 
 def minimum_jerk(u: np.ndarray) -> np.ndarray:
     """``s(u) = 10u^3 - 15u^4 + 6u^5`` on ``[0, 1]``, 0 before and 1 after (C2), any shape."""
@@ -277,7 +280,8 @@ def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tol
     Rest: the goal is the mean of the last 0.2 s; the demonstration is at rest from the first sample
     after which its smoothed position stays within ``rest_tolerance`` noise deviations of the goal (the
     standard deviation of the samples over those last 0.2 s). Periodic part: :func:`rdmp_gym.segment` on
-    the samples up to two thirds of the rest time (so the stop does not enter it); the Fourier template of the periodic
+    the samples up to two thirds of the rest time (so the stop does not enter it; 3/4 or 0.85 of it when
+    that shows too little of the periodic part); the Fourier template of the periodic
     part is then extended to the rest, and the end of the periodic part is the change point of its
     noise-scaled residual read backwards (the mirror of how :func:`segment` finds the start). Raises
     ``ValueError`` if the demonstration does not come to rest or shows too little periodic motion.
@@ -299,9 +303,17 @@ def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tol
     if away.size == 0 or away[-1] >= t.size - tail:
         raise ValueError("demo: does not come to rest (need at least 0.2 s at rest at the end)")
     rest_index = int(away[-1]) + 1
-    head = round(2.0 * rest_index / 3.0)
-    seg = segment(Demonstration(demo.t[:head], demo.Y[:head]), period=period, min_periods=1.0,
-                  n_harmonics=n_harmonics, margin=margin)
+    seg, head = None, 0
+    for share in _HEAD_SHARES:       # the shortest head that shows the periodic part (less risk of the stop in it)
+        head = round(share * rest_index)
+        try:
+            seg = segment(Demonstration(demo.t[:head], demo.Y[:head]), period=period, min_periods=1.0,
+                          n_harmonics=n_harmonics, margin=margin)
+            break
+        except ValueError as error:
+            reason = error
+    if seg is None:
+        raise ValueError(f"demo: no periodic part found before the stop ({reason})")
     first = round(seg.transient_length / dt)
     Z, _, _ = _normalised(demo.Y[: rest_index + 1])
     k = _harmonics(head - first, seg.period, dt, n_harmonics)

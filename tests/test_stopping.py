@@ -36,6 +36,14 @@ def test_segmentation_finds_the_stop(style):
     assert abs(seg.start.period - demo.truth.period) < 0.01
 
 
+def test_segmentation_with_only_two_periods():
+    demo = ending_demonstration(3, rng=2, n_periods=2.0, stop_length=0.8)
+    seg = segment_ending(demo)
+    t_exit = demo.truth.transient_length + 2.0 * demo.truth.period
+    assert t_exit <= seg.periodic_end <= t_exit + 0.25
+    assert abs(seg.start.period - demo.truth.period) < 0.01
+
+
 @pytest.mark.parametrize("style", [1, 4])
 def test_stop_reproduction_meets_the_bars(fitted, style):
     dmp = fitted[style]
