@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .basis import BasisSet, Fading, periodic_width, transient_basis_along_path
+from .basis import BasisSet, Fading, normalize, periodic_width, transient_basis_along_path
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
 from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
@@ -496,24 +496,34 @@ class RhythmicDMP:
         return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z,
                            amplitudes[0], ending)
 
-    def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0
-                           ) -> np.ndarray:
+    def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0,
+                           stop_at: float | None = None) -> np.ndarray:
         """How active each parameter is at each time, ``[T, P]`` in [0, 1] (PI²'s time weighting).
 
         A weight's entry is its basis function's normalised activation along the path of transient
-        ``transient``; the initial condition of that transient, the anchor and the amplitude act throughout (1);
-        another transient's initial condition does not act (0), nor do the stop weights (they act only after a stop).
+        ``transient`` (with the stop requested at ``stop_at``, if given); the initial condition of that transient,
+        the anchor and the amplitude act throughout (1); another transient's initial condition does not act (0),
+        nor do the stop weights without a stop.
         """
         k = self._check_transient(transient)
         start = self.transients[k]
-        phi, r = self.canonical.state(as_finite_array(t, "t", ndim=1) - np.min(t), start.phi0, start.r0)
-        activation = self.basis.normalized(phi, r)                                   # [T, D]
+        elapsed = as_finite_array(t, "t", ndim=1) - np.min(t)
+        phi, r = self.canonical.state(elapsed, start.phi0, start.r0)
+        stop = self._stop_plan(stop_at, None, None, start.phi0, self.canonical.tempo, self.anchor[None],
+                               self.amplitude[None])
+        if stop is None:
+            activation = self.basis.normalized(phi, r)                               # [T, D]
+        else:
+            activation = normalize(self.ending.mixture(self.basis, phi, r, (elapsed - stop.exit_time)
+                                                       * self.canonical.tempo, stop.rotation))   # [T, D + S]
         columns = []
         for name in self.layout.resolve(groups):
             if name == "periodic":
                 block = activation[:, : self.basis.n_periodic]
             elif name.startswith("transient:"):
                 block = activation[:, self._transient_columns(int(name[10:]))]
+            elif name == "stop" and stop is not None:
+                block = activation[:, self.basis.n_basis:]
             else:
                 acts = name != "stop" and (not name.startswith("initial:") or int(name[8:]) == k)
                 columns.append(np.full((phi.size, self.layout.sizes[name]), float(acts)))

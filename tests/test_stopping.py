@@ -122,6 +122,13 @@ def test_stop_group_save_load_and_old_files(fitted, tmp_path):
     np.testing.assert_allclose(batch[1], dmp.with_params(1.2 * theta, "stop").rollout(t, stop_at=5.0), atol=1e-12)
     assert np.abs(batch[1] - batch[0]).max() > 1e-3
     assert not np.any(dmp.param_time_weights(t, "stop"))
+    weights = dmp.param_time_weights(t, ["periodic", "stop"], stop_at=5.0)             # [T, d (N + S)]
+    stop_columns = weights[:, dmp.layout.sizes["periodic"]:]
+    exit_at = dmp._stop_plan(5.0, None, None, dmp.transients[0].phi0, 1.0, dmp.anchor[None],
+                             dmp.amplitude[None]).exit_time
+    assert not np.any(stop_columns[t < exit_at])
+    np.testing.assert_allclose(stop_columns[-1].reshape(dmp.n_dims, -1).sum(axis=1), 1.0, atol=1e-6)  # at rest
+    assert np.all(weights <= 1.0 + 1e-12) and np.all(weights >= 0.0)
     path = tmp_path / "ending.json"
     dmp.save(path)
     back = RhythmicDMP.load(path)
