@@ -334,7 +334,8 @@ class RhythmicDMP:
             return_velocity: also return velocities.
             stop_at: end the movement: a stop requested at this time (s after ``t[0]``) leaves the cycle at the
                 next demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at the goal (needs a DMP
-                fitted with :func:`rdmp_gym.stopping.fit_ending`).
+                fitted with :func:`rdmp_gym.stopping.fit_ending`); a request during the start transient is served
+                once the transient has reached the cycle.
             goal: ``[d]`` rest position of the stop (default: the demonstrated one, moved and transformed with
                 the anchor like the periodic part).
         Returns:
@@ -348,16 +349,17 @@ class RhythmicDMP:
         amplitudes = self.amplitude[None]
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend, transform)
         inits = np.array([[start.phi0, start.r0]])
-        stop = self._stop_plan(stop_at, exit_phase, goal, start.phi0, tempo, anchors, amplitudes, transform)
+        stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
                                offset, start.length / tempo, stop,
                                None if stop is None else self.ending.weights[None])
         return (y[0], yd[0]) if return_velocity else y[0]
 
-    def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, phi0: float, tempo: float,
-                   anchors: np.ndarray, amplitudes: np.ndarray, transform: np.ndarray | None = None
+    def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, start: TransientStart,
+                   tempo: float, anchors: np.ndarray, amplitudes: np.ndarray, transform: np.ndarray | None = None
                    ) -> StopPlan | None:
-        """The stop requested by ``stop_at`` (``None``: no stop); default goals ``[B, d]`` move with the anchors."""
+        """The stop requested by ``stop_at`` (``None``: no stop); default goals ``[B, d]`` move with the anchors.
+        A request during the start transient of ``start`` is served once the transient has reached the cycle."""
         if stop_at is None:
             if exit_phase is not None or goal is not None:
                 raise ValueError("stop_at: exit_phase and goal need a stop time")
@@ -369,7 +371,11 @@ class RhythmicDMP:
         if transform is not None:
             relative = relative @ transform.T
         goals = self._vector(goal, anchors + relative, "goal", anchors.shape[0])
-        return plan_stop(self.ending, stop_at, phi0, self.canonical.omega * tempo, goals, exit_phase)
+        stop_at = float(as_finite_array(stop_at, "stop_at", ndim=0))
+        if stop_at < 0.0:
+            raise ValueError(f"stop_at: expected a time >= 0, got {stop_at!r}")
+        return plan_stop(self.ending, max(stop_at, start.length / tempo), start.phi0, self.canonical.omega * tempo,
+                         goals, exit_phase)
 
     def with_ending(self, ending: Ending | None) -> RhythmicDMP:
         """A copy of this DMP with another end of the movement (``None`` removes it)."""
@@ -403,7 +409,7 @@ class RhythmicDMP:
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
         tempo = self._tempo(tempo)
         y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend)
-        stop = self._stop_plan(stop_at, exit_phase, goal, self.transients[k].phi0, tempo, anchors, amplitudes)
+        stop = self._stop_plan(stop_at, exit_phase, goal, self.transients[k], tempo, anchors, amplitudes)
         return self._simulate(t, weights, inits[:, k], anchors, amplitudes, y0, yd0, tempo, None,
                               offset, self.transients[k].length / tempo, stop, stop_weights)[0]
 
@@ -509,7 +515,7 @@ class RhythmicDMP:
         start = self.transients[k]
         elapsed = as_finite_array(t, "t", ndim=1) - np.min(t)
         phi, r = self.canonical.state(elapsed, start.phi0, start.r0)
-        stop = self._stop_plan(stop_at, None, None, start.phi0, self.canonical.tempo, self.anchor[None],
+        stop = self._stop_plan(stop_at, None, None, start, self.canonical.tempo, self.anchor[None],
                                self.amplitude[None])
         if stop is None:
             activation = self.basis.normalized(phi, r)                               # [T, D]
@@ -611,7 +617,7 @@ class DMPStepper:
         if self.stop is not None:
             raise ValueError("request_stop: a stop has already been requested")
         start = self.dmp.transients[self.transient]
-        self.stop = self.dmp._stop_plan(self.time, exit_phase, goal, start.phi0, self.canonical.tempo,
+        self.stop = self.dmp._stop_plan(self.time, exit_phase, goal, start, self.canonical.tempo,
                                         self.anchor[None], self.dmp.amplitude[None])
         self._block_index = -1      # the open-loop input from now on includes the stop
         return self.stop.exit_time

@@ -183,7 +183,7 @@ class AdaptiveFrequencyStepper:
         """As :meth:`rdmp_gym.DMPStepper.request_stop`, in canonical time; returns the exit's canonical time ``s``."""
         if self.stop is not None:
             raise ValueError("request_stop: a stop has already been requested")
-        plan = self.dmp._stop_plan(self.s, exit_phase, goal, self.start_state.phi0, 1.0, self.dmp.anchor[None],
+        plan = self.dmp._stop_plan(self.s, exit_phase, goal, self.start_state, 1.0, self.dmp.anchor[None],
                                    self.dmp.amplitude[None])
         self.stop = plan
         self._block_index = -1

@@ -87,6 +87,18 @@ def test_request_stop_matches_rollout_and_exits_at_the_demonstrated_phase(fitted
     assert np.abs(reference[~before] - free[~before]).max() > 0.01
 
 
+def test_a_request_during_the_start_waits_for_the_cycle(fitted):
+    dmp = fitted[4]
+    t = np.arange(0.0, 11.0, 1e-3)
+    y, yd = dmp.rollout(t, stop_at=0.2, return_velocity=True)
+    free = dmp.rollout(t)
+    start_end = t < dmp.transients[0].length
+    np.testing.assert_allclose(y[start_end], free[start_end], atol=1e-12)      # the start is untouched
+    peak = np.abs(np.gradient(yd, 1e-3, axis=0)).max()
+    assert peak < 1.5 * np.abs(np.gradient(np.gradient(free, 1e-3, axis=0), 1e-3, axis=0)).max()
+    assert np.linalg.norm(y[-1] - dmp.ending.goal) < 1e-3
+
+
 def test_exit_time_is_the_next_crossing():
     omega = 2.0 * np.pi / 1.5
     for request in (0.0, 0.3, 2.9):
@@ -124,7 +136,7 @@ def test_stop_group_save_load_and_old_files(fitted, tmp_path):
     assert not np.any(dmp.param_time_weights(t, "stop"))
     weights = dmp.param_time_weights(t, ["periodic", "stop"], stop_at=5.0)             # [T, d (N + S)]
     stop_columns = weights[:, dmp.layout.sizes["periodic"]:]
-    exit_at = dmp._stop_plan(5.0, None, None, dmp.transients[0].phi0, 1.0, dmp.anchor[None],
+    exit_at = dmp._stop_plan(5.0, None, None, dmp.transients[0], 1.0, dmp.anchor[None],
                              dmp.amplitude[None]).exit_time
     assert not np.any(stop_columns[t < exit_at])
     np.testing.assert_allclose(stop_columns[-1].reshape(dmp.n_dims, -1).sum(axis=1), 1.0, atol=1e-6)  # at rest
