@@ -15,12 +15,13 @@ from rdmp_gym.coupling import ObstacleAvoidance, avoiding_rollout
 __all__ = ["avoiding_path", "run_avoiding"]
 
 
-def avoiding_path(env, obstacle_xy: np.ndarray, gamma: float = 1e5, distance_scale: float = 0.02,
-                  substeps: int = 5) -> np.ndarray:
+def avoiding_path(env, obstacle_xy: np.ndarray, gamma: float = 3e5, distance_scale: float = 0.03,
+                  smoothing: float = 0.1, substeps: int = 5) -> np.ndarray:
     """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of the imitation in the env's current context, steered
     around a point obstacle at ``obstacle_xy [2]`` on the table (m). The DMP is integrated online at
     ``substeps`` times the control rate (as :meth:`ArmarWipeEnv.rollout_path`: anchored at the patch centre,
-    started at the sponge with ``start_blend``)."""
+    started at the sponge with ``start_blend``); ``gamma``, ``distance_scale`` and ``smoothing`` as in
+    :class:`~rdmp_gym.coupling.ObstacleAvoidance` and :func:`~rdmp_gym.coupling.avoiding_rollout`."""
     inner = env.unwrapped
     if inner.context is None:
         raise RuntimeError("call reset() before avoiding_path()")
@@ -33,7 +34,8 @@ def avoiding_path(env, obstacle_xy: np.ndarray, gamma: float = 1e5, distance_sca
     fine = np.arange((inner.n_steps - 1) * int(substeps) + 1) * (inner.dt / int(substeps))
     term = ObstacleAvoidance(obstacle_xy, gamma=gamma, distance_scale=distance_scale, dims=(0, 1))
     dmp = inner.dmp.with_params(inner.action_map.theta0, inner.groups)
-    path, _ = avoiding_rollout(dmp, fine, term, y0=inner.context.sponge_start, anchor=anchor, start_blend=True)
+    path, _ = avoiding_rollout(dmp, fine, term, smoothing=smoothing, y0=inner.context.sponge_start, anchor=anchor,
+                               start_blend=True)
     return path[:: int(substeps)]
 
 

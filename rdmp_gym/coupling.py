@@ -90,13 +90,17 @@ class ObstacleAvoidance:
 
 
 def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[ObstacleAvoidance], *,
-                     stop_at: float | None = None, **start_kwargs) -> tuple[np.ndarray, np.ndarray]:
+                     smoothing: float = 0.0, stop_at: float | None = None, **start_kwargs
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Roll ``dmp`` out online with the steering terms of ``obstacles`` (the no-learning baseline).
 
     Args:
         dmp: a :class:`rdmp_gym.RhythmicDMP`.
         t: ``[T]`` evenly spaced times from the start.
         obstacles: one or several :class:`ObstacleAvoidance` terms (their accelerations add).
+        smoothing: time constant (s) of a first-order low-pass on the coupling term (0: none, Hoffmann et
+            al.'s term as is). The raw term switches on and off within a few centimetres and, against the stiff
+            spring of (4), makes sharp accelerations; 0.1 s cuts the squared jerk by about 10x (see README).
         stop_at: request the stop at this time (a DMP with an ending).
         start_kwargs: passed to :meth:`RhythmicDMP.start` (transient, y0, yd0, anchor, tempo, start_blend).
     Returns:
@@ -108,7 +112,11 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
     terms = [obstacles] if isinstance(obstacles, ObstacleAvoidance) else list(obstacles)
     if not terms or not all(isinstance(term, ObstacleAvoidance) for term in terms):
         raise TypeError("obstacles: expected one or more ObstacleAvoidance terms")
+    if not (np.isfinite(smoothing) and smoothing >= 0.0):
+        raise ValueError(f"smoothing: expected a time constant >= 0, got {smoothing!r}")
     stepper = dmp.start(float((t[-1] - t[0]) / (t.size - 1)), **start_kwargs)
+    share = 1.0 if smoothing == 0.0 else 1.0 - np.exp(-stepper.dt / smoothing)
+    coupling = np.zeros(dmp.n_dims)
     positions, velocities = np.empty((t.size, dmp.n_dims)), np.empty((t.size, dmp.n_dims))
     positions[0], velocities[0] = stepper.state
     stop_step = None if stop_at is None else round(float(stop_at) / stepper.dt)
@@ -117,5 +125,6 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
             stepper.request_stop()
         y, yd = stepper.state
         acceleration = sum(term.acceleration(y, yd) for term in terms)
-        positions[i], velocities[i] = stepper.step(acceleration / stepper.omega**2)
+        coupling += share * (acceleration / stepper.omega**2 - coupling)
+        positions[i], velocities[i] = stepper.step(coupling)
     return positions, velocities
