@@ -23,6 +23,7 @@ solves one ridge problem for the stop weights on the demonstration from the exit
 
 from __future__ import annotations
 
+import inspect
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -348,10 +349,9 @@ def _stop_basis(canonical: CanonicalSystem, exit_phase: float, r_exit: float, le
     return centres, np.log(1.0 / overlap) / (0.5 * np.maximum(spacing, 1e-12)) ** 2
 
 
-def fit_ending(demo: Demonstration, n_periodic: int = 40, n_transient: int = 40, n_stop: int = 15, *,
+def fit_ending(demo: Demonstration, n_stop: int = 15, *,
                segmentation: StopSegmentation | None = None, nu1_factor: float = 0.9, nu2_factor: float = 0.7,
-               stop_overlap: float = 0.9, rest_margin: float = 0.15, delta: float = 1e-3, smoothing: float = 0.15,
-               regularization: float = 1e-6, **fit_kwargs):
+               stop_overlap: float = 0.9, rest_margin: float = 0.15, **fit_kwargs):
     """Fit a DMP with a start transient, the periodic pattern and a stop from one demonstration that ends.
 
     The start and periodic weights come from :meth:`RhythmicDMP.fit` on the demonstration up to the end
@@ -362,7 +362,6 @@ def fit_ending(demo: Demonstration, n_periodic: int = 40, n_transient: int = 40,
 
     Args:
         demo: a demonstration that ends (see :func:`segment_ending`).
-        n_periodic, n_transient: as in :meth:`RhythmicDMP.fit`.
         n_stop: stop basis functions S (>= 2).
         segmentation: from :func:`segment_ending`; estimated when omitted.
         nu1_factor, nu2_factor: the inner fading radii ``nu = factor * mu`` (``nu2 < nu1 < 1``; the stop
@@ -370,8 +369,9 @@ def fit_ending(demo: Demonstration, n_periodic: int = 40, n_transient: int = 40,
         stop_overlap: height at which neighbouring stop basis functions cross.
         rest_margin: the canonical stop path reaches the origin this share of the stop duration after the
             detected rest (the detection leads the true rest of a smooth approach).
-        delta, smoothing, regularization: as in :meth:`RhythmicDMP.fit`.
-        fit_kwargs: passed on to :meth:`RhythmicDMP.fit`.
+        fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``n_periodic``, ``n_transient``, ``smoothing``, ...);
+            the stop uses the same ``delta``, ``smoothing`` and ``regularization`` (those of
+            :meth:`RhythmicDMP.fit` unless given).
     Returns:
         a :class:`RhythmicDMP` with ``ending`` set.
     """
@@ -386,8 +386,12 @@ def fit_ending(demo: Demonstration, n_periodic: int = 40, n_transient: int = 40,
     dt = demo.dt
     end_index = round(seg.periodic_end / dt)
     head = Demonstration(demo.t[: end_index + 1], demo.Y[: end_index + 1], name=demo.name)
-    dmp = RhythmicDMP.fit(head, n_periodic, n_transient, segmentations=[seg.start], delta=delta,
-                          smoothing=smoothing, regularization=regularization, **fit_kwargs)
+    if "segmentations" in fit_kwargs:
+        raise ValueError("segmentations: give the StopSegmentation as segmentation=")
+    defaults = inspect.signature(RhythmicDMP.fit).parameters
+    delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
+                                        for name in ("delta", "smoothing", "regularization"))
+    dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
     canonical, mu = dmp.canonical, dmp.canonical.mu
     fading = StopFading(nu1_factor * mu, nu2_factor * mu, delta=delta)
     u1 = _minimum_jerk_inverse(1.0 - nu1_factor)
