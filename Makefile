@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 # torch is pinned in the same pip command so that pip takes the small CPU build.
-PIP_PKGS := -e ".[agents,dev]" torch==2.13.0
+PIP_PKGS := -e ".[agents,dev,ray]" torch==2.13.0
 export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
 
@@ -33,7 +33,9 @@ bench: install
 	$(BIN)/python benchmarks/bench_fidelity.py
 	$(BIN)/python benchmarks/bench_speed.py
 	$(BIN)/python benchmarks/bench_env.py
+	$(BIN)/python benchmarks/bench_throughput.py
 	$(BIN)/python benchmarks/bench_agents.py
+	$(BIN)/python benchmarks/bench_memory.py
 
 clean:
 	rm -rf $(VENV) runs figures

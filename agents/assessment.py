@@ -21,8 +21,8 @@ from .evaluation import Evaluator
 from .learners.base import EpisodeBatch
 from .options import check_choice
 from .plots import plot_evaluation
-from .runs import RunDirectory
-from .training import TrainConfig
+from .runs import RunDirectory, write_atomic
+from .training import TrainConfig, load_run_config
 
 __all__ = ["POLICIES", "evaluate_run", "record_best_episode"]
 
@@ -31,20 +31,27 @@ logger = logging.getLogger(__name__)
 POLICIES = ("best", "last")
 
 
-def _trained_actions(run: RunDirectory, config: TrainConfig, policy: str, observations: np.ndarray) -> np.ndarray:
+def _trained_actions(run: RunDirectory, config: TrainConfig, policy: str, observations: np.ndarray,
+                     n_actions: int) -> np.ndarray:
     """``[E, n]`` the run's actions for the contexts ``observations [E, o]``."""
     if policy == "best":
-        return np.repeat(run.load_best()[None], len(observations), axis=0)
+        return np.repeat(run.load_best(n_actions)[None], len(observations), axis=0)
     state = run.load_checkpoint()
     if state is None:
         raise FileNotFoundError(f"run: {run.path} has no checkpoint yet")
     if config.agent == "ppo":
-        from .sb3 import load_ppo_policy
+        from .sb3 import PPOAgent
 
-        model = load_ppo_policy(state["agent"]["model"])
-        actions, _ = model.predict(observations.astype(np.float32), deterministic=True)
-        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
-    return np.repeat(np.asarray(state["agent"]["learner"]["mean"])[None], len(observations), axis=0)
+        agent = PPOAgent(config.task, np.zeros(n_actions), config.rollouts, 1, config.seed, config.options)
+        try:
+            agent.load_state_dict(state["agent"])
+            return agent.policy_actions(observations)
+        finally:
+            agent.close()
+    mean = np.asarray(state["agent"]["learner"]["mean"], dtype=np.float64)
+    if mean.shape != (n_actions,) or not np.all(np.isfinite(mean)):
+        raise ValueError(f"{run.checkpoint_path}: the policy mean has shape {mean.shape}, expected ({n_actions},)")
+    return np.repeat(mean[None], len(observations), axis=0)
 
 
 def _record(env: gym.Env, options: dict[str, Any] | None, action: np.ndarray, seed: int, folder: Path) -> Path:
@@ -62,11 +69,12 @@ def record_best_episode(path: str | Path) -> Path:
     """Record the run's best policy (``best_params.npy``) in the first evaluation context of training,
     as ``best_episode.mp4`` in the run directory."""
     run = RunDirectory(path)
-    config = TrainConfig.from_dict(run.read_config())
-    seed = int(json.loads(run.best_json.read_text())["eval_seed"])
+    config = load_run_config(run)
+    seed = run.best_summary()["eval_seed"]
+    run.check_writable()
     env = config.task.make()
     try:
-        return _record(env, config.task.options(), run.load_best(), seed, run.path)
+        return _record(env, config.task.options(), run.load_best(env.action_space.shape[0]), seed, run.path)
     finally:
         env.close()
 
@@ -96,17 +104,19 @@ def _summary(batch: EpisodeBatch) -> dict[str, Any]:
 
 
 def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, workers: int = 1,
-                 policy: str = "best", video: bool = False, progress: bool = False) -> dict[str, Any]:
+                 policy: str = "best", video: bool = False, progress: bool = False, backend: str = "local",
+                 ray_address: str | None = None) -> dict[str, Any]:
     """Evaluate the run at ``path`` and the imitation on the same ``episodes`` reset seeds.
 
     Args:
         path: a run directory written by :func:`rdmp_gym.agents.training.train`.
         episodes: evaluation episodes per policy.
         seed: draws the reset seeds (contexts).
-        workers: worker processes.
+        workers: worker processes (or Ray actors).
         policy: ``best`` (``best_params.npy``) or ``last`` (the last checkpoint's policy; PPO: its network).
         video: also write ``best_episode.mp4`` (needs an env with ``record_episode``, e.g. ArmarWipe).
         progress: show a progress bar.
+        backend, ray_address: where the episodes run (see :class:`Evaluator`).
     Returns:
         the contents of ``evaluation.json``.
     """
@@ -114,13 +124,14 @@ def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, wor
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes: expected a positive int, got {episodes!r}")
     run = RunDirectory(path)
-    config = TrainConfig.from_dict(run.read_config())
+    config = load_run_config(run)
+    run.check_writable()             # before any episode is run
     spec = config.task
     seeds = np.random.default_rng(seed).integers(2**31 - 1, size=episodes)
-    with Evaluator(spec, workers) as evaluator:
+    with Evaluator(spec, workers, backend, ray_address) as evaluator:
         env = evaluator.env
         observations = np.stack([env.reset(seed=int(s), options=spec.options())[0] for s in seeds])
-        trained = _trained_actions(run, config, policy, observations)
+        trained = _trained_actions(run, config, policy, observations, evaluator.n_actions)
         imitation = np.zeros_like(trained)
         with tqdm(total=2 * episodes, disable=not progress, desc="evaluate", unit="episode") as bar:
             batches = {"imitation": _run_chunks(evaluator, imitation, seeds, bar),
@@ -141,5 +152,5 @@ def evaluate_run(path: str | Path, episodes: int = 10, *, seed: int = 12345, wor
                for name in batches}
     plot_evaluation(paths, metrics, run.path / "evaluation.png",
                     title=f"{config.agent} ({policy}) vs imitation, {episodes} episodes")
-    (run.path / "evaluation.json").write_text(json.dumps(result, indent=2) + "\n")
+    write_atomic(run.path / "evaluation.json", (json.dumps(result, indent=2) + "\n").encode())
     return result

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .evaluation import WorkerError
 from .tasks import WIPE_ID
 
 __all__ = ["main"]
@@ -67,6 +68,15 @@ def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return kwargs
 
 
+def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="where the episodes run: local worker processes or Ray actors (pip install "
+                             "'rdmp-gym[ray]'); the numbers are the same (default %(default)s)")
+    parser.add_argument("--ray-address", default=None,
+                        help="Ray cluster to join with --backend ray (default: $RAY_ADDRESS, else a new local "
+                             "Ray instance with --workers CPUs)")
+
+
 def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool, eval_episodes: int
                             ) -> None:
     from .training import AGENTS, START_MODES
@@ -78,13 +88,15 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     parser.add_argument("--seed", type=int, default=0, help="run seed (default %(default)s)")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="worker processes (default: all cores, %(default)s)")
+    _add_backend_arguments(parser)
     parser.add_argument("--option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                         help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
     parser.add_argument("--perturbation", type=float, default=0.3, help="std of the perturbed start")
     parser.add_argument("--eval-episodes", type=int, default=eval_episodes,
                         help="policy evaluation episodes (fixed contexts) per update (default %(default)s)")
-    parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint")
+    parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint, with "
+                        "its own config.json (flags only to extend --updates or change --workers)")
     _add_task_arguments(parser)
 
 
@@ -114,11 +126,66 @@ def _evaluation_rows(result: dict[str, Any]) -> list[dict[str, Any]]:
             for name in ("imitation", "trained")]
 
 
-def _command_train(args: argparse.Namespace) -> None:
+#: command-line flags that set a field of the run's config: ``dest -> (field, flag)``
+_RUN_FLAGS = {"agent": ("agent", "--agent"), "updates": ("updates", "--updates"),
+              "rollouts": ("rollouts", "--rollouts"), "seed": ("seed", "--seed"),
+              "workers": ("workers", "--workers"), "start": ("start", "--start"),
+              "perturbation": ("perturbation", "--perturbation"), "eval_episodes": ("eval_episodes", "--eval-episodes"),
+              "env": ("env_id", "--env"), "demo": ("demo", "--demo"), "style": ("env_kwargs.style", "--style"),
+              "groups": ("env_kwargs.groups", "--groups"), "n_periodic": ("env_kwargs.n_periodic", "--n-periodic"),
+              "n_transient": ("env_kwargs.n_transient", "--n-transient"),
+              "duration": ("env_kwargs.duration", "--duration")}
+_RUN_ENTRY_FLAGS = {"option": ("options", "--option"), "env_option": ("env_kwargs", "--env-option"),
+                    "reset_option": ("reset_options", "--reset-option")}
+
+
+def _all_actions(parser: argparse.ArgumentParser) -> list[argparse.Action]:
+    actions = []
+    for action in parser._actions:
+        actions.append(action)
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                actions.extend(_all_actions(sub))
+    return actions
+
+
+def _given_flags(argv: Sequence[str]) -> set[str]:
+    """The ``dest`` of every option written on the command line ``argv`` (defaults left out)."""
+    parser = _parser()
+    for action in _all_actions(parser):
+        if action.option_strings:
+            action.default = argparse.SUPPRESS
+    return set(vars(parser.parse_args(argv)))
+
+
+def _resume_changes(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, str]]:
+    """The settings given as flags to ``--resume`` (``field`` or ``field.key``) and their flag names."""
+    changes, labels = {}, {}
+    for dest in sorted(args.given_flags):
+        if dest in _RUN_FLAGS:
+            key, flag = _RUN_FLAGS[dest]
+            changes[key], labels[key] = getattr(args, dest), flag
+        elif dest in _RUN_ENTRY_FLAGS:
+            field, flag = _RUN_ENTRY_FLAGS[dest]
+            for name, value in getattr(args, dest):
+                changes[f"{field}.{name}"], labels[f"{field}.{name}"] = value, f"{flag} {name}"
+    return changes, labels
+
+
+def _train_or_resume(args: argparse.Namespace, agent: str, out: Path | str) -> Any:
+    """A new run from the flags, or (``--resume``) the run's own config changed only by the given flags."""
     from .training import train
 
-    config = _train_config(args, args.agent)
-    run = train(config, args.out, resume=args.resume, progress=True)
+    if args.resume:
+        changes, labels = _resume_changes(args)
+        return train(None, out, resume=True, changes=changes, labels=labels, progress=True,
+                     backend=args.backend, ray_address=args.ray_address)
+    return train(_train_config(args, agent), out, progress=True, backend=args.backend,
+                 ray_address=args.ray_address)
+
+
+def _command_train(args: argparse.Namespace) -> None:
+    run = _train_or_resume(args, args.agent, args.out)
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
           f"best policy return {last['best_eval_return']:.4g}")
@@ -132,7 +199,7 @@ def _command_evaluate(args: argparse.Namespace) -> None:
     from .assessment import evaluate_run
 
     result = evaluate_run(args.run, args.episodes, seed=args.seed, workers=args.workers, policy=args.policy,
-                          video=args.video, progress=True)
+                          video=args.video, progress=True, backend=args.backend, ray_address=args.ray_address)
     _print_table(_evaluation_rows(result))
     print(f"wrote {Path(args.run) / 'evaluation.json'} and evaluation.png" +
           (f" and {result['video']}" if "video" in result else ""))
@@ -162,7 +229,6 @@ def _command_main(args: argparse.Namespace) -> None:
     from .assessment import evaluate_run
     from .imitation import fit_dmp, load_demonstration
     from .plots import plot_fit
-    from .training import train
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -175,9 +241,10 @@ def _command_main(args: argparse.Namespace) -> None:
     print(f"[2/4] the paper's figures (2, 6, 7, 8, 9, 12) for the built-in demonstrations -> {out / 'figures'}")
     write_paper_figures(out / "figures")
     print(f"[3/4] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
-    run = train(config, out / "train", resume=args.resume, progress=True)
+    run = _train_or_resume(args, "pi2", out / "train")
     print(f"[4/4] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
-    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True)
+    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True,
+                          backend=args.backend, ray_address=args.ray_address)
     _print_table(_evaluation_rows(result))
     summary = {"fit": str(out / "fit.png"), "figures": str(out / "figures"), "run": str(run.path),
                "learning_curve": str(run.curve_png),
@@ -204,6 +271,7 @@ def _parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy (default %(default)s)")
     evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
     evaluate.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes")
+    _add_backend_arguments(evaluate)
     evaluate.add_argument("--policy", choices=("best", "last"), default="best", help="which policy of the run")
     evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
     evaluate.set_defaults(handler=_command_evaluate)
@@ -230,6 +298,7 @@ def _parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``rdmp-gym``; returns the exit status."""
     args = _parser().parse_args(argv)
+    args.given_flags = _given_flags(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
@@ -239,7 +308,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         torch.set_num_threads(1)
         args.handler(args)
-    except (ValueError, TypeError, FileNotFoundError, FileExistsError, FloatingPointError) as error:
+    except (ValueError, TypeError, OSError, FloatingPointError, ImportError, WorkerError) as error:
         print(f"rdmp-gym {args.command}: error: {error}", file=sys.stderr)
         return 2
     return 0

@@ -2,8 +2,10 @@
 
 Why these settings (PPO as a contextual bandit, one step per episode):
 
-* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / envs`` per env
-  (``envs`` the largest divisor of ``rollouts`` not above ``workers``);
+* one update = one PPO iteration of ``rollouts`` episodes: ``n_steps = rollouts / n`` per env, ``n`` the
+  largest divisor of ``rollouts`` not above the ``envs`` setting (2). ``n`` is a setting, not the worker
+  count, so PPO's numbers do not depend on ``--workers`` (which only decides whether the ``n`` envs
+  step in this process or in ``n`` subprocesses);
 * every episode terminates after its single step (``terminated=True``), so the advantage is
   ``r - V(context)`` and ``gamma``/``gae_lambda`` play no role;
 * the observation is the env's context; the policy is a Gaussian whose mean starts at the imitation
@@ -41,6 +43,7 @@ class PPOConfig:
         clip_range: PPO ratio clipping.
         ent_coef: entropy bonus.
         target_kl: early stop of an update's epochs at this approximate KL divergence; 0 = never.
+        envs: parallel envs of the vector env (at most; the largest divisor of ``rollouts`` not above it).
     """
 
     sigma: float = 0.6
@@ -51,6 +54,7 @@ class PPOConfig:
     clip_range: float = 0.2
     ent_coef: float = 0.0
     target_kl: float = 0.05
+    envs: int = 2
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)
@@ -61,3 +65,4 @@ class PPOConfig:
         check_range(self.clip_range, "ppo.clip_range", 0.0, 1.0, low_open=True)
         check_range(self.target_kl, "ppo.target_kl", 0.0, None)
         check_range(self.ent_coef, "ppo.ent_coef", 0.0, None)
+        check_range(self.envs, "ppo.envs", 1, None)

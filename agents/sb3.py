@@ -4,14 +4,15 @@ Settings: see :mod:`rdmp_gym.agents.ppo_config`.
 
 ``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
-random streams restart).
+random streams restart). Its checkpoint is SB3's own ``.zip``, of which only the weights are read
+(``set_parameters``: torch ``weights_only`` loading); SB3's ``data`` entry, which may hold pickled
+objects, is never loaded.
 """
 
 from __future__ import annotations
 
 import io
 import math
-import multiprocessing
 from collections.abc import Mapping
 from typing import Any
 
@@ -26,7 +27,7 @@ from .options import from_options
 from .ppo_config import PPOConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent", "load_ppo_policy"]
+__all__ = ["PPOAgent", "parallel_envs"]
 
 
 class _EpisodeCollector(BaseCallback):
@@ -41,7 +42,8 @@ class _EpisodeCollector(BaseCallback):
         for action, reward, info in zip(self.locals["clipped_actions"], self.locals["rewards"],
                                         self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
-            self.metrics.append(episode_metrics(float(reward), info))
+            # float32 as PPO learns from it (DummyVecEnv keeps rewards in float32, SubprocVecEnv in float64)
+            self.metrics.append(episode_metrics(float(np.float32(reward)), info))
         return True
 
     def pop_batch(self) -> EpisodeBatch:
@@ -56,17 +58,18 @@ class _EpisodeCollector(BaseCallback):
         return batch
 
 
-def _vector_env(task: TaskSpec, workers: int) -> VecEnv:
-    makers = [task.make_with_options] * workers
-    if workers == 1:
+def parallel_envs(rollouts: int, envs: int) -> int:
+    """PPO's vector-env size: the largest divisor of ``rollouts`` not above the ``envs`` setting (so every
+    env takes the same number of steps per update). It depends on the settings only, not on the machine."""
+    return max(count for count in range(1, min(envs, rollouts) + 1) if rollouts % count == 0)
+
+
+def _vector_env(task: TaskSpec, envs: int, workers: int) -> VecEnv:
+    """``envs`` envs, in this process (``workers == 1``) or one subprocess each (the same numbers either way)."""
+    makers = [task.make_with_options] * envs
+    if workers == 1 or envs == 1:
         return DummyVecEnv(makers)
-    method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
-    return SubprocVecEnv(makers, start_method=method)
-
-
-def load_ppo_policy(model: bytes) -> PPO:
-    """A PPO model saved in a checkpoint (``state["agent"]["model"]``), for prediction only."""
-    return PPO.load(io.BytesIO(model), device="cpu")
+    return SubprocVecEnv(makers, start_method="spawn")
 
 
 class PPOAgent:
@@ -76,8 +79,8 @@ class PPOAgent:
         task: the env.
         initial_action: ``[n]`` the policy mean at the start.
         rollouts: episodes per update.
-        workers: at most this many parallel envs (``SubprocVecEnv`` if > 1): the largest count that
-            divides ``rollouts``, so every env takes the same number of steps per update.
+        workers: 1 steps the envs in this process; more runs each of the ``envs`` envs (see
+            :func:`parallel_envs`) in its own subprocess (``SubprocVecEnv``). The numbers do not depend on it.
         seed: seeds torch, the policy and the envs.
         options: fields of :class:`PPOConfig`.
     """
@@ -85,9 +88,9 @@ class PPOAgent:
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
                  options: Mapping[str, Any] | None = None) -> None:
         self.config = from_options(PPOConfig, options, "ppo")
-        envs = max(count for count in range(1, min(workers, rollouts) + 1) if rollouts % count == 0)
+        envs = parallel_envs(rollouts, self.config.envs)
         self.rollouts = rollouts
-        self.env = _vector_env(task, envs)
+        self.env = _vector_env(task, envs, workers)
         self.env.seed(seed)
         batch = self.config.batch_size or rollouts
         hidden = [self.config.hidden, self.config.hidden]
@@ -127,10 +130,21 @@ class PPOAgent:
     def state_dict(self) -> dict[str, Any]:
         buffer = io.BytesIO()
         self.model.save(buffer)
-        return {"model": buffer.getvalue()}
+        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
+                "n_updates": int(self.model._n_updates)}
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        self.model = PPO.load(io.BytesIO(state["model"]), env=self.env, device="cpu")
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        """Restore the policy and optimiser weights from SB3's zip (weights only, nothing unpickled)."""
+        if not isinstance(state.get("model"), bytes):
+            raise ValueError("state.model: expected the bytes of an SB3 model zip")
+        for key in ("num_timesteps", "n_updates"):
+            if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
+                raise ValueError(f"state.{key}: expected a count >= 0, got {state.get(key)!r}")
+        try:
+            self.model.set_parameters(io.BytesIO(state["model"]), exact_match=True, device="cpu")
+        except (ValueError, KeyError, RuntimeError) as error:
+            raise ValueError(f"state.model: not a PPO model of this run's shape ({error})") from error
+        self.model.num_timesteps, self.model._n_updates = state["num_timesteps"], state["n_updates"]
 
     def close(self) -> None:
         self.env.close()

@@ -10,10 +10,16 @@ reset seeds, the perturbed start and the fixed evaluation seeds; the same config
 
 from __future__ import annotations
 
+import hashlib
 import logging
+import platform
+import subprocess
 import time
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from datetime import datetime, timezone
+from importlib import metadata
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -24,10 +30,11 @@ from .evaluation import Evaluator
 from .learners import LEARNERS, EpisodeBatch, Learner, make_learner
 from .options import check_choice, check_range, from_options, to_options
 from .ppo_config import PPOConfig
-from .runs import RunDirectory
+from .runs import RunDirectory, write_atomic
 from .tasks import WIPE_ID, TaskSpec
 
-__all__ = ["AGENTS", "ESAgent", "TrainConfig", "batch_summary", "train"]
+__all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_summary", "environment_record",
+           "load_run_config", "train"]
 
 logger = logging.getLogger(__name__)
 
@@ -46,8 +53,8 @@ class TrainConfig:
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
-        workers: worker processes for the episodes (the black-box learners' numbers do not depend on it;
-            PPO steps one env per worker, so its numbers do).
+        workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
+            (PPO's parallel envs are its own setting ``envs``).
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
@@ -221,55 +228,218 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
     return ESAgent(learner, evaluator, streams["episodes"], config.shared_context)
 
 
-def _resolve_config(config: TrainConfig | None, run: RunDirectory, resume: bool) -> TrainConfig:
-    if not resume:
-        if config is None:
-            raise ValueError("config: required for a new run")
-        if run.config_path.exists():
-            raise FileExistsError(f"out: {run.path} already holds a run; pass --resume or choose another --out")
+MUTABLE_ON_RESUME = ("updates", "workers")
+_PACKAGES = ("rdmp-gym", "numpy", "scipy", "gymnasium", "mujoco", "cma", "stable-baselines3", "torch", "filelock")
+
+
+class NoValidEpisodesError(ValueError):
+    """Every episode of the first update was invalid: the learner would only see a constant penalty."""
+
+
+def _git_commit() -> dict[str, Any]:
+    """The commit (and whether the work tree differs) of the checkout rdmp-gym runs from, if it is one."""
+    source = Path(__file__).resolve().parent.parent
+    if not any((folder / ".git").exists() for folder in (source, *source.parents)):
+        return {"commit": None}
+    try:
+        commit = subprocess.run(["git", "-C", str(source), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                timeout=10, check=True).stdout.strip()
+        status = subprocess.run(["git", "-C", str(source), "status", "--porcelain", "--untracked-files=no"],
+                                capture_output=True, text=True, timeout=10, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return {"commit": None}
+    return {"commit": commit, "dirty": bool(status.strip())}
+
+
+def environment_record() -> dict[str, Any]:
+    """Versions of Python and the packages a run depends on, rdmp-gym's version and git commit."""
+    versions: dict[str, str | None] = {}
+    for name in _PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return {"time": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "python": platform.python_version(), "packages": versions, "rdmp_gym": _git_commit()}
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def load_run_config(run: RunDirectory | str | Path) -> TrainConfig:
+    """The configuration of a run directory, with its demonstration resolved to the run's own copy.
+
+    A relative ``demo`` is relative to the run directory; a copy that no longer matches the sha256 in
+    ``provenance.json`` is a ``ValueError``.
+    """
+    run = run if isinstance(run, RunDirectory) else RunDirectory(run)
+    try:
+        config = TrainConfig.from_dict(run.read_config())
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"{run.config_path}: {error}; restore the file or start a new run") from error
+    if not config.demo:
         return config
-    saved = TrainConfig.from_dict(run.read_config())
-    if config is None:
-        return saved
-    changed = sorted(name for name, value in config.to_dict().items()
-                     if name not in ("updates", "workers") and value != saved.to_dict()[name])
-    if changed:
-        raise ValueError(f"resume: {changed} differ from the run's config.json; only updates and workers may change")
-    return replace(saved, updates=config.updates, workers=config.workers)
+    demo = Path(config.demo) if Path(config.demo).is_absolute() else run.path.resolve() / config.demo
+    if not demo.exists():
+        raise FileNotFoundError(f"demo: {demo} (named by {run.config_path}) is missing")
+    expected = run.read_provenance().get("demo", {}).get("sha256")
+    if expected is not None and _sha256(demo) != expected:
+        raise ValueError(f"demo: {demo} changed since the run started (sha256 differs from provenance.json); "
+                         "restore it or start a new run")
+    return replace(config, demo=str(demo))
 
 
-def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False, progress: bool = False
-          ) -> RunDirectory:
+def _lookup(config: dict[str, Any], key: str) -> Any:
+    field_name, _, entry = key.partition(".")
+    value = config[field_name]
+    return value if not entry else (value or {}).get(entry)
+
+
+def _resumed_config(run: RunDirectory, config: TrainConfig | None, changes: Mapping[str, Any],
+                    labels: Mapping[str, str]) -> TrainConfig:
+    """The run's own configuration with ``changes`` applied (see :func:`train`)."""
+    saved = load_run_config(run)
+    given = dict(config.to_dict()) if config is not None else {}
+    given.update(changes)
+    fields = saved.to_dict()
+    resolved = {}
+    for key, value in given.items():
+        label = labels.get(key, key)
+        if key.partition(".")[0] not in fields:
+            raise ValueError(f"{label}: not a setting of a run")
+        if key in MUTABLE_ON_RESUME:
+            resolved[key] = value
+            continue
+        current = _lookup(fields, key)
+        if key == "demo" and value and current:
+            if not Path(value).exists():
+                raise FileNotFoundError(f"demo: {value} does not exist")
+            same = _sha256(Path(value)) == _sha256(Path(current))
+        else:
+            same = value == current
+        if not same:
+            raise ValueError(f"{label}: {value!r} differs from the run's {current!r} ({run.config_path}); a resumed "
+                             f"run keeps its configuration, only {' and '.join(MUTABLE_ON_RESUME)} may change")
+    return replace(saved, **resolved)
+
+
+def _start_files(run: RunDirectory, config: TrainConfig) -> TrainConfig:
+    """Copy the demonstration into the new run; the config as stored (demo relative to the run)."""
+    record = environment_record()
+    provenance: dict[str, Any] = {"sessions": [{"started": "new", **record}]}
+    stored = config
+    if config.demo:
+        from .imitation import load_demonstration
+
+        source = Path(config.demo).resolve()
+        load_demonstration(str(source))                  # a clear error for a missing or broken file
+        copy = run.path / f"demo{source.suffix.lower()}"
+        write_atomic(copy, source.read_bytes())
+        provenance["demo"] = {"source": str(source), "copy": copy.name, "sha256": _sha256(copy)}
+        stored = replace(config, demo=copy.name)
+    run.write_provenance(provenance)
+    return stored
+
+
+def _resume_session(run: RunDirectory, config: TrainConfig) -> None:
+    """Record the changed ``updates``/``workers`` in ``config.json`` and this resume in ``provenance.json``;
+    warn when the package versions changed."""
+    stored = run.read_config()
+    if any(stored.get(key) != getattr(config, key) for key in MUTABLE_ON_RESUME):
+        run.write_config({**stored, **{key: getattr(config, key) for key in MUTABLE_ON_RESUME}})
+    provenance = run.read_provenance()
+    record = environment_record()
+    sessions = provenance["sessions"]
+    if sessions and isinstance(sessions[0], dict) and sessions[0].get("packages") != record["packages"]:
+        before = sessions[0].get("packages") or {}
+        changed = {k: (before.get(k), v) for k, v in record["packages"].items() if before.get(k) != v}
+        logger.warning("%s: resuming with other package versions than the run started with: %s", run.path, changed)
+    sessions.append({"started": "resume", **record})
+    run.write_provenance(provenance)
+
+
+def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
+          changes: Mapping[str, Any] | None = None, labels: Mapping[str, str] | None = None,
+          progress: bool = False, backend: str = "local",
+          ray_address: str | None = None) -> RunDirectory:
     """Train an agent and write the run directory ``out`` (see :mod:`rdmp_gym.agents.runs`).
 
     Args:
-        config: the run; with ``resume`` it may be None (use ``config.json``), or differ only in
-            ``updates`` and ``workers``.
-        out: run directory.
+        config: the run; with ``resume`` it may be None (use the run's ``config.json``), or must agree
+            with it except in ``updates`` and ``workers``.
+        out: run directory (a new run needs a new or empty one; it is locked while the run is written).
         resume: continue from the run's last checkpoint.
+        changes: with ``resume``: settings to change (``field`` or ``field.key`` for an entry of
+            ``env_kwargs``, ``options``, ``reset_options``); ``updates`` (to extend the run) and
+            ``workers`` may change, any other value that differs from the run's is a ``ValueError``.
+        labels: names for ``changes`` keys in error messages (e.g. the command-line flags).
         progress: show a progress bar.
+        backend, ray_address: where the episodes run (see :class:`Evaluator`); the numbers do not depend on it.
     Returns:
         the run directory.
     """
     run = RunDirectory(out)
-    config = _resolve_config(config, run, resume)
-    streams = _seed_streams(config.seed)
-    with Evaluator(config.task, config.workers) as evaluator:
-        initial = _initial_action(config, evaluator, streams["start"])
-        eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
-        observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
-                                 for s in eval_seeds])
-        agent = _make_agent(config, evaluator, streams, initial)
-        if not resume:
-            run.create(config.to_dict())
-        try:
-            _loop(config, run, agent, evaluator, eval_seeds, observations, resume, progress)
-        finally:
-            agent.close()
-    from .plots import plot_learning_curve
+    if not resume and (config is None or changes):
+        raise ValueError("config: a new run needs a config (and no changes)")
+    with run.open(new=not resume):
+        config = _resumed_config(run, config, changes or {}, labels or {}) if resume \
+            else replace(config, demo=str(Path(config.demo).resolve()) if config.demo else "")
+        streams = _seed_streams(config.seed)
+        with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
+            initial = _initial_action(config, evaluator, streams["start"])
+            eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
+            observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
+                                     for s in eval_seeds])
+            agent = _make_agent(config, evaluator, streams, initial)
+            try:
+                if resume:
+                    _resume_session(run, config)
+                else:
+                    run.write_config(_start_files(run, config).to_dict())
+                _loop(config, run, agent, evaluator, eval_seeds, observations, resume, progress)
+            finally:
+                agent.close()
+        from .plots import plot_learning_curve
 
-    plot_learning_curve(run.read_log(), run.curve_png, title=f"{config.agent} on {config.env_id}")
+        plot_learning_curve(run.read_log(), run.curve_png, title=f"{config.agent} on {config.env_id}")
     return run
+
+
+def _restore(run: RunDirectory, agent: Agent, state: dict[str, Any], config: TrainConfig
+             ) -> tuple[int, int, dict[str, Any] | None, float]:
+    """Validate a checkpoint's state and load it into ``agent``; ``(update, episodes, best, elapsed)``."""
+    where = f"{run.checkpoint_path}"
+    fix = "delete checkpoint.json and checkpoint-*.* to restart the run, or start a new run"
+    for key in ("update", "episodes"):
+        if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
+            raise ValueError(f"{where}: '{key}' is {state.get(key)!r}, expected a count >= 0; {fix}")
+    elapsed, best = state.get("elapsed"), state.get("best")
+    if isinstance(elapsed, bool) or not isinstance(elapsed, (int, float)) or not np.isfinite(elapsed) or elapsed < 0:
+        raise ValueError(f"{where}: 'elapsed' is {elapsed!r}, expected seconds >= 0; {fix}")
+    if best is not None and (not isinstance(best, dict) or not isinstance(best.get("eval_return_mean"), (int, float))):
+        raise ValueError(f"{where}: 'best' has no number 'eval_return_mean'; {fix}")
+    if not isinstance(state.get("agent"), dict):
+        raise ValueError(f"{where}: 'agent' is missing; {fix}")
+    if state["update"] > config.updates:
+        raise ValueError(f"updates: the run already has {state['update']} updates, more than {config.updates}; "
+                         f"pass --updates {state['update']} or more")
+    try:
+        agent.load_state_dict(state["agent"])
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{where}: the state does not fit this run's agent ({error}); {fix}") from error
+    return state["update"], state["episodes"], best, float(elapsed)
+
+
+def _invalid_reasons(evaluator: Evaluator, config: TrainConfig, batch: EpisodeBatch, fallback_seed: int
+                     ) -> dict[str, int]:
+    """Re-run the (cheap, unsimulated) invalid episodes here and count their ``info['invalid_reason']``."""
+    env, counts = evaluator.env, Counter()
+    for action, seed in zip(batch.actions, batch.seeds, strict=True):
+        env.reset(seed=int(seed) if seed >= 0 else fallback_seed, options=config.task.options())
+        info = env.step(np.asarray(action, dtype=np.float32))[4]
+        counts[str(info.get("invalid_reason") or "unknown")] += 1
+    return dict(counts.most_common())
 
 
 def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,
@@ -280,8 +450,7 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
         if resume:
             run.truncate_log(-1)   # killed before its first checkpoint: start over
     else:
-        agent.load_state_dict(state["agent"])
-        update, episodes, best, elapsed = state["update"], state["episodes"], state["best"], state["elapsed"]
+        update, episodes, best, elapsed = _restore(run, agent, state, config)
         run.truncate_log(update)
         logger.info("resuming %s at update %d (%d episodes)", run.path, update, episodes)
     started = time.perf_counter() - elapsed
@@ -315,5 +484,12 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
             update += 1
             episodes += batch.size
             evaluate_and_log(batch)
+            if update == 1 and not np.any(batch.valid):
+                reasons = _invalid_reasons(evaluator, config, batch, int(eval_seeds[0]))
+                raise NoValidEpisodesError(
+                    f"training: all {batch.size} episodes of the first update were invalid (invalid_reason: "
+                    f"{', '.join(f'{k} x{v}' for k, v in reasons.items())}); the learner would only see a constant "
+                    "penalty. Check the demonstration's units (metres, table frame) and the env settings; "
+                    f"the run stopped at update 1 in {run.path}")
             bar.update(1)
             bar.set_postfix(ret=f"{best['eval_return_mean']:.3g}")

@@ -11,6 +11,7 @@ the table. Target checked: coverage >= 0.95 with force in band >= 0.9 (policy ev
 
     python benchmarks/bench_agents.py                     # the full benchmark (about 20-40 min on 2 cores)
     python benchmarks/bench_agents.py --seeds 1 --budget 60 --agents pi2 cmaes   # a quick look
+    python benchmarks/bench_agents.py --backend ray      # every run a Ray task (RAY_ADDRESS: a cluster)
 """
 
 from __future__ import annotations
@@ -26,13 +27,12 @@ from pathlib import Path
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import gymnasium as gym
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from rdmp_gym.agents.tasks import WIPE_ID
+from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from tqdm import tqdm
 
@@ -51,7 +51,11 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--rollouts", type=int, default=10, help="episodes per update")
     parser.add_argument("--contexts", choices=("random", "fixed"), default="random")
     parser.add_argument("--eval-contexts", type=int, default=6, help="evaluation contexts (random mode)")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=int, default=2, help="processes per run (local backend)")
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="ray: the runs (agent x start x seed) are Ray tasks of one CPU each, each run on "
+                             "1 worker; the same result files")
+    parser.add_argument("--ray-address", default=None, help="Ray cluster (default $RAY_ADDRESS, else a local one)")
     parser.add_argument("--option", action="append", default=[], metavar="AGENT.KEY=VALUE",
                         help="override a learner setting, e.g. pi2.sigma=0.5 (repeatable)")
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
@@ -89,7 +93,7 @@ def _run(agent: str, start: str, seed: int, args: argparse.Namespace, env_kwargs
     reset_options = None
     eval_episodes = args.eval_contexts
     if args.contexts == "fixed":
-        env = gym.make(WIPE_ID, disable_env_checker=True, **env_kwargs)
+        env = TaskSpec(WIPE_ID, env_kwargs).make()          # (also registers the env in a Ray worker)
         reset_options = {"context": env.reset(seed=seed)[1]["context"].tolist()}
         env.close()
         eval_episodes = 1
@@ -105,6 +109,28 @@ def _run(agent: str, start: str, seed: int, args: argparse.Namespace, env_kwargs
                                                         "eval_force_in_band", "return_mean", "coverage",
                                                         "force_in_band", "valid", "exploration")}
                       for record in records]}
+
+
+def _run_on_ray(jobs: list[tuple[str, str, int]], args: argparse.Namespace, env_kwargs: dict,
+                options: dict[str, dict], scratch: Path) -> list[dict]:
+    """Every run as a Ray task (one CPU, one worker inside); results in the order of ``jobs``."""
+    from rdmp_gym.agents.ray_backend import import_ray, init_ray
+
+    ray = import_ray()
+    owns = init_ray(os.cpu_count() or 1, args.ray_address)
+    remote = ray.remote(num_cpus=1)(_run)
+    serial = argparse.Namespace(**{**vars(args), "workers": 1})
+    try:
+        pending = [remote.remote(agent, start, seed, serial, env_kwargs, options.get(agent, {}), scratch)
+                   for agent, start, seed in jobs]
+        with tqdm(total=len(pending), desc="runs (ray)", unit="run") as bar:
+            for ref in pending:
+                ray.wait([ref], num_returns=1)
+                bar.update(1)
+        return ray.get(pending)
+    finally:
+        if owns:
+            ray.shutdown()
 
 
 def _summary(runs: list[dict], agents: list[str], starts: list[str]) -> list[dict]:
@@ -193,8 +219,11 @@ def main() -> None:
     jobs = [(agent, start, seed) for start in args.starts for agent in args.agents for seed in range(args.seeds)]
     runs = []
     try:
-        for agent, start, seed in tqdm(jobs, desc="runs", unit="run"):
-            runs.append(_run(agent, start, seed, args, env_kwargs, options.get(agent, {}), scratch))
+        if args.backend == "ray":
+            runs = _run_on_ray(jobs, args, env_kwargs, options, scratch)
+        else:
+            for agent, start, seed in tqdm(jobs, desc="runs", unit="run"):
+                runs.append(_run(agent, start, seed, args, env_kwargs, options.get(agent, {}), scratch))
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     rows = _summary(runs, args.agents, args.starts)

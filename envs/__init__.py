@@ -1,12 +1,12 @@
 """Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP on a simulated ARMAR-III.
 
-Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v0``, an episodic env: one
+Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v1``, an episodic env: one
 ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``; no ``max_episode_steps``)::
 
     import gymnasium as gym
     import rdmp_gym  # registers the env
 
-    env = gym.make("rdmp_gym/ArmarWipe-v0", n_periods=4)
+    env = gym.make("rdmp_gym/ArmarWipe-v1", n_periods=4)      # obstacle=True by default
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample() * 0)  # the imitation
 
@@ -32,6 +32,7 @@ from .wipe_env import ArmarWipeEnv
 __all__ = [
     "ARM_JOINTS",
     "CONTEXT_FIELDS",
+    "DEPRECATED_ENV_ID",
     "ENV_ID",
     "TERMS",
     "ArmarWipeEnv",
@@ -42,7 +43,12 @@ __all__ = [
     "WipeScene",
 ]
 
-ENV_ID = "rdmp_gym/ArmarWipe-v0"
+ENV_ID = "rdmp_gym/ArmarWipe-v1"
+#: Deprecated: v0's reward could be gamed (dirt off the table, touching counted as wiping, no self-collision).
+#: It now makes the v1 env without the obstacle, with a DeprecationWarning, and will be removed.
+DEPRECATED_ENV_ID = "rdmp_gym/ArmarWipe-v0"
 
 if ENV_ID not in gym.registry:
-    gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv")
+    gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv", kwargs={"obstacle": True})
+if DEPRECATED_ENV_ID not in gym.registry:
+    gym.register(id=DEPRECATED_ENV_ID, entry_point="rdmp_gym.envs.wipe_env:deprecated_v0")

@@ -1,22 +1,30 @@
-"""The episode context of the wiping task: table pose, dirt patch, sponge start.
+"""The episode context of the wiping task: table pose, dirt patch, sponge start, obstacle.
 
-The context is the observation of the episodic env: a float32 vector ``[10]``
+The context is the observation of the episodic env: a float32 vector ``[13]``
 
-    0 table_height   offset of the table top from its nominal height (m)
-    1 tilt_x         table roll about the table frame's x axis (rad)
-    2 tilt_y         table pitch about the table frame's y axis (rad)
-    3, 4 patch_centre  centre of the dirty patch in the nominal table frame (m)
-    5, 6 patch_size    side lengths of the dirty patch (m)
-    7, 8, 9 sponge_start  start of the sponge face centre in the nominal table frame (m; z above the surface)
+    0        table_height       offset of the table top from its nominal height (m)
+    1, 2     table_tilt         table roll about the table frame's x axis, pitch about its y axis (rad)
+    3, 4     patch_centre       centre of the dirty patch in the nominal table frame (m)
+    5, 6     patch_size         side lengths of the dirty patch (m)
+    7, 8, 9  sponge_start       start of the sponge face centre in the nominal table frame (m; z above the surface)
+    10       obstacle           1 if a cup stands on the table in this episode, else 0
+    11, 12   obstacle_position  the cup's centre on the table (table frame, m); (0, 0) when there is none
 
-Each field has a *sampling* range (what ``reset`` draws from, small and well inside the reach) and
-wider *bounds* (the observation space; what ``reset(options=...)`` accepts).
+Each field has a *sampling* range (what ``reset`` draws from, well inside the reach) and wider
+*bounds* (the observation space; what ``reset(options=...)`` accepts). Whatever is drawn or given,
+the whole dirt patch lies on the table top, and a cup stands on the table, off the patch; a context
+that breaks either raises ``ValueError``.
+
+The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
+corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
+the way, within 1 cm of the line, where the imitation's approach comes down on it. A draw that would
+put it on the patch or off the table leaves the context without a cup.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,14 +37,20 @@ CONTEXT_FIELDS: dict[str, tuple[int, int]] = {
     "patch_centre": (3, 2),
     "patch_size": (5, 2),
     "sponge_start": (7, 3),
+    "obstacle": (10, 1),
+    "obstacle_position": (11, 2),
 }
 _ALIASES = {"patch_center": "patch_centre"}
-SIZE = 10
+SIZE = 13
+_DRAWN = 10          # fields 0..9 are drawn uniformly; the obstacle fields are placed
 
-_SAMPLE_LOW = np.array([-0.02, -0.05, -0.05, -0.03, -0.04, 0.10, 0.10, -0.12, 0.04, 0.06])
-_SAMPLE_HIGH = np.array([0.02, 0.05, 0.05, 0.03, 0.04, 0.22, 0.22, -0.02, 0.16, 0.10])
-_BOUND_LOW = np.array([-0.06, -0.15, -0.15, -0.15, -0.20, 0.02, 0.02, -0.30, -0.30, 0.0])
-_BOUND_HIGH = np.array([0.06, 0.15, 0.15, 0.15, 0.20, 0.30, 0.30, 0.20, 0.30, 0.25])
+_SAMPLE_LOW = np.array([-0.02, -0.05, -0.05, -0.02, -0.04, 0.10, 0.10, -0.10, 0.20, 0.10, 0.0, 0.0, 0.0])
+_SAMPLE_HIGH = np.array([0.02, 0.05, 0.05, 0.03, 0.04, 0.22, 0.22, 0.00, 0.28, 0.14, 1.0, 0.0, 0.0])
+_BOUND_LOW = np.array([-0.06, -0.15, -0.15, -0.15, -0.20, 0.02, 0.02, -0.30, -0.30, 0.0, 0.0, -0.30, -0.45])
+_BOUND_HIGH = np.array([0.06, 0.15, 0.15, 0.15, 0.20, 0.30, 0.30, 0.20, 0.30, 0.25, 1.0, 0.40, 0.45])
+
+#: Clearance (m) kept between the cup's rim and the dirty patch when it is placed.
+PATCH_CLEARANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -48,34 +62,54 @@ class Context:
     patch_centre: np.ndarray
     patch_size: np.ndarray
     sponge_start: np.ndarray
+    obstacle: bool = False
+    obstacle_position: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     def vector(self) -> np.ndarray:
-        """The context as a float64 vector ``[10]``."""
+        """The context as a float64 vector ``[13]``."""
         return np.concatenate([[self.table_height], self.table_tilt, self.patch_centre, self.patch_size,
-                               self.sponge_start])
+                               self.sponge_start, [float(self.obstacle)],
+                               self.obstacle_position if self.obstacle else np.zeros(2)])
 
     @classmethod
     def from_vector(cls, v: np.ndarray) -> Context:
         """Inverse of :meth:`vector`."""
         v = np.asarray(v, dtype=np.float64)
-        return cls(float(v[0]), v[1:3].copy(), v[3:5].copy(), v[5:7].copy(), v[7:10].copy())
+        present = bool(v[10] >= 0.5)
+        return cls(float(v[0]), v[1:3].copy(), v[3:5].copy(), v[5:7].copy(), v[7:10].copy(), present,
+                   v[11:13].copy() if present else np.zeros(2))
 
 
 class ContextSpec:
-    """Sampling ranges and bounds of the context.
+    """Sampling ranges, bounds and consistency rules of the context.
 
     Args:
-        ranges: optional ``{field: (low, high)}`` overrides of the sampling ranges (each a number or
-            the field's length of numbers); they must lie within the bounds.
+        ranges: optional ``{field: (low, high)}`` overrides of the sampling ranges of fields 0-9 (each a
+            number or the field's length of numbers); they must lie within the bounds.
+        table_extent: the table top in the table frame, (x_low, x_high, y_low, y_high) (m).
+        obstacle: whether contexts may have a cup at all.
+        obstacle_probability: share of drawn contexts that get a cup (when it fits).
+        obstacle_radius: the cup's radius (m).
     """
 
-    def __init__(self, ranges: Mapping[str, tuple] | None = None):
+    def __init__(self, ranges: Mapping[str, tuple] | None = None,
+                 table_extent: tuple[float, float, float, float] = (-0.14, 0.36, -0.45, 0.45),
+                 obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035):
         self.low = _SAMPLE_LOW.copy()
         self.high = _SAMPLE_HIGH.copy()
         self.bound_low = _BOUND_LOW.copy()
         self.bound_high = _BOUND_HIGH.copy()
+        self.table_extent = tuple(float(x) for x in table_extent)
+        self.obstacle = bool(obstacle)
+        if not (0.0 <= obstacle_probability <= 1.0):
+            raise ValueError(f"obstacle_probability: expected a number in [0, 1], got {obstacle_probability!r}")
+        self.obstacle_probability = float(obstacle_probability)
+        self.obstacle_radius = float(obstacle_radius)
         for key, value in (ranges or {}).items():
             start, length = self._field(key, "context_ranges")
+            if start >= _DRAWN:
+                raise ValueError(f"context_ranges: {key} is placed, not drawn from a range; use obstacle=False "
+                                 "or obstacle_probability instead")
             try:
                 low, high = (np.broadcast_to(np.asarray(x, dtype=np.float64), (length,)) for x in value)
             except (TypeError, ValueError) as error:
@@ -86,6 +120,13 @@ class ContextSpec:
                 raise ValueError(f"context_ranges: {key} = ({low}, {high}) must satisfy low <= high within "
                                  f"[{self.bound_low[part]}, {self.bound_high[part]}]")
             self.low[part], self.high[part] = low, high
+        # every drawable patch must lie on the table
+        x_lo, x_hi, y_lo, y_hi = self.table_extent
+        half = self.high[5:7] / 2
+        if (self.low[3] - half[0] < x_lo - 1e-9 or self.high[3] + half[0] > x_hi + 1e-9
+                or self.low[4] - half[1] < y_lo - 1e-9 or self.high[4] + half[1] > y_hi + 1e-9):
+            raise ValueError("context_ranges: patch_centre and patch_size ranges allow patches beyond the table "
+                             f"top {self.table_extent} (table frame, m)")
 
     @staticmethod
     def _field(key: str, argument: str) -> tuple[int, int]:
@@ -96,13 +137,19 @@ class ContextSpec:
         return CONTEXT_FIELDS[name]
 
     def sample(self, rng: np.random.Generator, options: Mapping | None = None) -> Context:
-        """Draw a context from ``rng``; ``options`` fixes fields (or ``context``: the whole vector)."""
-        vector = rng.uniform(self.low, self.high)
+        """Draw a context from ``rng``; ``options`` fixes fields (or ``context``: the whole vector).
+
+        Raises ValueError for a patch beyond the table top, or a cup off the table or on the patch."""
+        vector = np.r_[rng.uniform(self.low[:_DRAWN], self.high[:_DRAWN]), 0.0, 0.0, 0.0]
+        draw = rng.uniform(size=4)                      # presence, position along and across the corridor
+        given: set[str] = set()
         for key, value in (options or {}).items():
             if key == "context":
                 start, length = 0, SIZE
+                given |= {"obstacle", "obstacle_position"}
             else:
                 start, length = self._field(key, "options")
+                given.add(_ALIASES.get(key, key))
             try:
                 array = np.asarray(value, dtype=np.float64).reshape(-1)
             except (TypeError, ValueError) as error:
@@ -116,4 +163,53 @@ class ContextSpec:
                 raise ValueError(f"options: {key} = {array} lies outside the bounds "
                                  f"[{self.bound_low[part]}, {self.bound_high[part]}]")
             vector[part] = array
-        return Context.from_vector(vector)
+        context = Context.from_vector(vector)
+        self._check_patch(context)
+        present = context.obstacle if "obstacle" in given else draw[0] < self.obstacle_probability
+        if present and not self.obstacle:
+            if "obstacle" in given:
+                raise ValueError("options: obstacle = 1 but the env was made with obstacle=False")
+            present = False
+        position = context.obstacle_position
+        if present and "obstacle_position" not in given:
+            position = self._corridor_point(context, draw[1:])
+            if position is None:
+                if "obstacle" in given:
+                    raise ValueError("options: obstacle = 1 but no cup fits in this context's approach corridor; "
+                                     "give obstacle_position")
+                present = False
+        context = Context(context.table_height, context.table_tilt, context.patch_centre, context.patch_size,
+                          context.sponge_start, bool(present), position if present else np.zeros(2))
+        if present and self._misplaced(context, position):
+            raise ValueError(f"options: obstacle_position {position} puts the cup (radius {self.obstacle_radius} m) "
+                             f"off the table top {self.table_extent} or on the dirt patch")
+        return context
+
+    def _check_patch(self, context: Context) -> None:
+        x_lo, x_hi, y_lo, y_hi = self.table_extent
+        low = context.patch_centre - context.patch_size / 2
+        high = context.patch_centre + context.patch_size / 2
+        if low[0] < x_lo - 1e-9 or high[0] > x_hi + 1e-9 or low[1] < y_lo - 1e-9 or high[1] > y_hi + 1e-9:
+            raise ValueError(f"options: the dirt patch [{low}, {high}] (table frame, m) extends beyond the table "
+                             f"top x in [{x_lo}, {x_hi}], y in [{y_lo}, {y_hi}]; dirt lives on the table only")
+
+    def _misplaced(self, context: Context, xy: np.ndarray) -> bool:
+        x_lo, x_hi, y_lo, y_hi = self.table_extent
+        r = self.obstacle_radius
+        off_table = xy[0] - r < x_lo or xy[0] + r > x_hi or xy[1] - r < y_lo or xy[1] + r > y_hi
+        gap = np.maximum(np.abs(xy - context.patch_centre) - context.patch_size / 2, 0.0)
+        on_patch = bool(np.hypot(*gap) < r + PATCH_CLEARANCE)
+        return off_table or on_patch
+
+    def _corridor_point(self, context: Context, draw: np.ndarray) -> np.ndarray | None:
+        start, centre = context.sponge_start[:2], context.patch_centre
+        line = centre - start
+        length = float(np.linalg.norm(line))
+        if length < 1e-6:
+            return None
+        along = line / length
+        across = np.array([-along[1], along[0]])
+        xy = start + (0.35 + 0.25 * draw[0]) * line + (draw[1] - 0.5) * 0.02 * across
+        if self._misplaced(context, xy):
+            return None
+        return xy

@@ -36,7 +36,7 @@ class ForceAdaptationSettings:
 
     target_force: float = 18.0
     enabled: bool = True
-    gain: float = 0.004
+    gain: float = 0.02
     max_rate: float = 0.08
     min_offset: float = -0.06
     max_offset: float = 0.08
@@ -95,10 +95,12 @@ class JointTargetPlan:
         dt: control period (s).
         lead: ``kv / kp`` per joint [n] (s); zeros disable the feed-forward.
         lower, upper: joint limits [n] the targets are clipped to.
+        normal: the surface normal [3] (world) the path was solved for (default +z); the pressing depth
+            acts along it and the wrist force is measured along it.
     """
 
     def __init__(self, solution: IKResult, dt: float, lead: np.ndarray, lower: np.ndarray,
-                 upper: np.ndarray):
+                 upper: np.ndarray, normal: np.ndarray | None = None):
         q = solution.q
         velocity = np.gradient(q, dt, axis=0) if len(q) > 1 else np.zeros_like(q)
         self.path_q = q
@@ -107,6 +109,8 @@ class JointTargetPlan:
         self.normal_dq = solution.normal_dq
         self.lower = np.asarray(lower, dtype=np.float64)
         self.upper = np.asarray(upper, dtype=np.float64)
+        normal = np.array([0.0, 0.0, 1.0]) if normal is None else np.asarray(normal, dtype=np.float64)
+        self.normal = normal / np.linalg.norm(normal)
 
     def __len__(self) -> int:
         return len(self.q)

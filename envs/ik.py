@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from .kinematics import ChainKinematics
 
@@ -61,13 +62,15 @@ class PathIK:
         limit_zone: width (rad) of the band inside each limit from which the null-space task pushes
             joints back towards the interior.
         limit_gain: fraction of the intrusion into that band corrected per iteration.
-        tolerance: after ``min_iterations``, the coarse pass stops when the task errors (m, rad) or the
-            joint updates (rad) of all its points are below this.
+        tolerance: after ``min_iterations``, the coarse pass stops when the position errors (m) or the
+            joint updates (rad) of all its points are below this (and the angle errors below ``rot_tolerance``).
+        rot_tolerance: angle error (rad) below which the coarse pass may stop (1e-3 rad = 0.06 deg).
     """
 
     def __init__(self, kinematics: ChainKinematics, posture: np.ndarray, joint_weights: np.ndarray,
                  damping: float = 0.01, limit_margin: float = 0.01, nullspace_gain: float = 0.1,
-                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4):
+                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4,
+                 rot_tolerance: float = 1e-3):
         n = kinematics.n
         posture = np.asarray(posture, dtype=np.float64)
         joint_weights = np.asarray(joint_weights, dtype=np.float64)
@@ -85,6 +88,7 @@ class PathIK:
         self.damping2 = damping**2
         self.nullspace_gain = nullspace_gain
         self.tolerance = tolerance
+        self.rot_tolerance = rot_tolerance
         self.zone_lower = kinematics.lower + limit_zone
         self.zone_upper = kinematics.upper - limit_zone
         self.limit_gain = limit_gain
@@ -166,17 +170,23 @@ class PathIK:
             q, pos_err, rot_err, _, _, blocked = self._step(q, targets[knots], normal, basis,
                                                             rot_weight[knots], True, blocked)
             if iteration + 1 >= min_iterations and (
-                    (pos_err.max() < self.tolerance and rot_err.max() < self.tolerance)
+                    (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):
                 break
         if len(knots) < count:
             index = np.arange(count)
-            q = np.stack([np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
+            # a cubic spline, not straight lines, through the coarse solution: the joint path has no
+            # velocity kinks at the knots (which showed up as 20 rad/s² spikes in the joint acceleration)
+            q = CubicSpline(knots, q, axis=0)(index) if len(knots) > 2 else np.stack(
+                [np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
+            q = np.clip(q, self.lower, self.upper)
             blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
                                axis=1) > 0.5
+        # The fine pass treats every joint as free (limits still enforced by projection): a "blocked" flag
+        # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
-            q, *_, blocked = self._step(q, targets, normal, basis, rot_weight, True, blocked)
-        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, blocked)
+            q, *_ = self._step(q, targets, normal, basis, rot_weight, True, None)
+        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, None)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])

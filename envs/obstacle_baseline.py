@@ -15,8 +15,8 @@ from rdmp_gym.coupling import ObstacleAvoidance, avoiding_rollout
 __all__ = ["avoiding_path", "run_avoiding"]
 
 
-def avoiding_path(env, obstacle_xy: np.ndarray, gamma: float = 3e5, distance_scale: float = 0.03,
-                  smoothing: float = 0.1, substeps: int = 5) -> np.ndarray:
+def avoiding_path(env, obstacle_xy: np.ndarray, gamma: float = 2e4, distance_scale: float = 0.03,
+                  smoothing: float = 0.0, substeps: int = 5) -> np.ndarray:
     """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of the imitation in the env's current context, steered
     around a point obstacle at ``obstacle_xy [2]`` on the table (m). The DMP is integrated online at
     ``substeps`` times the control rate (as :meth:`ArmarWipeEnv.rollout_path`: anchored at the patch centre,

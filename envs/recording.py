@@ -3,7 +3,8 @@
 Rendering uses ``mujoco.Renderer``. Headless machines need an OpenGL backend chosen *before*
 ``mujoco`` is imported: ``MUJOCO_GL=egl`` (GPU or Mesa llvmpipe, no extra packages) or
 ``MUJOCO_GL=osmesa`` (software, needs libosmesa). The dirt cells are not bodies of the model; they
-are drawn as flat visual-only boxes added to the render scene, brown while dirty and hidden once wiped.
+are drawn as flat visual-only boxes added to the render scene, brown with an opacity equal to the dirt
+left on the cell, and hidden once (almost) clean.
 """
 
 from __future__ import annotations
@@ -52,28 +53,32 @@ class SceneRenderer:
             self._renderer = mujoco.Renderer(self.scene.model, height=self.height, width=self.width)
         return self._renderer
 
-    def render(self, cells_world: np.ndarray | None = None, wiped: np.ndarray | None = None,
+    def render(self, cells_world: np.ndarray | None = None, dirt: np.ndarray | None = None,
                cell_half: float = 0.005, table_rot: np.ndarray | None = None) -> np.ndarray:
-        """Frame of the current state; dirty cells (``cells_world`` [N, 3] not ``wiped`` [N]) drawn on top."""
+        """Frame of the current state; dirt cells (``cells_world`` [N, 3] with ``dirt`` [N] in [0, 1] left,
+        default all dirty) drawn on top."""
         renderer = self._get()
         renderer.update_scene(self.scene.data, camera=self.camera)
         if cells_world is not None and len(cells_world):
-            self._add_dirt(renderer.scene, cells_world, wiped, cell_half, table_rot)
+            self._add_dirt(renderer.scene, cells_world, dirt, cell_half, table_rot)
         return renderer.render().copy()
 
     @staticmethod
-    def _add_dirt(scn: mujoco.MjvScene, cells: np.ndarray, wiped: np.ndarray | None, half: float,
+    def _add_dirt(scn: mujoco.MjvScene, cells: np.ndarray, dirt: np.ndarray | None, half: float,
                   rot: np.ndarray | None) -> None:
         mat = (np.eye(3) if rot is None else rot).ravel()
         size = np.array([half * 0.92, half * 0.92, 0.0008])
         for index, centre in enumerate(cells):
-            if wiped is not None and wiped[index]:
+            level = 1.0 if dirt is None else float(dirt[index])
+            if level < 0.02:
                 continue
             if scn.ngeom >= scn.maxgeom:
                 logger.warning("render scene full: %d dirt cells not drawn", len(cells) - index)
                 break
             pos = centre + mat.reshape(3, 3)[:, 2] * 0.0009
-            mujoco.mjv_initGeom(scn.geoms[scn.ngeom], mujoco.mjtGeom.mjGEOM_BOX, size, pos, mat, _DIRT_RGBA)
+            rgba = _DIRT_RGBA.copy()
+            rgba[3] = min(1.0, level)
+            mujoco.mjv_initGeom(scn.geoms[scn.ngeom], mujoco.mjtGeom.mjGEOM_BOX, size, pos, mat, rgba)
             scn.ngeom += 1
 
     def close(self) -> None:

@@ -36,12 +36,16 @@ ARM_JOINTS = (
 )
 
 _REQUIRED = {
-    mujoco.mjtObj.mjOBJ_BODY: ("table", "hand", "sponge"),
-    mujoco.mjtObj.mjOBJ_GEOM: ("sponge", "table_top"),
+    mujoco.mjtObj.mjOBJ_BODY: ("table", "hand", "sponge", "obstacle"),
+    mujoco.mjtObj.mjOBJ_GEOM: ("sponge", "table_top", "obstacle"),
     mujoco.mjtObj.mjOBJ_SITE: ("ft_site", "sponge_tcp", "tcp"),
-    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch", "sponge_table", "robot_table"),
-    mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide"),
+    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch", "sponge_table", "robot_table",
+                                 "arm_torso", "arm_platform", "arm_obstacle"),
+    mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide", "obstacle_free"),
 }
+
+#: Where a parked (absent) obstacle waits: under the floor, out of sight, weightless, with its collisions off.
+OBSTACLE_PARKING = np.array([0.2, 1.5, -1.0])
 
 
 @dataclass(frozen=True)
@@ -130,6 +134,24 @@ class WipeScene:
         self.sponge_site = idx(mujoco.mjtObj.mjOBJ_SITE, "sponge_tcp")
         self.tcp_site = idx(mujoco.mjtObj.mjOBJ_SITE, "tcp")
         self.slide_qpos = m.jnt_qposadr[idx(mujoco.mjtObj.mjOBJ_JOINT, "sponge_slide")]
+        # The obstacle: a free body (cylinder) placed on the table or parked.
+        self.obstacle_body = idx(mujoco.mjtObj.mjOBJ_BODY, "obstacle")
+        self.obstacle_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "obstacle")
+        free = idx(mujoco.mjtObj.mjOBJ_JOINT, "obstacle_free")
+        if (m.jnt_type[free] != mujoco.mjtJoint.mjJNT_FREE
+                or m.geom_type[self.obstacle_geom] != mujoco.mjtGeom.mjGEOM_CYLINDER):
+            raise ValueError("xml_file: 'obstacle_free' must be a free joint and geom 'obstacle' a cylinder")
+        self.obstacle_qpos = int(m.jnt_qposadr[free])
+        self.obstacle_dof = int(m.jnt_dofadr[free])
+        self.obstacle_radius = float(m.geom_size[self.obstacle_geom, 0])
+        self.obstacle_half_height = float(m.geom_size[self.obstacle_geom, 1])
+        self._obstacle_collision = (int(m.geom_contype[self.obstacle_geom]),
+                                    int(m.geom_conaffinity[self.obstacle_geom]))
+        self.obstacle_xy: np.ndarray | None = None
+        # The table top as a rectangle in the table frame: (x_low, x_high, y_low, y_high) (m).
+        top = m.geom_pos[self.table_geom], m.geom_size[self.table_geom]
+        self.table_extent = (float(top[0][0] - top[1][0]), float(top[0][0] + top[1][0]),
+                             float(top[0][1] - top[1][1]), float(top[0][1] + top[1][1]))
         sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_force")
         self.force_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
         sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_torque")
@@ -139,6 +161,10 @@ class WipeScene:
         # world frame) and robot-subtree-table (found).
         self.sponge_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")])
         self.robot_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "robot_table")])
+        # arm-body self-contact (found, min distance) x 2 and arm-obstacle contact (found)
+        self.self_contact_adr = tuple(int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, n)])
+                                      for n in ("arm_torso", "arm_platform"))
+        self.obstacle_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "arm_obstacle")])
         if m.sensor_dim[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")] != 4:
             raise ValueError("xml_file: sensor 'sponge_table' must be a contact sensor with data=\"found force\" "
                              "and reduce=\"netforce\"")
@@ -176,6 +202,40 @@ class WipeScene:
         self.model.body_quat[self.table_body] = quat
         self.table_pose = pose
 
+    def place_obstacle(self, xy: np.ndarray | None) -> None:
+        """Stand the obstacle upright on the actual table at table-frame ``xy`` [2] (m), or park it out of
+        the scene (weightless, no collisions) with ``None``. Takes effect at the next :meth:`set_arm_state`."""
+        m = self.model
+        if xy is None:
+            m.body_gravcomp[self.obstacle_body] = 1.0
+            m.geom_contype[self.obstacle_geom] = 0
+            m.geom_conaffinity[self.obstacle_geom] = 0
+            self.obstacle_xy = None
+            return
+        m.body_gravcomp[self.obstacle_body] = 0.0
+        m.geom_contype[self.obstacle_geom], m.geom_conaffinity[self.obstacle_geom] = self._obstacle_collision
+        self.obstacle_xy = np.asarray(xy, dtype=np.float64).copy()
+
+    def _obstacle_pose(self) -> np.ndarray:
+        """qpos [7] of the obstacle: standing on the actual table at ``obstacle_xy``, or parked."""
+        if self.obstacle_xy is None:
+            return np.r_[OBSTACLE_PARKING, 1.0, 0.0, 0.0, 0.0]
+        origin, rot = self.table_frame(actual=True)
+        centre = origin + rot @ np.r_[self.obstacle_xy, self.obstacle_half_height + 1e-4]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, rot.ravel())
+        return np.r_[centre, quat]
+
+    def obstacle_position(self) -> np.ndarray:
+        """Current world position of the obstacle's centre, [3]."""
+        return self.data.qpos[self.obstacle_qpos:self.obstacle_qpos + 3].copy()
+
+    def control_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        """(origin [3], rotation [3, 3]) of the frame the controller plans in: the nominal table origin
+        (the height offset is unknown to the controller and found by the force adaptation) with the
+        actual table orientation (the tilt is in the context, so the sponge follows the actual normal)."""
+        return self.nominal_table_pos.copy(), self.table_frame(actual=True)[1]
+
     def table_frame(self, actual: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(origin [3], rotation [3, 3]) of the actual (or nominal) table frame in the world."""
         if not actual:
@@ -185,8 +245,9 @@ class WipeScene:
         return origin, self.nominal_table_rot @ rotation_from_tilt(p.tilt_x, p.tilt_y)
 
     def to_world(self, points: np.ndarray, actual: bool = False) -> np.ndarray:
-        """Table-frame points [..., 3] to world points [..., 3] (nominal frame unless ``actual``)."""
-        origin, rot = self.table_frame(actual)
+        """Table-frame points [..., 3] to world points [..., 3] in the control frame (:meth:`control_frame`),
+        or the actual table frame with ``actual``."""
+        origin, rot = self.table_frame(True) if actual else self.control_frame()
         return np.asarray(points, dtype=np.float64) @ rot.T + origin
 
     def arm_qpos(self) -> np.ndarray:
@@ -197,6 +258,7 @@ class WipeScene:
         """Reset the simulation to rest at joint positions ``q`` [10] with matching servo targets."""
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[self.qpos_adr] = q
+        self.data.qpos[self.obstacle_qpos:self.obstacle_qpos + 7] = self._obstacle_pose()
         self.data.ctrl[self.actuator_ids] = q
         mujoco.mj_forward(self.model, self.data)
 

@@ -1,16 +1,20 @@
-"""``rdmp_gym/ArmarWipe-v0``: episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+"""``rdmp_gym/ArmarWipe-v1``: episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
 1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a``;
 2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
-   the sponge path ``P [T, 3]`` in the nominal table frame (x, y on the table, z above it);
-3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat, joint
-   speeds): an invalid one returns a graded penalty at once, ``info["valid"] = False``;
+   the sponge path ``P [T, 3]`` in the table frame (x, y on the table, z above it);
+3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat on the
+   tilted table, joint speeds): an invalid one returns a graded penalty at once, ``info["valid"] = False``;
 4. otherwise MuJoCo simulates it at the control rate with differential-IK joint targets and online
-   wrist-force adaptation of the pressing depth (the table may be higher, lower or tilted);
+   wrist-force adaptation of the pressing depth along the actual table normal (the table height is
+   unknown to the controller; its tilt is known from the context); a cup may stand in the approach;
 5. the reward sums the terms of :mod:`rdmp_gym.envs.reward`, all in ``info["reward_terms"]``, and
-   ``info["cost_trace"]`` gives the per-control-step cost for PI².
+   ``info["cost_trace"]`` gives the per-control-step cost for PI² (it sums to ``-reward``;
+   ``info["cost_terms"]`` splits it by term);
+   ``info["is_success"]``: coverage >= 0.95, force in band >= 90 % of the wiping phase, no collision
+   (arm on the table, arm on the robot's body), the cup neither touched nor moved, a valid episode.
 
 Rendering: ``render_mode="rgb_array"`` renders offscreen with ``mujoco.Renderer``; on a headless
 machine set ``MUJOCO_GL=egl`` (or ``osmesa``) before importing mujoco. Because an episode is a single
@@ -20,7 +24,8 @@ step, :meth:`ArmarWipeEnv.record_episode` (or ``record_frames=True``) captures f
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Mapping
+import warnings
+from collections.abc import Callable, Iterable, Mapping
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, ClassVar
@@ -40,17 +45,21 @@ from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .ik import IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
-from .reward import RewardSettings, RewardWeights, invalid_reward, wipe_reward
+from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
 from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
-from .wiping import DirtCells, WipeTrace, simulate_wipe
+from .wiping import DirtField, WipeTrace, simulate_wipe
 
-__all__ = ["ArmarWipeEnv"]
+__all__ = ["ArmarWipeEnv", "deprecated_v0"]
 
 logger = logging.getLogger(__name__)
 
 #: Path bounds in the nominal table frame (m): beyond them a path is invalid without simulation.
 WORKSPACE_LOW = np.array([-0.35, -0.40, -0.05])
 WORKSPACE_HIGH = np.array([0.35, 0.40, 0.30])
+#: ``info["is_success"]`` thresholds: coverage, force-in-band fraction, obstacle displacement (m).
+SUCCESS_COVERAGE = 0.95
+SUCCESS_FORCE_IN_BAND = 0.9
+SUCCESS_OBSTACLE_SHIFT = 0.005
 
 
 @lru_cache(maxsize=16)
@@ -83,7 +92,12 @@ class ArmarWipeEnv(gym.Env):
             forward on the next periods (Gams et al. 2010; :mod:`rdmp_gym.envs.force_learning`); ``True`` or a
             ``ForceProfileSettings``.
         context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.context`).
+        obstacle: contexts may put a cup in the approach corridor (``False``: never).
+        obstacle_probability: share of drawn contexts with a cup (where one fits).
         cell_size: dirt cell side (m).
+        wear_rate: Preston coefficient of the dirt (1/(Pa m); see :mod:`rdmp_gym.envs.wiping`).
+        penetration_limit: penetration (m) of a robot geom into the robot's body or (other than the
+            sponge) into the table beyond which the episode is invalid (reason ``"penetration"``).
         limit_margin: distance to a joint limit (rad) that counts as "at the limit".
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
         max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid.
@@ -114,10 +128,14 @@ class ArmarWipeEnv(gym.Env):
         force_sigma: float = 6.0,
         reward_weights: Mapping[str, float] | None = None,
         adaptation: bool = True,
-        admittance_gain: float = 0.004,
+        admittance_gain: float = 0.02,
         force_learning: bool | ForceProfileSettings = False,
         context_ranges: Mapping[str, tuple] | None = None,
+        obstacle: bool = True,
+        obstacle_probability: float = 0.75,
         cell_size: float = 0.01,
+        wear_rate: float = 2.0e-3,
+        penetration_limit: float = 0.005,
         limit_margin: float = 0.02,
         ik_tolerance: tuple[float, float] = (0.005, float(np.deg2rad(5.0))),
         max_joint_speed: float = 3.0,
@@ -168,6 +186,9 @@ class ArmarWipeEnv(gym.Env):
             self.frame_skip = int(frame_skip)
         else:
             rate = check_positive(control_rate, "control_rate")
+            if rate * model.opt.timestep > 1.0 + 1e-9:
+                raise ValueError(f"control_rate: expected at most the physics rate {1.0 / model.opt.timestep:g} Hz "
+                                 f"(1 / timestep), got {control_rate!r}")
             self.frame_skip = max(1, round(1.0 / (rate * model.opt.timestep)))
         self.dt = self.frame_skip * model.opt.timestep
         self.control_rate = 1.0 / self.dt
@@ -204,7 +225,14 @@ class ArmarWipeEnv(gym.Env):
             raise ValueError("ik_tolerance: expected (position m, angle rad)")
         self.ik_tolerance = tuple(check_positive(value, "ik_tolerance") for value in ik_tolerance)
         self.max_joint_speed = check_positive(max_joint_speed, "max_joint_speed")
-        self.context_spec = ContextSpec(context_ranges)
+        self.wear_rate = check_positive(wear_rate, "wear_rate")
+        self.penetration_limit = check_positive(penetration_limit, "penetration_limit")
+        if not isinstance(obstacle, (bool, np.bool_)):
+            raise ValueError(f"obstacle: expected True or False, got {obstacle!r}")
+        self.obstacle = bool(obstacle)
+        self.context_spec = ContextSpec(context_ranges, table_extent=self.scene.table_extent, obstacle=self.obstacle,
+                                        obstacle_probability=float(obstacle_probability),
+                                        obstacle_radius=self.scene.obstacle_radius)
 
         kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS)
         self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY)
@@ -227,11 +255,14 @@ class ArmarWipeEnv(gym.Env):
         if render_mode is not None or record_frames:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.record_frames = bool(record_frames)
+        #: record the sponge-table force at every physics step into ``info["fine_force_trace"]``
+        self.fine_force = False
         self.frames: list[np.ndarray] = []
 
         self.context: Context | None = None
         self._cells_world = np.zeros((0, 3))
-        self._wiped = np.zeros(0, dtype=bool)
+        self._dirt = np.zeros(0)
+        self._imitation_jerk: float | None = None
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
@@ -268,10 +299,12 @@ class ArmarWipeEnv(gym.Env):
         context = self.context_spec.sample(self.np_random, options)
         self.context = context
         self.scene.set_table(TablePose(context.table_height, *context.table_tilt))
+        self.scene.place_obstacle(context.obstacle_position if context.obstacle else None)
         cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
         origin, rot = self.scene.table_frame(actual=True)
         self._cells_world = np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
-        self._wiped = np.zeros(len(cells), dtype=bool)
+        self._dirt = np.ones(len(cells))
+        self._imitation_jerk = None
         start = self._solve(context.sponge_start[None])
         self.scene.set_arm_state(start.q[0])
         self.frames = []
@@ -340,9 +373,18 @@ class ArmarWipeEnv(gym.Env):
         return self._evaluate(None, path)
 
     def _solve(self, path: np.ndarray) -> IKResult:
-        world = self.scene.to_world(path, actual=False)
+        world = self.scene.to_world(path)
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
-        return self.ik.solve(world, self.scene.nominal_normal, rot_weight=weight)
+        return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
+
+    def _smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
+        """Jerk of the commanded path relative to the imitation's in this context, and joint accelerations."""
+        jerk_sq = Smoothness.jerk_squared(path, self.dt)
+        if self._imitation_jerk is None:
+            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.rollout_path(self.action_map.theta0),
+                                                                        self.dt)))
+        ratio = float(np.sum(jerk_sq)) / max(self._imitation_jerk, 1e-12)
+        return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
 
     def _evaluate(self, theta: np.ndarray | None, path: np.ndarray | None = None) -> tuple[float, dict]:
         info: dict[str, Any] = {"params": None if theta is None else theta.copy()}
@@ -367,58 +409,86 @@ class ArmarWipeEnv(gym.Env):
         if speed > self.max_joint_speed:
             return self._invalid(info, "joint_speed", speed / self.max_joint_speed - 1.0)
 
-        plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper)
+        smooth = self._smoothness(path, solution.q)
+        normal = self.scene.control_frame()[1][:, 2]
+        plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper, normal)
         self.scene.set_arm_state(solution.q[0])
         adaptation = (ForceAdaptation(self.adaptation_settings, self.dt) if self.force_learning is None
                       else ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period,
                                                 self.dmp.transients[0].phi0, self.force_learning))
-        dirt = DirtCells(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], self.force_band)
+        dirt = DirtField(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
+                         contact_threshold=self.reward_settings.contact_threshold)
         callback = self._capture if self.record_frames else None
-        self._wiped = np.zeros(len(self._cells_world), dtype=bool)
+        self._dirt = np.ones(len(self._cells_world))
         if callback is not None:
             self.frames.append(self._frame())
         trace = simulate_wipe(self.scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
-                              limit_margin=self.limit_margin, callback=callback)
-        self._wiped = trace.wiped
-        terms, cost = wipe_reward(trace, self.periodic, len(self._cells_world), self.reward_settings,
-                                  self.reward_weights)
-        info.update(self._statistics(trace))
+                              limit_margin=self.limit_margin, callback=callback, fine_force=self.fine_force)
+        self._dirt = trace.dirt
+        info.update(self._statistics(trace, smooth))
+        traces: dict[str, np.ndarray] = {}
+        info["cost_terms"] = traces
+        if trace.penetration > self.penetration_limit:
+            logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, self.penetration_limit)
+            terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights, traces)
+            return self._finish(info, terms, cost, valid=False, reason="penetration", unstable=trace.unstable)
+        terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
 
-    def _statistics(self, trace: WipeTrace) -> dict[str, Any]:
+    def _statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
         live = np.arange(self.n_steps) < trace.steps
         per = self.periodic & live
         force = trace.contact_force[per]
         low, high = self.force_band
         target = self.reward_settings.target_force
-        return {
-            "coverage": float(np.mean(trace.wiped)) if trace.wiped.size else 0.0,
+        stats = {
+            "coverage": trace.coverage,
             "force_mean": float(force.mean()) if force.size else 0.0,
+            "force_sd": float(force.std()) if force.size else 0.0,
             "force_error_mean": float(np.mean(np.abs(force - target))) if force.size else 0.0,
             "force_in_band_fraction": float(np.mean((force >= low) & (force <= high))) if force.size else 0.0,
             "contact_fraction": float(np.mean(force >= self.reward_settings.contact_threshold)) if force.size else 0.0,
             "max_force": float(trace.contact_force[live].max()),
             "max_wrist_force": float(np.abs(trace.wrist_force[live]).max()),
+            "impact_force": trace.impact_force,
+            "jerk_ratio": smooth.jerk_ratio,
+            "peak_joint_accel": float(smooth.joint_accel.max()),
             "arm_collision_fraction": float(np.mean(trace.arm_contact[live])),
+            "self_collision_fraction": float(np.mean(trace.self_contact[live])),
+            "penetration": trace.penetration,
+            "obstacle_touch_steps": int(np.sum(trace.obstacle_contact)),
+            "obstacle_shift": float(trace.obstacle_shift.max()),
             "joint_limit_fraction": float(np.mean(trace.at_limit[live])),
             "steps": int(trace.steps),
             "force_trace": trace.contact_force.copy(),
+            "dirt_removed_trace": trace.removed.copy(),
         }
+        if trace.fine_force is not None:
+            stats["fine_force_trace"] = trace.fine_force.copy()
+        return stats
 
     def _invalid(self, info: dict, reason: str, severity: float) -> tuple[float, dict]:
-        terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights)
-        info.update({"coverage": 0.0, "force_mean": 0.0, "force_error_mean": 0.0, "force_in_band_fraction": 0.0,
-                     "contact_fraction": 0.0, "max_force": 0.0, "max_wrist_force": 0.0,
-                     "arm_collision_fraction": 0.0, "joint_limit_fraction": 0.0, "steps": 0,
-                     "force_trace": np.zeros(self.n_steps)})
+        traces: dict[str, np.ndarray] = {}
+        info["cost_terms"] = traces
+        terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights, traces)
+        info.update({"coverage": 0.0, "force_mean": 0.0, "force_sd": 0.0, "force_error_mean": 0.0,
+                     "force_in_band_fraction": 0.0, "contact_fraction": 0.0, "max_force": 0.0, "max_wrist_force": 0.0,
+                     "impact_force": 0.0, "jerk_ratio": float("nan"), "peak_joint_accel": float("nan"),
+                     "arm_collision_fraction": 0.0, "self_collision_fraction": 0.0, "penetration": 0.0,
+                     "obstacle_touch_steps": 0, "obstacle_shift": 0.0, "joint_limit_fraction": 0.0, "steps": 0,
+                     "force_trace": np.zeros(self.n_steps), "dirt_removed_trace": np.zeros(self.n_steps)})
         logger.debug("invalid parameters (%s, severity %.3g)", reason, severity)
         return self._finish(info, terms, cost, valid=False, reason=reason, unstable=False)
 
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool) -> tuple[float, dict]:
         reward = sum(terms.values())
+        success = (valid and not unstable and info["coverage"] >= SUCCESS_COVERAGE
+                   and info["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
+                   and info["arm_collision_fraction"] == 0.0 and info["self_collision_fraction"] == 0.0
+                   and info["obstacle_touch_steps"] == 0 and info["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
-                     "unstable": unstable, "n_cells": len(self._cells_world)})
+                     "unstable": unstable, "is_success": bool(success), "n_cells": len(self._cells_world)})
         return float(reward), info
 
     # ------------------------------------------------------------------ helpers
@@ -426,13 +496,26 @@ class ArmarWipeEnv(gym.Env):
         assert self.context is not None
         return self.context.vector().astype(np.float32)
 
-    def _frame(self, wiped: np.ndarray | None = None) -> np.ndarray:
+    def _frame(self, dirt: np.ndarray | None = None) -> np.ndarray:
         if self._renderer is None:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         _, rot = self.scene.table_frame(actual=True)
-        return self._renderer.render(self._cells_world, self._wiped if wiped is None else wiped,
+        return self._renderer.render(self._cells_world, self._dirt if dirt is None else dirt,
                                      0.5 * self.cell_size, rot)
 
-    def _capture(self, k: int, wiped: np.ndarray) -> None:
+    def _capture(self, k: int, dirt_left: Callable[[], np.ndarray]) -> None:
         if (k + 1) % self.frame_stride == 0:
-            self.frames.append(self._frame(wiped))
+            self.frames.append(self._frame(dirt_left()))
+
+
+def deprecated_v0(**kwargs: Any) -> ArmarWipeEnv:
+    """Entry point of the deprecated ``rdmp_gym/ArmarWipe-v0``: warns and makes v1 without the obstacle.
+
+    v0's reward counted dirt beyond the table edge, touching as wiping and let the arm pass through the
+    robot; v1 (:class:`ArmarWipeEnv`) fixes all of it and changes the reward's meaning, hence the new version.
+    """
+    warnings.warn("rdmp_gym/ArmarWipe-v0 is deprecated and will be removed: its reward could be gamed. It now "
+                  "makes rdmp_gym/ArmarWipe-v1 with obstacle=False; use rdmp_gym/ArmarWipe-v1.",
+                  DeprecationWarning, stacklevel=2)
+    kwargs.setdefault("obstacle", False)
+    return ArmarWipeEnv(**kwargs)

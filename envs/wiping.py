@@ -1,17 +1,23 @@
-"""Simulate the sponge along a joint-target plan: contact forces, wiped dirt cells, collisions.
+"""Simulate the sponge along a joint-target plan: contact forces, dirt wear, collisions, the obstacle.
 
 One call runs a whole wiping episode in MuJoCo at the control rate (``frame_skip`` physics steps per
-control step). The loop itself does only what must happen online: the wrist-force adaptation of the
-pressing depth, the servo targets, the physics, and a copy of the per-step measurements. Everything
-else is evaluated afterwards, vectorised over the episode, with the same per-step criteria:
+control step). The loop does only what must happen online: the wrist-force adaptation of the pressing
+depth, the servo targets, the physics and a copy of the per-step measurements. For 0.2 s after the
+first sponge contact it steps the physics one step at a time to catch the touchdown's peak force (the
+impact). Everything else is evaluated afterwards, vectorised over the episode:
 
 - the sponge–table normal force is the net force of MuJoCo's sponge–table contacts (the model's
   ``sponge_table`` contact sensor, i.e. ``mj_contactForce`` summed over exactly those contacts in C),
   projected on the actual table normal; :func:`contact_summary` recomputes it from ``data.contact``;
-- an arm collision is any contact between a robot geom other than the sponge and the table
-  (``robot_table`` sensor count minus the sponge's);
-- a dirt cell is wiped at the first control step at which the sponge–table force lies in the band
-  while the cell is under the sponge's footprint (:func:`cells_under_sponge`).
+- dirt wears by a Preston-type law (:class:`DirtField`): at a control step with sponge–table force F,
+  every dirt cell under the sponge face loses ``wear_rate * p * s`` of its (unit) dirt, where
+  ``p = F / face area`` is the contact pressure and ``s`` the distance the face slid over the table
+  since the previous step. Standing still (``s = 0``) or hovering (``F = 0``) removes nothing; the
+  coverage is the fraction of the dirt removed;
+- an arm collision is a contact of a robot geom other than the sponge with the table; a self-collision
+  a contact of the moving arm (upper arm to sponge) with the torso, head or platform (sensors
+  ``arm_torso``, ``arm_platform``); for both the deepest penetration is recorded;
+- the obstacle: whether the arm touches it (sensor ``arm_obstacle``) and how far it has moved.
 """
 
 from __future__ import annotations
@@ -25,40 +31,76 @@ import numpy as np
 from .controller import ForceAdaptation, JointTargetPlan
 from .scene import WipeScene
 
-__all__ = ["DirtCells", "WipeTrace", "cells_under_sponge", "contact_summary", "simulate_wipe"]
+__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "cells_under_sponge", "contact_summary", "simulate_wipe"]
+
+#: Time after the first sponge contact (s) in which the peak normal force is the impact.
+IMPACT_WINDOW = 0.2
 
 
 @dataclass(frozen=True)
-class DirtCells:
-    """Dirt cells on the actual table.
+class DirtField:
+    """Dirt cells on the actual table and their wear law.
 
     Attributes:
         world: cell centres on the table surface in the world frame, [N, 3].
         normal: the actual table normal in the world frame, [3].
-        force_band: (min, max) sponge–table normal force (N) that wipes.
+        wear_rate: Preston coefficient (1 / (Pa m)): dirt removed per cell per pascal of contact pressure
+            per metre slid (a cell holds 1 unit of dirt).
+        contact_threshold: a sponge–table force below this (N) wears nothing.
         depth_tolerance: a cell counts as under the sponge only if the sponge face is within this
             distance (m) of it along the face normal (a tilted sponge touches with one edge only).
     """
 
     world: np.ndarray
     normal: np.ndarray
-    force_band: tuple[float, float] = (5.0, 60.0)
+    wear_rate: float = 2.0e-3
+    contact_threshold: float = 1.0
     depth_tolerance: float = 0.003
+
+    def wear(self, force: np.ndarray, slide: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
+             half: np.ndarray) -> np.ndarray:
+        """Cumulative wear ``[K, N]`` after each of ``K`` control steps (dirt left = ``max(0, 1 - wear)``).
+
+        Args:
+            force: sponge–table normal force per step, [K] (N).
+            slide: distance the sponge face slid along the table in each step, [K] (m).
+            box_pos, box_rot: sponge box pose per step, [K, 3] and [K, 9].
+            half: sponge box half sizes [3] (the face is the -x side, area ``4 half[1] half[2]``).
+        """
+        count = len(force)
+        pressure = np.where(force >= self.contact_threshold, force, 0.0) / (4.0 * half[1] * half[2])
+        dose = self.wear_rate * pressure * slide                      # [K]: dirt removed under the face
+        wear = np.zeros((count, len(self.world)))
+        rows = np.flatnonzero(dose > 0)
+        chunk = max(1, 200_000 // max(1, len(self.world)))
+        for start in range(0, rows.size, chunk):
+            part = rows[start:start + chunk]
+            under = cells_under_sponge(self.world, box_pos[part], box_rot[part], half, self.depth_tolerance)
+            wear[part] = under * dose[part, None]
+        return np.cumsum(wear, axis=0)
 
 
 @dataclass
 class WipeTrace:
-    """Per-control-step record of a simulated wipe (``T`` control steps, ``N`` cells).
+    """Per-control-step record of a simulated wipe (``T`` control steps, ``N`` dirt cells).
 
     Attributes:
         contact_force: normal force of the sponge–table contacts, [T] (N).
-        wrist_force: bias-corrected wrist force along the nominal table normal, + = pressing, [T] (N).
+        wrist_force: bias-corrected wrist force along the control normal, + = pressing, [T] (N).
         depth: commanded pressing depth (preload + adapted offset), [T] (m).
-        new_cells: number of cells first wiped at each step, [T].
+        removed: fraction of all the dirt removed in each step, [T] (sums to the coverage).
+        dirt: dirt left per cell at the end, [N] in [0, 1].
         arm_contact: a robot geom other than the sponge touches the table, [T].
+        self_contact: the moving arm touches the robot's torso, head or platform, [T].
+        obstacle_contact: the arm (upper arm to sponge) touches the obstacle, [T].
+        obstacle_shift: distance of the obstacle's centre from where it stood, [T] (m; 0 without one).
         at_limit: a controlled joint is within the margin of a limit, [T].
-        sponge_pos: sponge face centre (uncompressed, on the hand), [T, 3] (world).
-        wiped: final wiped mask, [N].
+        sponge_pos: sponge face centre (on the hand), [T, 3] (world).
+        penetration: deepest penetration of a robot geom into the robot's body or (other than the
+            sponge) into the table, over the episode (m, >= 0).
+        impact_force: peak sponge–table force within :data:`IMPACT_WINDOW` of the first contact (N).
+        impact_step: the control step of that peak (-1 without contact).
+        fine_force: sponge–table force at every physics step, [T * frame_skip] (only when asked for).
         steps: number of valid control steps (``T`` unless unstable).
         unstable: the simulation diverged (NaN, MuJoCo's reset on bad accelerations, or a force above
             the limit) at step ``steps - 1``; later entries are zero.
@@ -67,13 +109,25 @@ class WipeTrace:
     contact_force: np.ndarray
     wrist_force: np.ndarray
     depth: np.ndarray
-    new_cells: np.ndarray
+    removed: np.ndarray
+    dirt: np.ndarray
     arm_contact: np.ndarray
+    self_contact: np.ndarray
+    obstacle_contact: np.ndarray
+    obstacle_shift: np.ndarray
     at_limit: np.ndarray
     sponge_pos: np.ndarray
-    wiped: np.ndarray
+    penetration: float
+    impact_force: float
+    impact_step: int
+    fine_force: np.ndarray | None
     steps: int
     unstable: bool
+
+    @property
+    def coverage(self) -> float:
+        """Fraction of the dirt removed."""
+        return float(1.0 - self.dirt.mean()) if self.dirt.size else 0.0
 
 
 def cells_under_sponge(cells: np.ndarray, pos: np.ndarray, rot: np.ndarray, half: np.ndarray,
@@ -86,11 +140,9 @@ def cells_under_sponge(cells: np.ndarray, pos: np.ndarray, rot: np.ndarray, half
         half: the sponge box half sizes [3]; the face is the box side at -x.
         tolerance: how far (m) beyond the face plane a cell may lie and still count.
     """
-    k = len(pos)
-    rot = rot.reshape(k, 3, 3)
-    # local[k, n, :] = R_k^T (c_n - p_k): one gemm for all poses
-    local = (cells @ rot.transpose(1, 0, 2).reshape(3, 3 * k)).reshape(len(cells), k, 3).transpose(1, 0, 2)
-    local = local - np.einsum("kj,kji->ki", pos, rot)[:, None, :]
+    rot = rot.reshape(len(pos), 3, 3)
+    # local[k, n, :] = R_k^T (c_n - p_k), as row vectors: c_n R_k - p_k R_k (one batched matmul)
+    local = np.matmul(cells[None], rot) - np.matmul(pos[:, None, :], rot)
     return ((np.abs(local[..., 1]) <= half[1]) & (np.abs(local[..., 2]) <= half[2])
             & (local[..., 0] >= -half[0] - tolerance))
 
@@ -115,30 +167,44 @@ def contact_summary(scene: WipeScene, normal: np.ndarray) -> tuple[float, bool]:
     return total, arm
 
 
+def _arm_table_penetration(scene: WipeScene) -> float:
+    """Deepest penetration (m, >= 0) of a robot geom other than the sponge into the table, now."""
+    d = scene.data
+    deepest = 0.0
+    for i in range(d.ncon):
+        contact = d.contact[i]
+        g1, g2 = int(contact.geom1), int(contact.geom2)
+        if scene.table_geom in (g1, g2) and (scene.is_arm_geom[g1] or scene.is_arm_geom[g2]):
+            deepest = max(deepest, -float(contact.dist))
+    return deepest
+
+
 def simulate_wipe(
     scene: WipeScene,
     plan: JointTargetPlan,
     path_height: np.ndarray,
     adaptation: ForceAdaptation,
-    dirt: DirtCells,
+    dirt: DirtField,
     frame_skip: int,
     limit_margin: float = 0.02,
     max_force: float = 2000.0,
-    callback: Callable[[int, np.ndarray], None] | None = None,
+    callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None,
+    fine_force: bool = False,
 ) -> WipeTrace:
     """Run the plan from the current simulation state.
 
     Args:
-        scene: the scene, already reset to rest at ``plan.q[0]`` with the table in place.
-        plan: joint targets per control step ([T] steps).
+        scene: the scene, already reset to rest at ``plan.q[0]`` with the table and obstacle in place.
+        plan: joint targets per control step ([T] steps) and the control normal.
         path_height: commanded sponge height above the nominal surface per control step, [T] (m).
         adaptation: the force controller (reset here).
-        dirt: the dirt cells, the table normal and the wiping force band.
+        dirt: the dirt cells, the table normal and the wear law.
         frame_skip: physics steps per control step.
         limit_margin: distance to a joint limit (rad) counted as "at the limit".
         max_force: any wrist or contact force above this (N) counts as a diverged simulation.
-        callback: called as ``callback(k, wiped)`` after control step ``k`` with the wiped mask ``[N]``
-            so far (e.g. to grab video frames); it costs a coverage evaluation per step.
+        callback: called as ``callback(k, dirt_left)`` after control step ``k``; ``dirt_left()`` returns the
+            dirt left per cell ``[N]`` so far (e.g. to grab video frames; each call costs a wear evaluation).
+        fine_force: also record the sponge–table force at every physics step (``trace.fine_force``).
     """
     m, d = scene.model, scene.data
     count = len(plan)
@@ -154,7 +220,7 @@ def simulate_wipe(
         ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
     adaptation.reset()
     update = adaptation.update
-    normal = scene.nominal_normal
+    normal = plan.normal
     table_normal = np.asarray(dirt.normal, dtype=np.float64)
     ft_rot = d.site_xmat[scene.ft_site]
     sensordata = d.sensordata
@@ -162,48 +228,73 @@ def simulate_wipe(
     bias_n = float(scene.wrist_force_world() @ normal)
     contact_rows = slice(scene.sponge_contact_adr, scene.sponge_contact_adr + 4)
     robot_adr = scene.robot_contact_adr
+    torso_adr, platform_adr = scene.self_contact_adr
+    obstacle_adr = scene.obstacle_contact_adr
+    obstacle_qpos = slice(scene.obstacle_qpos, scene.obstacle_qpos + 3)
     qpos_adr: slice | np.ndarray = scene.qpos_adr
     if np.array_equal(qpos_adr, np.arange(qpos_adr[0], qpos_adr[0] + len(qpos_adr))):
         qpos_adr = slice(int(qpos_adr[0]), int(qpos_adr[0]) + len(scene.qpos_adr))
-    # wrist force along the normal: n . (R f); with n a world axis that is one row of R
-    axis = int(np.argmax(np.abs(normal)))
-    row = slice(3 * axis, 3 * axis + 3) if abs(normal[axis]) == 1.0 else None
-    sign = float(normal[axis])
     geom_xpos, geom_xmat = d.geom_xpos[scene.sponge_geom], d.geom_xmat[scene.sponge_geom]
     site_xpos = d.site_xpos[scene.sponge_site]
     half = scene.sponge_half
-    f_lo, f_hi = dirt.force_band
-    cells = dirt.world
+    tn0, tn1, tn2 = (float(x) for x in table_normal)
+    fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
 
     contact = np.zeros((count, 4))        # found, net force (world)
     robot_found = np.zeros(count)
+    self_found = np.zeros(count, dtype=bool)
+    obstacle_found = np.zeros(count, dtype=bool)
+    obstacle_pos = np.zeros((count, 3))
     wrist_force = np.zeros(count)
     depth_trace = np.zeros(count)
     joint_pos = np.zeros((count, len(scene.qpos_adr)))
     sponge_pos = np.zeros((count, 3))
     box_pos = np.zeros((count, 3))
     box_rot = np.zeros((count, 9))
-    live_wiped = np.zeros(len(cells), dtype=bool)
+    peak = np.zeros(count)                # per-step peak force while stepping one physics step at a time
+    fine = np.zeros(count * frame_skip) if fine_force else None
+    obstacle_start = d.qpos[obstacle_qpos].copy()
     q_all, ndq = plan.q, plan.normal_dq
     step = mujoco.mj_step
     measured = 0.0
     steps = count
+    penetration = 0.0
+    first_contact = -1
     # MuJoCo resets the data (time back to 0) when accelerations blow up: time that fails to advance
     # signals divergence, as do NaN and excessive wrist forces.
     last_time = d.time
+    a = contact_rows.start
 
     for k in range(count):
         depth = update(measured, path_height[k])
         d.ctrl[ctrl_index] = q_all[k] - depth * ndq[k]
-        step(m, d, frame_skip)
-        if row is not None:
-            measured = bias_n - sign * float(ft_rot[row] @ sensordata[force_adr])
+        if fine is not None or (first_contact >= 0 and k < first_contact + fine_window):
+            top = 0.0
+            for i in range(frame_skip):
+                step(m, d)
+                force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
+                top = max(top, force)
+                if fine is not None:
+                    fine[k * frame_skip + i] = force
+            peak[k] = top
         else:
-            measured = bias_n - float(normal @ (ft_rot.reshape(3, 3) @ sensordata[force_adr]))
+            step(m, d, frame_skip)
+        if first_contact < 0 and sensordata[a] > 0:
+            first_contact = k
+        measured = bias_n - float(normal @ (ft_rot.reshape(3, 3) @ sensordata[force_adr]))
         wrist_force[k] = measured
         depth_trace[k] = depth
         contact[k] = sensordata[contact_rows]
         robot_found[k] = sensordata[robot_adr]
+        if sensordata[torso_adr] > 0 or sensordata[platform_adr] > 0:
+            self_found[k] = True
+            for adr in (torso_adr, platform_adr):
+                if sensordata[adr] > 0:
+                    penetration = max(penetration, -float(sensordata[adr + 1]))
+        if robot_found[k] - contact[k, 0] > 0.5:
+            penetration = max(penetration, _arm_table_penetration(scene))
+        obstacle_found[k] = sensordata[obstacle_adr] > 0
+        obstacle_pos[k] = d.qpos[obstacle_qpos]
         joint_pos[k] = d.qpos[qpos_adr]
         sponge_pos[k] = site_xpos
         box_pos[k] = geom_xpos
@@ -214,11 +305,7 @@ def simulate_wipe(
             break
         last_time = now
         if callback is not None:
-            force = abs(float(contact[k, 1:] @ table_normal))
-            if f_lo <= force <= f_hi:
-                live_wiped |= cells_under_sponge(cells, box_pos[k:k + 1], box_rot[k:k + 1], half,
-                                                 dirt.depth_tolerance)[0]
-            callback(k, live_wiped)
+            callback(k, lambda k=k: _dirt_left(dirt, contact, box_pos, box_rot, half, k))
 
     contact_force = np.abs(contact[:, 1:] @ table_normal)
     over = np.flatnonzero(contact_force[:steps] > max_force)
@@ -231,20 +318,48 @@ def simulate_wipe(
     lo = scene.joint_lower + limit_margin
     hi = scene.joint_upper - limit_margin
     at_limit = live & np.any((joint_pos < lo) | (joint_pos > hi), axis=1)
+    shift = np.where(live, np.linalg.norm(obstacle_pos - obstacle_start, axis=1), 0.0)
+    if scene.obstacle_xy is None:
+        shift[:] = 0.0
 
-    new_cells = np.zeros(count, dtype=np.int64)
-    wiped = np.zeros(len(cells), dtype=bool)
-    band = np.flatnonzero(live & (contact_force >= f_lo) & (contact_force <= f_hi))
-    chunk = max(1, 200_000 // max(1, len(cells)))
-    for start in range(0, band.size, chunk):
-        rows = band[start:start + chunk]
-        under = cells_under_sponge(cells, box_pos[rows], box_rot[rows], half, dirt.depth_tolerance) & ~wiped
-        hit = under.any(axis=0)
-        if hit.any():
-            first = rows[np.argmax(under[:, hit], axis=0)]
-            np.add.at(new_cells, first, 1)
-            wiped |= hit
+    removed, left = _removal(dirt, contact_force, box_pos, box_rot, half, live)
+    peak = np.maximum(peak, contact_force)
+    impact_step = -1
+    impact_force = 0.0
+    if first_contact >= 0:
+        window = slice(first_contact, min(steps, first_contact + fine_window))
+        impact_step = first_contact + int(np.argmax(peak[window]))
+        impact_force = float(peak[impact_step])
     for array in (wrist_force, depth_trace):
         array[~live] = 0.0
-    return WipeTrace(contact_force, wrist_force, depth_trace, new_cells, arm_contact, at_limit,
-                     sponge_pos, wiped, steps, unstable)
+    return WipeTrace(contact_force, wrist_force, depth_trace, removed, left, arm_contact, self_found & live,
+                     obstacle_found & live, shift, at_limit, sponge_pos, penetration, impact_force, impact_step,
+                     fine, steps, unstable)
+
+
+def _slide(box_pos: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Distance [K] the face centre slid along the table (normal component removed) into each step."""
+    step = np.diff(box_pos, axis=0, prepend=box_pos[:1])
+    step = step - np.outer(step @ normal, normal)
+    return np.linalg.norm(step, axis=1)
+
+
+def _removal(dirt: DirtField, force: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray, half: np.ndarray,
+             live: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(fraction of all dirt removed per step [K], dirt left per cell [N]) of an episode."""
+    count, cells = len(force), len(dirt.world)
+    if cells == 0:
+        return np.zeros(count), np.zeros(0)
+    slide = np.where(live, _slide(box_pos, dirt.normal), 0.0)
+    cumulative = np.minimum(dirt.wear(np.where(live, force, 0.0), slide, box_pos, box_rot, half), 1.0)
+    total = cumulative.sum(axis=1) / cells
+    removed = np.diff(total, prepend=0.0)
+    return removed, 1.0 - cumulative[-1]
+
+
+def _dirt_left(dirt: DirtField, contact: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
+               half: np.ndarray, k: int) -> np.ndarray:
+    """Dirt left per cell [N] after control step ``k`` (for callbacks; recomputes the episode so far)."""
+    force = np.abs(contact[:k + 1, 1:] @ dirt.normal)
+    _, left = _removal(dirt, force, box_pos[:k + 1], box_rot[:k + 1], half, np.ones(k + 1, dtype=bool))
+    return left

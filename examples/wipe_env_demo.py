@@ -1,4 +1,4 @@
-"""Demo of rdmp_gym/ArmarWipe-v0: the imitation wipes, force adaptation copes with a lower table,
+"""Demo of rdmp_gym/ArmarWipe-v1: the imitation wipes, force adaptation copes with a lower table,
 a random action perturbs the DMP, and (optionally) an episode is written to a video.
 
 Run headless with ``MUJOCO_GL=egl python examples/wipe_env_demo.py [--video runs/wipe.mp4]``.
@@ -15,12 +15,12 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import gymnasium as gym
 import numpy as np
 
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
+import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 
 def summary(name: str, reward: float, info: dict) -> str:
     return (f"{name:34s} reward {reward:6.3f}  coverage {info['coverage']:5.3f}  force {info['force_mean']:5.1f} N  "
-            f"in band {info['force_in_band_fraction']:4.2f}  valid {info['valid']}")
+            f"in band {info['force_in_band_fraction']:4.2f}  valid {info['valid']}  success {info['is_success']}")
 
 
 def main() -> None:
@@ -29,8 +29,8 @@ def main() -> None:
     parser.add_argument("--video", type=Path, default=None, help="write one episode to this .mp4/.gif")
     args = parser.parse_args()
 
-    env = gym.make("rdmp_gym/ArmarWipe-v0", style=args.style, n_periods=4, render_mode="rgb_array")
-    rigid = gym.make("rdmp_gym/ArmarWipe-v0", style=args.style, n_periods=4, adaptation=False)
+    env = gym.make("rdmp_gym/ArmarWipe-v1", style=args.style, n_periods=4, render_mode="rgb_array")
+    rigid = gym.make("rdmp_gym/ArmarWipe-v1", style=args.style, n_periods=4, adaptation=False)
     zero = np.zeros(env.action_space.shape, dtype=np.float32)
     print(f"action dim {env.action_space.shape[0]}, context {env.observation_space.shape[0]}, "
           f"{env.unwrapped.n_steps} control steps at {env.unwrapped.control_rate:.0f} Hz")

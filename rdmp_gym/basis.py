@@ -7,8 +7,12 @@ Transient (along a canonical path): ``psi_j(phi, r) = a(r) exp(-vbar_j |pol(phi,
 ``delta`` at ``mu1``; both use ``exp(-v_tilde (r - mu_x)**k)``.
 
 The forcing term (5) is the normalised mixture ``sum_b Psi_b w_b / sum_b Psi_b``. Where a perturbed
-canonical path leaves every support, the raw sum underflows; we divide by ``sum_b Psi_b + epsilon``
-instead, so the forcing term fades smoothly to zero there rather than becoming 0/0.
+canonical path leaves every support, the raw sum underflows and the bare mixture jumps between whichever
+far-away basis function happens to be least small (or becomes 0/0). We divide by ``sum_b Psi_b + floor``
+instead (``Fading.floor``): on the encoded paths the activations sum to about 1 and the floor changes
+nothing the fit does not absorb; where they sum to much less than the floor the forcing term fades
+smoothly to zero. The default of :class:`Fading` (1e-10) is the old, nearly bare mixture kept for saved
+DMPs; :meth:`RhythmicDMP.fit` uses ``SMOOTH_FLOOR``.
 """
 
 from __future__ import annotations
@@ -20,10 +24,17 @@ import numpy as np
 from .canonical import CanonicalSystem
 from .validation import check_positive
 
-__all__ = ["BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path", "von_mises"]
+__all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path",
+           "von_mises"]
 
 NORMALISATION_EPSILON = 1e-10
-"""Added to the sum of activations in the normalised mixture (5); keeps it finite off every support."""
+"""Added to the sum of activations in the normalised mixture (5) by default; keeps it finite off every support."""
+
+SMOOTH_FLOOR = 1e-2
+"""The floor the fit uses: the mixture fades to 0 wherever the activations sum to much less than 1 %."""
+
+FORCING_BLOCK = 1 << 15
+"""Time samples per block in :meth:`BasisSet.forcing` (bounds the ``[T, D]`` activations held at once)."""
 
 GATE_FLOOR = 1e-16
 """Gate values below this are exactly 0, so a family of basis functions can be skipped where it is
@@ -39,18 +50,21 @@ class Fading:
         mu2: radius above which only the transient basis is active (> mu1).
         k: exponent of the fade (k = 4 makes the forcing term smooth).
         delta: value of ``g(mu2)`` and ``a(mu1)`` (the support threshold, about 1e-3).
+        floor: added to the sum of activations in the mixture (5), so that it fades where they are small.
     """
 
     mu1: float
     mu2: float
     k: int = 4
     delta: float = 1e-3
+    floor: float = NORMALISATION_EPSILON
 
     def __post_init__(self) -> None:
         check_positive(self.mu1, "mu1")
         check_positive(self.delta, "delta")
         if not self.mu2 > self.mu1:
             raise ValueError(f"mu2: must exceed mu1 = {self.mu1:g}, got {self.mu2!r}")
+        check_positive(self.floor, "floor")
         if not 0.0 < self.delta < 1.0:
             raise ValueError(f"delta: must lie in (0, 1), got {self.delta!r}")
 
@@ -72,9 +86,9 @@ class Fading:
         return np.where(gate < GATE_FLOOR, 0.0, gate)
 
 
-def normalize(activations: np.ndarray) -> np.ndarray:
-    """Normalised activations ``Psi / (sum Psi + eps)`` along the last axis, ``[..., D]`` (the mixture (5))."""
-    return activations / (activations.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+def normalize(activations: np.ndarray, floor: float = NORMALISATION_EPSILON) -> np.ndarray:
+    """Normalised activations ``Psi / (sum Psi + floor)`` along the last axis, ``[..., D]`` (the mixture (5))."""
+    return activations / (activations.sum(axis=-1, keepdims=True) + floor)
 
 
 def von_mises(phi: np.ndarray, centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
@@ -104,6 +118,8 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
     """
     if n_basis < 1:
         raise ValueError(f"n_transient: expected at least 1 basis function, got {n_basis}")
+    if not 0.0 < overlap < 1.0:
+        raise ValueError(f"transient_overlap: must lie in (0, 1), got {overlap!r}")
     times = np.linspace(0.0, span, n_basis) if n_basis > 1 else np.array([0.0])
     phi, r = canonical.state(times, phi0, r0)
     centres = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
@@ -178,11 +194,17 @@ class BasisSet:
         return out
 
     def forcing(self, phi: np.ndarray, r: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        """The forcing term (5), ``sum Psi w / (sum Psi + eps)``: ``phi, r [T]`` and ``weights [..., d, D]``
-        -> ``[..., T, d]`` (the normalisation is applied to the ``d`` outputs, not the ``D`` activations)."""
-        raw = self.activations(phi, r)
-        return (raw @ np.swapaxes(weights, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+        """The forcing term (5), ``sum Psi w / (sum Psi + floor)``: ``phi, r [T]`` and ``weights [..., d, D]``
+        -> ``[..., T, d]`` (the normalisation is applied to the ``d`` outputs, not the ``D`` activations).
+        Evaluated in blocks of ``FORCING_BLOCK`` samples, so memory beyond the output does not grow with T."""
+        phi, r = np.broadcast_arrays(np.asarray(phi, dtype=float), np.asarray(r, dtype=float))
+        transposed = np.swapaxes(weights, -1, -2)
+        blocks = []
+        for start in range(0, max(phi.shape[-1], 1), FORCING_BLOCK):
+            raw = self.activations(phi[..., start:start + FORCING_BLOCK], r[..., start:start + FORCING_BLOCK])
+            blocks.append((raw @ transposed) / (raw.sum(axis=-1, keepdims=True) + self.fading.floor))
+        return blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-2)
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Normalised activations ``Psi / (sum Psi + eps)``, ``[..., T, D]``; the forcing term is this @ W."""
-        return normalize(self.activations(phi, r))
+        """Normalised activations ``Psi / (sum Psi + floor)``, ``[..., T, D]``; the forcing term is this @ W."""
+        return normalize(self.activations(phi, r), self.fading.floor)

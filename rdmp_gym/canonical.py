@@ -107,7 +107,8 @@ class _TravelTime:
             inside = target > 0.0
             if np.any(inside):
                 xi = x[inside]
-                xi = xi - (branch.c_of_x(xi) - target[inside]) * (1.0 / branch.c_of_x(xi, 1))
+                value, slope = _value_and_slope(branch, xi)
+                xi = xi - (value - target[inside]) * (1.0 / slope)
                 x[inside] = xi
             r[mask] = self.mu + branch.sign * np.exp(x)
         return r
@@ -116,18 +117,42 @@ class _TravelTime:
         if np.any(c > branch.c_grid[-1]):
             raise ValueError("r0: the canonical state lies outside the tabulated range "
                              f"(travel time {c.max():.3g} s > {branch.c_grid[-1]:.3g} s)")
+        x = branch.x_grid[0] + c * branch.rate_low          # linear beyond the table's inner edge
         inside = c >= 0.0
-        return np.where(inside, branch.x_of_c(np.maximum(c, 0.0)),
-                        branch.x_grid[0] + c * branch.rate_low)
+        if np.any(inside):                                  # the spline only where it is needed
+            x[inside] = branch.x_of_c(c[inside])
+        return x
 
     def max_travel(self, sign: int) -> float:
         """The longest tabulated travel time on a branch (s, unit tempo)."""
         return float((self.above if sign > 0 else self.below).c_grid[-1])
 
 
+def _value_and_slope(branch: _Branch, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(branch.c_of_x(x), branch.c_of_x(x, 1))`` with one interval look-up for both: the grid is uniform, so
+    the interval is computed rather than searched (the same interval, and so the same numbers, as scipy's
+    ``PPoly`` evaluation, which sums the power form in the same order; extrapolation from the end intervals)."""
+    knots, coefficients = branch.x_grid, branch.c_of_x.c                  # [G], [4, G - 1]
+    last = knots.size - 2
+    index = np.clip(np.floor((x - knots[0]) * (last / (knots[-1] - knots[0]))), 0, last).astype(np.intp)
+    index -= (index > 0) & (x < knots[index])                            # rounding of the computed interval
+    index += (index < last) & (x >= knots[np.minimum(index + 1, last + 1)])
+    s = x - knots[index]
+    c0, c1, c2, c3 = (coefficients[k, index] for k in range(4))
+    square = s * s
+    value = c3 + c2 * s + c1 * square + c0 * (square * s)
+    slope = c2 + c1 * s * 2.0 + c0 * square * 3.0
+    return value, slope
+
+
 @lru_cache(maxsize=8)
 def _travel_time(mu: float, eta: float, alpha: float, beta: float) -> _TravelTime:
-    return _TravelTime(mu, eta, alpha, beta)
+    with np.errstate(all="ignore"):
+        try:
+            return _TravelTime(mu, eta, alpha, beta)
+        except ValueError as error:     # the tables overflow: travel times beyond float64
+            raise ValueError(f"mu, eta, alpha, beta: the radial dynamics with ({mu:g}, {eta:g}, {alpha:g}, "
+                             f"{beta:g}) are too slow or too fast to tabulate ({error})") from error
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from .demonstrations import Demonstration
 from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
 from .segmentation import Segmentation, segment
 from .transformation import TransformationSystem
-from .validation import check_positive, check_time_grid
+from .validation import as_finite_array, check_count, check_positive, check_time_grid
 
 __all__ = ["PeriodicDMP"]
 
@@ -39,13 +39,24 @@ class PeriodicDMP:
     def __init__(self, period: float, weights: np.ndarray, anchor: np.ndarray, phi0: float, start: np.ndarray,
                  start_velocity: np.ndarray, alpha_z: float = 25.0, width: float | None = None) -> None:
         self.period = check_positive(period, "period")
-        self.weights = np.asarray(weights, dtype=float)
-        self.anchor, self.phi0 = np.asarray(anchor, dtype=float), float(phi0)
-        self.start, self.start_velocity = np.asarray(start, dtype=float), np.asarray(start_velocity, dtype=float)
+        self.weights = as_finite_array(weights, "weights", ndim=2)
+        d, n = self.weights.shape
+        if d < 1 or n < 1:
+            raise ValueError(f"weights: expected shape [d, N] with d, N >= 1, got {self.weights.shape}")
+        self.anchor = self._vector(anchor, "anchor", d)
+        self.phi0 = float(as_finite_array(phi0, "phi0", ndim=0))
+        self.start = self._vector(start, "start", d)
+        self.start_velocity = self._vector(start_velocity, "start_velocity", d)
         self.alpha_z = check_positive(alpha_z, "alpha_z")
-        n = self.weights.shape[1]
         self.centres = 2.0 * np.pi * np.arange(n) / n
         self.width = periodic_width(n) if width is None else check_positive(width, "width")
+
+    @staticmethod
+    def _vector(value: object, name: str, d: int) -> np.ndarray:
+        array = as_finite_array(value, name, ndim=1)
+        if array.shape != (d,):
+            raise ValueError(f"{name}: expected shape ({d},), got {array.shape}")
+        return array
 
     @property
     def omega(self) -> float:
@@ -62,8 +73,7 @@ class PeriodicDMP:
         demo = demos if isinstance(demos, Demonstration) else next(iter(demos))
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
-        if int(n_periodic) < 2:
-            raise ValueError(f"n_periodic: expected at least 2, got {n_periodic}")
+        n_periodic = check_count(n_periodic, "n_periodic", 2)
         seg = segment(demo) if segmentation is None else segmentation
         omega = 2.0 * np.pi / seg.period
         elapsed = demo.t - demo.t[0]
@@ -84,7 +94,13 @@ class PeriodicDMP:
         elapsed = t - t[0]
         system = TransformationSystem(self.omega, float(elapsed[-1] / (t.size - 1)), self.alpha_z)
         forcing = self._normalized(self.phi0 + self.omega * elapsed) @ self.weights.T
-        g = self.anchor if anchor is None else np.asarray(anchor, dtype=float)
-        y0 = self.start if y0 is None else np.asarray(y0, dtype=float)
-        yd0 = self.start_velocity if yd0 is None else np.asarray(yd0, dtype=float)
-        return system.rollout(system.input(g, forcing), y0, yd0 / self.omega)[0]
+        d = self.anchor.size
+        g = self.anchor if anchor is None else self._vector(anchor, "anchor", d)
+        y0 = self.start if y0 is None else self._vector(y0, "y0", d)
+        yd0 = self.start_velocity if yd0 is None else self._vector(yd0, "yd0", d)
+        with np.errstate(all="ignore"):
+            y = system.rollout(system.input(g, forcing), y0, yd0 / self.omega)[0]
+        if not np.all(np.isfinite(y)):
+            raise ValueError(f"rollout: the result overflowed to NaN or inf; the period ({self.period:g} s), gains "
+                             "or weights are out of range")
+        return y

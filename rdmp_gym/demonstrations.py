@@ -9,7 +9,11 @@ exactly periodic (z = anchor z) from ``T`` on.
 
 from __future__ import annotations
 
+import codecs
 import csv
+import io
+import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -174,11 +178,14 @@ class Demonstration:
         column, in file order, is one dimension of ``Y``. The demonstration is named after the file.
         """
         path = Path(path)
-        with path.open(newline="") as handle:
+        with _open_text(path) as handle:
             header = next(csv.reader(handle), None)
             if not header:
                 raise ValueError(f"path: {path} has no header row")
             header = [name.strip() for name in header]
+            repeated = sorted({name for name in header if header.count(name) > 1})
+            if repeated:
+                raise ValueError(f"path: {path} names the column(s) {repeated} more than once")
             if time_column not in header:
                 raise ValueError(f"time_column: {time_column!r} is not a column of {path} "
                                  f"(columns: {header})")
@@ -205,12 +212,33 @@ class Demonstration:
     def from_npz(cls, path: str | Path) -> Demonstration:
         """Read an ``.npz`` archive: arrays ``t`` ``[L]``, ``Y`` ``[L, d]`` (``name`` optional)."""
         path = Path(path)
-        with np.load(path, allow_pickle=False) as data:
+        try:
+            data = np.load(path, allow_pickle=False)
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+            raise ValueError(f"path: {path} is not a readable .npz archive ({error})") from error
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise ValueError(f"path: {path} is a single .npy array, not an .npz archive with arrays t and Y")
+        with data:
             missing = [key for key in ("t", "Y") if key not in data.files]
             if missing:
                 raise ValueError(f"path: {path} lacks the array(s) {missing} (has {data.files})")
-            name = str(data["name"]) if "name" in data.files else path.stem
-            return cls(t=data["t"], Y=data["Y"], name=name)
+            try:
+                name = str(data["name"]) if "name" in data.files else path.stem
+                t, Y = data["t"], data["Y"]
+            except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as error:
+                raise ValueError(f"path: {path} is damaged ({error})") from error
+        return cls(t=t, Y=Y, name=name)
+
+
+def _open_text(path: Path) -> io.StringIO:
+    """The text of ``path``: UTF-8 (with or without the BOM spreadsheets write) or UTF-16 with a BOM."""
+    raw = path.read_bytes()
+    encoding = "utf-16" if raw[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE) else "utf-8-sig"
+    try:
+        return io.StringIO(raw.decode(encoding), newline="")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"path: {path} is not UTF-8 or UTF-16 text ({error.reason} at byte {error.start})") \
+            from error
 
 
 def _as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:

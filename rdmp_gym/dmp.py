@@ -10,17 +10,33 @@ from pathlib import Path
 
 import numpy as np
 
-from .basis import BasisSet, Fading, normalize, periodic_width, transient_basis_along_path
+from .basis import (
+    NORMALISATION_EPSILON,
+    SMOOTH_FLOOR,
+    BasisSet,
+    Fading,
+    normalize,
+    periodic_width,
+    transient_basis_along_path,
+)
+from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
-from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
+from .fitting import (
+    FIT_METHODS,
+    fit_trajectory,
+    fit_weights,
+    forcing_target,
+    second_differences,
+    smooth_derivatives,
+)
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .stopping import Ending, StopPlan, plan_stop
 from .transformation import TransformationSystem
-from .validation import as_finite_array, check_positive, check_time_grid
+from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
 
-__all__ = ["DMPStepper", "RhythmicDMP", "TransientStart"]
+__all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "TransientStart", "start_blend_profiles"]
 
 logger = logging.getLogger(__name__)
 
@@ -35,8 +51,10 @@ class TransientStart:
         phi0, r0: initial condition of the canonical system, ``init_T(entrance_phase, mu1)``.
         length: transient length T_k of the demonstration (s).
         entrance_phase: phase at which the transient enters the periodic pattern (rad).
-        start: ``[d]`` position of the demonstration at its first sample.
-        start_velocity: ``[d]`` velocity of the demonstration at its first sample.
+        start: ``[d]`` start position of the demonstration (fitted with the weights by ``trajectory``; the
+            smoothed first sample otherwise).
+        start_velocity: ``[d]`` its start velocity (fitted under the smooth-start model: a derivative
+            estimate at the first noisy sample is off by up to 0.1 m/s).
     """
 
     phi0: float
@@ -47,11 +65,53 @@ class TransientStart:
     start_velocity: np.ndarray
 
 
-def start_fade(elapsed: np.ndarray, length: float) -> np.ndarray:
-    """Weight ``[T]`` of the start offset under ``start_blend``: 1 at the start, 0 from ``length`` on
-    (a minimum-jerk profile, C2)."""
+SMOOTHNESS_REFERENCE = 40
+"""``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
+``period / 40``); other spacings get the penalty on the same time curvature."""
+
+PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
+                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25)}
+"""Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
+(LWR (11), a stiff spring, narrow basis functions, the bare mixture (5)); roll out with
+``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
+
+
+def start_blend_profiles(elapsed: np.ndarray, length: float) -> np.ndarray:
+    """Quintic profiles of the start blend and their first two time derivatives, ``[2, 3, T]``.
+
+    Profile 0 falls from 1 to 0 with zero slope and curvature at both ends (minimum jerk); profile 1
+    has slope 1 and zero value and curvature at the start. Both are 0 with zero derivatives from
+    ``length`` on, so ``e(t) = dy P0(t) + dv P1(t)`` moves a start offset ``(dy, dv)`` away smoothly (C2).
+    """
     u = np.clip(elapsed / length, 0.0, 1.0)
-    return 1.0 - u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+    fall = np.stack([1.0 - u**3 * (10.0 - 15.0 * u + 6.0 * u**2),
+                     -30.0 * u**2 * (1.0 - u) ** 2 / length,
+                     -60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / length**2])
+    slope = np.stack([length * u * (1.0 - u) ** 3 * (1.0 + 3.0 * u),
+                      (1.0 - u) ** 2 * (1.0 + 2.0 * u - 15.0 * u**2),
+                      -12.0 * u * (1.0 - u) * (3.0 - 5.0 * u) / length])
+    return np.stack([fall, slope])
+
+
+def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, velocity_offset: np.ndarray,
+                 omega: float, alpha_z: float) -> np.ndarray:
+    """Anchor shift ``[B, T, d]`` whose response is exactly ``e(t) = dy P0(t) + dv P1(t)`` (lengths ``[B]``,
+    offsets ``[B, d]``): ``dg = e + de/dt / (beta_z Omega) + d2e/dt2 / (alpha_z beta_z Omega^2)``."""
+    beta_z = alpha_z / 4.0
+    gains = np.array([1.0, 1.0 / (beta_z * omega), 1.0 / (alpha_z * beta_z * omega**2)])
+    shifts = []
+    for row in range(offset.shape[0]):
+        profiles = gains @ start_blend_profiles(elapsed, float(length[row]))            # [2, T]
+        shifts.append(profiles[0][:, None] * offset[row] + profiles[1][:, None] * velocity_offset[row])
+    return np.stack(shifts)
+
+
+def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tuple[np.ndarray, np.ndarray]:
+    """The state ``(y, yd)`` ``[..., d]`` that the forcing term ``[..., d]`` holds at the start: the spring's
+    equilibrium ``g + f / (alpha_z beta_z)``, at rest. From there the acceleration starts at 0 and the spring
+    follows the forcing term with no fast transient of its own (for a demonstration that starts at rest,
+    this is about its start)."""
+    return anchor + forcing / (alpha_z * alpha_z / 4.0), np.zeros_like(anchor + forcing)
 
 
 @lru_cache(maxsize=64)
@@ -94,6 +154,29 @@ def _transform_matrix(n_dims: int, scale: float | np.ndarray, rotation: float | 
     return matrix * scale
 
 
+def _trajectory_design(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence[Demonstration],
+                       inits: Sequence[tuple[float, float]], lengths: Sequence[float], anchor: np.ndarray,
+                       alpha_z: float, substeps: int) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """The smooth-start rollout model ``y = P(t) + (y0 - P(0)) P0(t) + yd0 P1(t)`` at each demonstration's
+    samples (P: the motion from the settled state, linear in the weights; P0, P1: the start-blend profiles),
+    as ``(responses [L_k, D], start_columns [L_k, 2], samples minus the anchor's part [L_k, d])`` per
+    demonstration. The basis responses are simulated ``substeps`` times finer than the samples."""
+    responses, start_columns, samples = [], [], []
+    for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
+        phi, r = canonical.state(np.zeros(1), phi0, r0)
+        settled, settled_yd = settled_state(basis.normalized(phi, r)[0], np.zeros(basis.n_basis), alpha_z)
+        fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
+        phi, r = canonical.state(fine, phi0, r0)
+        system = _transformation(canonical.omega, demo.dt / substeps, alpha_z)
+        response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
+                                  settled, settled_yd / canonical.omega)[0][::substeps]  # [L, D]
+        (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
+        responses.append(response - fall[:, None] * settled - slope[:, None] * settled_yd)
+        start_columns.append(np.stack([fall, slope], axis=1))
+        samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
+    return responses, start_columns, samples
+
+
 class RhythmicDMP:
     """A rhythmic DMP that encodes a periodic pattern and K transients that lead into it.
 
@@ -117,7 +200,7 @@ class RhythmicDMP:
                  amplitude: np.ndarray | None = None, ending: Ending | None = None) -> None:
         self.canonical = canonical
         self.basis = basis
-        self.weights = as_finite_array(weights, "weights", ndim=2)
+        self.weights = np.ascontiguousarray(as_finite_array(weights, "weights", ndim=2))
         self.transients = tuple(transients)
         self.anchor = as_finite_array(anchor, "anchor", ndim=1)
         self.alpha_z = check_positive(alpha_z, "alpha_z")
@@ -156,37 +239,59 @@ class RhythmicDMP:
     # ------------------------------------------------------------------ fitting
     @classmethod
     def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-            n_transient: int | Sequence[int] = 40, method: str = "ridge", *,
+            n_transient: int | Sequence[int] = 40, method: str = "trajectory", *,
             segmentations: Sequence[Segmentation] | None = None, period: float | None = None,
-            alpha_z: float = 25.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
+            alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
             beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
-            delta: float = 1e-3, periodic_overlap: float = 0.5, transient_overlap: float = 0.5,
-            smoothing: float = 0.15, regularization: float = 1e-6) -> RhythmicDMP:
+            delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
+            smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.1,
+            floor: float = SMOOTH_FLOOR, substeps: int = 4,
+            fading_fractions: tuple[float, float] = (0.5, 0.25)) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         Args:
             demos: a :class:`Demonstration` or K of them (one transient each), all with d dimensions.
             n_periodic: periodic basis functions N.
             n_transient: transient basis functions per transient (an int or K ints).
-            method: ``"lwr"`` (the paper's (11)/(12)) or ``"ridge"`` (global least squares, default).
+            method: ``"trajectory"`` (default: weights and start state that make the rollout itself match the
+                samples, see :func:`~rdmp_gym.fitting.fit_trajectory`), ``"lwr"`` (the paper's (11)/(12)) or
+                ``"ridge"`` (global least squares on the forcing target (10)).
             segmentations: per demonstration; estimated with :func:`segment` when omitted.
             period: common period (s); the mean of the segmentations' periods when omitted.
-            alpha_z: transformation-system gain.
+            alpha_z: transformation-system gain (default 5: a softer spring, see the README's trade-offs;
+                25 in :data:`PAPER_SETTINGS`).
             mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
             mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
             fading_time: t_f (s), the overlap of transient and periodic basis; default
-                ``min(period, shortest transient) / 4``.
+                ``min(a period, b shortest transient)`` with ``(a, b) = fading_fractions``.
             delta: support threshold of the fades.
-            periodic_overlap, transient_overlap: height at which neighbouring basis functions cross.
-            smoothing: Savitzky-Golay window (s) for the demonstration's derivatives.
-            regularization: relative ridge penalty.
+            periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
+                wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
+            smoothing: Savitzky-Golay window (s) for the demonstration's derivatives (``lwr``, ``ridge``).
+            regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the
+                forcing term stays gentle off the encoded paths; 1e-6 otherwise).
+            smoothness: relative penalty on second differences of neighbouring weights (``ridge``,
+                ``trajectory``); 0 in :data:`PAPER_SETTINGS`.
+            floor: added to the sum of activations in the mixture (5) (:class:`Fading`), so that the forcing
+                term fades to 0 where no basis function is active.
+            substeps: ``trajectory`` simulates each basis function's response this many times finer than the
+                samples.
+            fading_fractions: ``(a, b)`` of the default ``fading_time``; ``(0.5, 0.25)`` gives a gentler
+                hand-over than the earlier ``(0.25, 0.25)`` where the period is short (the last transient
+                functions are narrowed there by the close turns of the spiral).
         """
         demos = _as_demos(demos)
+        if regularization is None:
+            regularization = 1e-4 if method == "trajectory" else 1e-6
+        regularization = check_nonnegative(regularization, "regularization")
+        smoothness = check_nonnegative(smoothness, "smoothness")
+        check_positive(smoothing, "smoothing")
+        check_positive(alpha_z, "alpha_z")
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
-        if int(n_periodic) < 2:
-            raise ValueError(f"n_periodic: expected at least 2, got {n_periodic}")
-        sizes = [int(n_transient)] * len(demos) if np.ndim(n_transient) == 0 else [int(m) for m in n_transient]
+        n_periodic = check_count(n_periodic, "n_periodic", 2)
+        sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
+                 else [check_count(m, "n_transient", 1) for m in n_transient])
         if len(sizes) != len(demos) or min(sizes) < 1:
             raise ValueError(f"n_transient: expected a positive int or {len(demos)} positive ints, got {n_transient!r}")
         if segmentations is None:
@@ -206,10 +311,10 @@ class RhythmicDMP:
                     for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
         mu1 = mu1_factor * mu
         t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
-               else 0.25 * min(common_period, min(lengths)))
+               else min(fading_fractions[0] * common_period, fading_fractions[1] * min(lengths)))
         if t_f >= min(lengths):
             raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
-        fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta)
+        fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
 
         inits = [canonical.init_T(length, phase, mu1) for length, phase in zip(lengths, entrance, strict=True)]
         paths = [transient_basis_along_path(canonical, phi0, r0, length - 0.5 * t_f, m,
@@ -222,14 +327,32 @@ class RhythmicDMP:
             transient_widths=np.concatenate([widths for _, widths in paths]),
             transient_sizes=tuple(sizes), fading=fading)
 
-        activations, targets, transients = [], [], []
-        for demo, (phi0, r0), length, phase in zip(demos, inits, lengths, entrance, strict=True):
-            Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
-            phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
-            activations.append(basis.activations(phi, r))
-            targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
-            transients.append(TransientStart(phi0, r0, length, phase, Y[0].copy(), Yd[0].copy()))
-        weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization)
+        spacings = [common_period / n_periodic] + [(length - 0.5 * t_f) / max(m - 1, 1)
+                                                   for length, m in zip(lengths, sizes, strict=True)]
+        differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes), spacings,
+                                         common_period / SMOOTHNESS_REFERENCE)
+        responses, start_columns, samples = _trajectory_design(canonical, basis, demos, inits, lengths, anchor,
+                                                               alpha_z, substeps)
+        if method == "trajectory":
+            weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness,
+                                             regularization)
+        else:
+            activations, targets, starts = [], [], []
+            for demo, (phi0, r0) in zip(demos, inits, strict=True):
+                Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
+                phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
+                activations.append(basis.activations(phi, r))
+                targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
+                starts.append(Y[0])
+            weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization,
+                                  smoothness, differences, floor)
+            # the demonstrated start (smoothed), and the start velocity that best explains the samples under
+            # the smooth start (a derivative estimate at the first sample is noisy)
+            starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
+                                           rcond=None)[0][0])
+                      for y0, response, columns, sample in zip(starts, responses, start_columns, samples, strict=True)]
+        transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
+                      for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
         logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
                     len(demos), n_periodic, sizes, common_period, method)
         return cls(canonical, basis, weights.T, transients, anchor, alpha_z)
@@ -251,72 +374,136 @@ class RhythmicDMP:
             raise ValueError(f"{name}: expected shape ({self.n_dims},) or ({batch}, {self.n_dims}), got {array.shape}")
         return np.broadcast_to(array, (batch, self.n_dims))
 
+    def _forcing(self, canonical: CanonicalSystem, times: np.ndarray, weights: np.ndarray, inits: np.ndarray,
+                 amplitudes: np.ndarray, transform: np.ndarray | None) -> np.ndarray:
+        """Forcing term ``[B, T, d]`` at ``times [T]`` along the paths from ``inits [B, 2]``, times
+        ``M diag(amplitude)``; the basis is evaluated once per distinct initial condition."""
+        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
+        phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])              # [U, T] each
+        if unique.shape[0] == 1:              # one canonical path shared by the batch
+            forcing = self.basis.forcing(phis[0], radii[0], weights)
+        else:                                 # every rollout on its own path (perturbed initial conditions)
+            forcing = batched_forcing(self.basis, phis[inverse.ravel()], radii[inverse.ravel()], weights)
+        forcing *= amplitudes[:, None, :]
+        return forcing if transform is None else forcing @ transform.T
+
+    def _stop_forcing(self, canonical: CanonicalSystem, times: np.ndarray, weights: np.ndarray, inits: np.ndarray,
+                      amplitudes: np.ndarray, transform: np.ndarray | None, stop: StopPlan,
+                      stop_weights: np.ndarray) -> np.ndarray:
+        """Forcing term ``[B, T, d]`` like :meth:`_forcing`, with the stop family after ``stop.exit_time``
+        (``stop_weights [B, d, S]``); one mixture per distinct initial condition."""
+        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
+        phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])              # [U, T] each
+        tau = (times - stop.exit_time) * canonical.tempo
+        forcing = np.empty((weights.shape[0], times.size, self.n_dims))
+        for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
+            members = np.flatnonzero(inverse.ravel() == index)
+            forcing[members] = self.ending.forcing(self.basis, phi, r, tau, stop.rotation, weights[members],
+                                                   stop_weights[members])
+        forcing *= amplitudes[:, None, :]
+        return forcing if transform is None else forcing @ transform.T
+
+    def _settled(self, canonical: CanonicalSystem, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
+                 amplitudes: np.ndarray, transform: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """``(y, yd)`` ``[B, d]`` that the forcing term leads to at t = 0 (see :func:`settled_state`)."""
+        forcing = self._forcing(canonical, np.zeros(1), weights, inits, amplitudes, transform)[:, 0]
+        return settled_state(forcing, anchors, self.alpha_z)
+
+    def settled_start(self, transient: int = 0, tempo: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The state ``(y [d], yd [d])`` that transient ``transient``'s forcing term leads to at its start
+        (:func:`settled_state`; for a demonstration that starts at rest, about its start). From there the
+        acceleration starts at 0 and follows the forcing term with no fast transient of its own; the smooth
+        start (``start_blend=True``) blends from the requested start into the motion from this state.
+        """
+        k = self._check_transient(transient)
+        canonical = replace(self.canonical, tempo=self._tempo(tempo))
+        start = self.transients[k]
+        y, yd = self._settled(canonical, self.weights[None], np.array([[start.phi0, start.r0]]), self.anchor[None],
+                              self.amplitude[None], None)
+        return y[0], yd[0]
+
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                   amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
-                  transform: np.ndarray | None, start_offset: np.ndarray | None = None, fade_length: float = 1.0,
+                  transform: np.ndarray | None, blend_length: np.ndarray | None = None,
                   stop: StopPlan | None = None, stop_weights: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
         anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. The forcing term is
-        multiplied by ``M diag(amplitude)``. A ``start_offset [B, d]`` moves the anchor at the start and fades
-        out over ``fade_length`` seconds (``start_blend``). A ``stop`` (with ``stop_weights [B, d, S]``) ends
-        the movement at ``stop.goal [B, d]``."""
+        multiplied by ``M diag(amplitude)``. With ``blend_length [B]`` (s) the start is blended
+        (``start_blend``): the result is the settled motion plus a quintic offset ``e(t)`` that starts at
+        ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length`` on. A ``stop`` (with
+        ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
         canonical = replace(self.canonical, tempo=tempo)
-        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
-        phis, radii = canonical.state(elapsed, unique[:, 0], unique[:, 1])              # [U, T] each
-        forcing = np.empty((weights.shape[0], t.size, self.n_dims))
-        for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
-            members = np.flatnonzero(inverse.ravel() == index)
-            if stop is None:
-                forcing[members] = self.basis.forcing(phi, r, weights[members])
-            else:
-                forcing[members] = self.ending.forcing(self.basis, phi, r, (elapsed - stop.exit_time) * tempo,
-                                                       stop.rotation, weights[members], stop_weights[members])
-        forcing *= amplitudes[:, None, :]
-        if transform is not None:
-            forcing = forcing @ transform.T
-        base = anchors
-        if start_offset is not None:
-            anchors = anchors[:, None, :] + start_fade(elapsed, fade_length)[:, None] * start_offset[:, None, :]
-        if stop is not None:
-            blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[:, None]
-            anchors = (anchors if anchors.ndim == 3 else anchors[:, None, :]) + blend * (stop.goal - base)[:, None, :]
+        if stop is None:
+            forcing = self._forcing(canonical, elapsed, weights, inits, amplitudes, transform)
+        else:
+            forcing = self._stop_forcing(canonical, elapsed, weights, inits, amplitudes, transform, stop,
+                                         stop_weights)
         omega = canonical.omega * tempo
+        path = anchors
+        if blend_length is not None:
+            y_settled, yd_settled = self._settled(canonical, weights, inits, anchors, amplitudes, transform)
+            path = anchors[:, None, :] + _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled,
+                                                      omega, self.alpha_z)
+        if stop is not None:        # the anchor blends to the goal (after the start blend has ended)
+            blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[None, :, None]
+            path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
         system = _transformation(omega, dt, self.alpha_z)
-        y, z = system.rollout(system.input(anchors, forcing), y0, yd0 / omega)
-        return y, z * omega
+        with np.errstate(all="ignore"):
+            y, z = system.rollout(system.input(path, forcing), y0, yd0 / omega)
+            z = z * omega
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+            raise ValueError("rollout: the result overflowed to NaN or inf; the period, gains, weights or time grid "
+                             f"are out of range (period {self.period:g} s, alpha_z {self.alpha_z:g}, tempo {tempo:g})")
+        return y, z
 
-    def _start(self, k: int, y0: object, yd0: object, tempo: float, anchors: np.ndarray, amplitudes: np.ndarray,
-               start_blend: bool, transform: np.ndarray | None = None
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Initial ``(y0, yd0)`` ``[B, d]`` of transient k for anchors and amplitudes ``[B, d]``.
+    def _start(self, k: np.ndarray, y0: object, yd0: object, tempo: float, anchors: np.ndarray,
+               amplitudes: np.ndarray, transform: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Initial ``(y0, yd0)`` ``[B, d]`` for transients ``k [B]``, anchors and amplitudes ``[B, d]``.
 
-        The defaults are its demonstration's start and start velocity, transformed like the whole movement
-        (``g + M diag(amplitude) (start - g)``, g the fitted anchor). Under ``start_blend`` also the offset of
-        ``y0`` from that start carried along with the anchor, ``anchor + M diag(amplitude) (start - g)``."""
-        start = self.transients[k]
-        relative_start = amplitudes * (start.start - self.anchor)                       # [B, d]
-        default_yd0 = amplitudes * start.start_velocity * tempo / self.canonical.tempo
+        The defaults are the demonstration's start and start velocity, transformed like the whole movement
+        (``g + M diag(amplitude) (start - g)``, g the fitted anchor)."""
+        starts = np.stack([self.transients[int(i)].start for i in k])
+        velocities = np.stack([self.transients[int(i)].start_velocity for i in k])
+        relative_start = amplitudes * (starts - self.anchor)                              # [B, d]
+        default_yd0 = amplitudes * velocities * tempo / self.canonical.tempo
         if transform is not None:   # the whole demonstrated movement is transformed about the fitted anchor
             relative_start, default_yd0 = relative_start @ transform.T, default_yd0 @ transform.T
         y0 = self._vector(y0, self.anchor + relative_start, "y0", anchors.shape[0])
-        offset = y0 - (anchors + relative_start) if start_blend else None
-        return y0, self._vector(yd0, default_yd0, "yd0", anchors.shape[0]), offset
+        return y0, self._vector(yd0, default_yd0, "yd0", anchors.shape[0])
 
-    def rollout(self, t: np.ndarray, transient: int = 0, y0: np.ndarray | None = None,
+    def _transients(self, transient: int | str, y0: object, batch: int, amplitudes: np.ndarray,
+                    transform: np.ndarray | None = None) -> np.ndarray:
+        """Transient index per row, ``[B]``: the given one, or under ``"nearest"`` the one whose (transformed)
+        demonstrated start is nearest to ``y0`` (the first transient when ``y0`` is omitted)."""
+        if not (isinstance(transient, str) and transient == "nearest"):
+            return np.full(batch, self._check_transient(transient))
+        if y0 is None:
+            return np.zeros(batch, dtype=int)
+        y0 = self._vector(y0, self.anchor, "y0", batch)
+        relative = amplitudes[:, None, :] * (self.starts - self.anchor)[None]               # [B, K, d]
+        if transform is not None:
+            relative = relative @ transform.T
+        return np.argmin(np.linalg.norm(self.anchor + relative - y0[:, None, :], axis=-1), axis=1)
+
+    def _blend_lengths(self, k: np.ndarray, tempo: float, start_blend: bool) -> np.ndarray | None:
+        return np.array([self.transients[int(i)].length / tempo for i in k]) if start_blend else None
+
+    def rollout(self, t: np.ndarray, transient: int | str = 0, y0: np.ndarray | None = None,
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
                 scale: float | np.ndarray = 1.0, rotation: float | np.ndarray | None = None,
-                tempo: float | None = None, start_blend: bool = False, return_velocity: bool = False,
+                tempo: float | None = None, start_blend: bool = True, return_velocity: bool = False,
                 stop_at: float | None = None, exit_phase: float | None = None, goal: np.ndarray | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Reproduce the movement: transient ``transient`` from its own initial condition, then the cycle.
 
         Args:
             t: ``[T]`` evenly spaced times; ``t[0]`` is the start of the movement.
-            transient: index of the encoded transient (its canonical initial condition).
+            transient: index of the encoded transient (its canonical initial condition), or ``"nearest"``:
+                the one whose demonstrated start is nearest to ``y0`` (paper V-A).
             y0, yd0: ``[d]`` start position/velocity (default: that transient's demonstration start).
             anchor: ``[d]`` new anchor g (default: the fitted one). The periodic part moves with it.
             scale: amplitude factor (a number or ``[d]``) of the movement about the anchor.
@@ -325,12 +512,12 @@ class RhythmicDMP:
                 ``M = R diag(scale)``: the default start becomes ``g + M (start - g)`` (g: the fitted anchor);
                 the result is exact, and exact on the periodic part for any explicit ``y0``.
             tempo: speed factor (default: the canonical system's; 0.5 = half speed).
-            start_blend: for a ``y0`` away from the demonstrated start (carried along with the anchor,
-                ``anchor + M (start - g)``): shift the anchor by the offset at the start and fade the shift
-                out over the transient (minimum jerk), so the movement starts at ``y0``, keeps the
-                demonstrated transient's shape and joins the pattern smoothly. Without it the stiff
-                spring closes the gap within about ``4 / (alpha_z Omega)`` seconds. The periodic part
-                is the same either way.
+            start_blend: the smooth start (default): the motion the forcing term leads to (see
+                :meth:`settled_start`) plus an offset that starts at ``(y0, yd0)`` minus that state and fades
+                out over the transient's length (quintic, C2): no spike from any start state or canonical
+                initial condition, the demonstrated transient's shape from a shifted start. ``False``: the
+                paper's behaviour, the spring closes any gap within about ``8 / (alpha_z Omega)`` seconds.
+                The periodic part is the same either way.
             return_velocity: also return velocities.
             stop_at: end the movement: a stop requested at this time (s after ``t[0]``) leaves the cycle at the
                 next demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at the goal (needs a DMP
@@ -341,17 +528,17 @@ class RhythmicDMP:
         Returns:
             positions ``[T, d]`` (and velocities ``[T, d]``).
         """
-        k = self._check_transient(transient)
         tempo = self._tempo(tempo)
-        start = self.transients[k]
         transform = _transform_matrix(self.n_dims, scale, rotation)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
         amplitudes = self.amplitude[None]
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend, transform)
+        k = self._transients(transient, y0, 1, amplitudes, transform)
+        y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes, transform)
+        start = self.transients[int(k[0])]
         inits = np.array([[start.phi0, start.r0]])
         stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
-                               offset, start.length / tempo, stop,
+                               self._blend_lengths(k, tempo, start_blend), stop,
                                None if stop is None else self.ending.weights[None])
         return (y[0], yd[0]) if return_velocity else y[0]
 
@@ -383,9 +570,9 @@ class RhythmicDMP:
                            self.amplitude, ending)
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
-                      transient: int = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
+                      transient: int | str = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
                       anchor: np.ndarray | None = None, tempo: float | None = None,
-                      start_blend: bool = False, stop_at: float | None = None,
+                      start_blend: bool = True, stop_at: float | None = None,
                       exit_phase: float | None = None, goal: np.ndarray | None = None) -> np.ndarray:
         """Roll out B parameter vectors at once (the selected ``groups`` of each; the rest as fitted).
 
@@ -394,13 +581,16 @@ class RhythmicDMP:
             t: ``[T]`` evenly spaced times.
             groups: which parameter groups ``thetas`` holds (see :mod:`rdmp_gym.parameters`).
             transient, y0, yd0, anchor, tempo, start_blend, stop_at, exit_phase, goal: as in :meth:`rollout`;
-                y0/yd0/anchor/goal may be ``[B, d]``. The stop starts at the same time for all B (their phases
-                differ only where ``initial`` is selected; the exit follows transient ``transient``'s fitted phase).
+                y0/yd0/anchor/goal may be ``[B, d]`` (under ``transient="nearest"`` each row picks its own
+                transient). The stop is requested at the same time for all B; each row exits at the exit phase
+                that follows its transient's fitted phase (their phases differ only where ``initial`` is selected).
         Returns:
             ``[B, T, d]`` positions.
         """
-        k = self._check_transient(transient)
         thetas = as_finite_array(thetas, "thetas", ndim=2)
+        if thetas.shape[0] == 0:
+            raise ValueError("thetas: expected at least one parameter vector (B >= 1), got shape "
+                             f"{thetas.shape}")
         weights, inits, anchors, amplitudes, stop_weights = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:
@@ -408,22 +598,42 @@ class RhythmicDMP:
                 raise ValueError("anchor: given both as an argument and in thetas (group 'anchor')")
             anchors = self._vector(anchor, self.anchor, "anchor", batch)
         tempo = self._tempo(tempo)
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, amplitudes, start_blend)
-        stop = self._stop_plan(stop_at, exit_phase, goal, self.transients[k], tempo, anchors, amplitudes)
-        return self._simulate(t, weights, inits[:, k], anchors, amplitudes, y0, yd0, tempo, None,
-                              offset, self.transients[k].length / tempo, stop, stop_weights)[0]
+        k = self._transients(transient, y0, batch, amplitudes)
+        y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes)
+        inits = inits[np.arange(batch), k]
+        if stop_at is None:
+            self._stop_plan(None, exit_phase, goal, self.transients[0], tempo, anchors, amplitudes)
+            return self._simulate(t, weights, inits, anchors, amplitudes, y0, yd0, tempo, None,
+                                  self._blend_lengths(k, tempo, start_blend))[0]
+        result = np.empty((batch, check_time_grid(t, "t").size, self.n_dims))
+        for index in np.unique(k):      # the exit time follows each transient's own phase
+            rows = np.flatnonzero(k == index)
+            stop = self._stop_plan(stop_at, exit_phase, None if goal is None else self._vector(
+                goal, self.anchor, "goal", batch)[rows], self.transients[index], tempo, anchors[rows],
+                amplitudes[rows])
+            result[rows] = self._simulate(t, weights[rows], inits[rows], anchors[rows], amplitudes[rows], y0[rows],
+                                          yd0[rows], tempo, None, self._blend_lengths(k[rows], tempo, start_blend),
+                                          stop, stop_weights[rows])[0]
+        return result
 
-    def start(self, dt: float, transient: int = 0, y0: np.ndarray | None = None,
+    def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,
               yd0: np.ndarray | None = None, anchor: np.ndarray | None = None,
-              tempo: float | None = None, start_blend: bool = False) -> DMPStepper:
+              tempo: float | None = None, start_blend: bool = True) -> DMPStepper:
         """An online integrator that advances by ``dt`` per :meth:`DMPStepper.step` (for feedback);
         arguments as in :meth:`rollout`."""
-        k = self._check_transient(transient)
         tempo = self._tempo(tempo)
         anchors = self._vector(anchor, self.anchor, "anchor", 1)
-        y0, yd0, offset = self._start(k, y0, yd0, tempo, anchors, self.amplitude[None], start_blend)
-        return DMPStepper(self, check_positive(dt, "dt"), k, y0[0].copy(), yd0[0].copy(), anchors[0].copy(), tempo,
-                          None if offset is None else offset[0])
+        amplitudes = self.amplitude[None]
+        k = self._transients(transient, y0, 1, amplitudes)
+        y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes)
+        offsets = None
+        if start_blend:
+            start = self.transients[int(k[0])]
+            y_settled, yd_settled = self._settled(replace(self.canonical, tempo=tempo), self.weights[None],
+                                                  np.array([[start.phi0, start.r0]]), anchors, amplitudes, None)
+            offsets = (y0[0] - y_settled[0], yd0[0] - yd_settled[0])
+        return DMPStepper(self, check_positive(dt, "dt"), int(k[0]), y0[0].copy(), yd0[0].copy(), anchors[0].copy(),
+                          tempo, offsets)
 
     def forcing(self, t: np.ndarray, transient: int = 0) -> np.ndarray:
         """The forcing term f along transient ``transient``'s canonical path, ``[T, d]`` (t from the start)."""
@@ -521,7 +731,8 @@ class RhythmicDMP:
             activation = self.basis.normalized(phi, r)                               # [T, D]
         else:
             activation = normalize(self.ending.mixture(self.basis, phi, r, (elapsed - stop.exit_time)
-                                                       * self.canonical.tempo, stop.rotation))   # [T, D + S]
+                                                       * self.canonical.tempo, stop.rotation),
+                                   self.basis.fading.floor)                                      # [T, D + S]
         columns = []
         for name in self.layout.resolve(groups):
             if name == "periodic":
@@ -562,17 +773,18 @@ class DMPStepper:
     Uses the same exact first-order-hold step as :meth:`RhythmicDMP.rollout`, so with no coupling
     both produce the same trajectory. A coupling term ``c [d]`` is added to the forcing term inside
     (4) and held over the step: ``dz/dt = Omega (alpha_z (beta_z (g - y) - z) + f + c)``. The
-    canonical system does not depend on ``y``, so the open-loop part of the input (anchor and forcing
-    term) is computed ahead in blocks of ``BLOCK`` samples; a step then costs one 2x2 update.
+    canonical system does not depend on ``y``, so the open-loop part of the input (anchor, moved by the
+    smooth start's offset, and forcing term) is computed ahead in blocks of ``BLOCK`` samples; a step then
+    costs one 2x2 update.
     """
 
     BLOCK = 256
 
     def __init__(self, dmp: RhythmicDMP, dt: float, transient: int, y0: np.ndarray, yd0: np.ndarray,
-                 anchor: np.ndarray, tempo: float, start_offset: np.ndarray | None = None) -> None:
+                 anchor: np.ndarray, tempo: float, start_offsets: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         self.dmp, self.dt, self.transient, self.anchor = dmp, dt, transient, anchor
-        self.start_offset = np.zeros_like(anchor) if start_offset is None else start_offset
-        self.fade_length = dmp.transients[transient].length / tempo
+        self.start_offsets = start_offsets
+        self.blend_length = dmp.transients[transient].length / tempo
         self.canonical = replace(dmp.canonical, tempo=tempo)
         self.omega = self.canonical.omega * tempo
         self.system = _transformation(self.omega, dt, dmp.alpha_z)
@@ -593,7 +805,10 @@ class DMPStepper:
             start = self.dmp.transients[self.transient]
             times = (index * self.BLOCK + np.arange(self.BLOCK)) * self.dt
             phi, r = self.canonical.state(times, start.phi0, start.r0)
-            anchor = self.anchor + start_fade(times, self.fade_length)[:, None] * self.start_offset
+            anchor = self.anchor
+            if self.start_offsets is not None:
+                anchor = anchor + _blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
+                                               self.start_offsets[1][None], self.omega, self.dmp.alpha_z)[0]
             if self.stop is None:
                 forcing = self.dmp.basis.forcing(phi, r, self.dmp.weights)
             else:
@@ -601,7 +816,7 @@ class DMPStepper:
                 forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, self.dmp.weights,
                                                   self.dmp.ending.weights)
                 anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - self.anchor)
-            self._block = (self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing)
+            self._block = self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing
             self._block_index = index
         return self._block[offset]
 

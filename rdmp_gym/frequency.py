@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .dmp import _blend_shift
 from .stopping import StopPlan
 from .validation import as_finite_array, check_positive
 
@@ -121,13 +122,14 @@ class AdaptiveFrequencyStepper:
         frequency_time: ``tau_Omega`` (s; default one fitted period), the low-pass of the oscillator's frequency.
         frequency_coupling: gain of the oscillator's frequency equation (default ``coupling``).
         oscillator_phase: the oscillator's initial phase (default the DMP's, so a locked input keeps it).
+        start_blend: the smooth start of :meth:`rdmp_gym.RhythmicDMP.rollout` (default; in canonical time).
     """
 
     BLOCK = 512
 
     def __init__(self, dmp, dt: float, transient: int = 0, coupling: float = 2.0, phase_gain: float = 1.0,
                  frequency_time: float | None = None, frequency_coupling: float | None = None,
-                 oscillator_phase: float | None = None) -> None:
+                 oscillator_phase: float | None = None, start_blend: bool = True) -> None:
         self.dmp, self.dt = dmp, check_positive(dt, "dt")
         self.transient = dmp._check_transient(transient)
         self.start_state = dmp.transients[self.transient]
@@ -144,6 +146,10 @@ class AdaptiveFrequencyStepper:
         self.y = self.start_state.start.copy()
         self.z = self.start_state.start_velocity / self.omega_fit
         self.stop: StopPlan | None = None
+        self.start_offsets = None
+        if start_blend:
+            y_settled, yd_settled = dmp.settled_start(self.transient, 1.0)
+            self.start_offsets = (self.start_state.start - y_settled, self.start_state.start_velocity - yd_settled)
 
     @property
     def phase(self) -> float:
@@ -166,6 +172,9 @@ class AdaptiveFrequencyStepper:
             tau = times - self.stop.exit_time
             forcing = dmp.ending.forcing(dmp.basis, phi, r, tau, self.stop.rotation, dmp.weights, dmp.ending.weights)
             anchor = dmp.anchor + dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - dmp.anchor)
+        if self.start_offsets is not None:
+            anchor = anchor + _blend_shift(times, np.array([start.length]), self.start_offsets[0][None],
+                                           self.start_offsets[1][None], self.omega_fit, dmp.alpha_z)[0]
         return dmp.alpha_z * dmp.alpha_z / 4.0 * anchor + dmp.amplitude * forcing
 
     def _drive(self, s: float) -> np.ndarray:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .basis import GATE_FLOOR, NORMALISATION_EPSILON, normalize
+from .basis import GATE_FLOOR, normalize
 from .canonical import CanonicalSystem
 from .demonstrations import (
     _DEFAULT_START,
@@ -46,6 +46,7 @@ from .demonstrations import (
 )
 from .fitting import forcing_target, smooth_derivatives
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
+from .transformation import TransformationSystem
 from .validation import as_finite_array, check_positive
 
 __all__ = ["Ending", "StopFading", "StopPlan", "StopSegmentation", "ending_demonstration", "exit_time", "fit_ending",
@@ -189,7 +190,7 @@ class Ending:
         -> ``[..., T, d]``."""
         raw = self.mixture(basis, phi, r, tau, rotation)
         full = np.concatenate([weights, stop_weights], axis=-1)
-        return (raw @ np.swapaxes(full, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + NORMALISATION_EPSILON)
+        return (raw @ np.swapaxes(full, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + basis.fading.floor)
 
     def to_dict(self) -> dict:
         """JSON-ready numbers (the optional ``stop`` field of a DMP file)."""
@@ -198,17 +199,6 @@ class Ending:
                 "weights": self.weights.tolist(),
                 "fading": {"nu1": self.fading.nu1, "nu2": self.fading.nu2, "k": self.fading.k,
                            "delta": self.fading.delta}}
-
-    @classmethod
-    def from_dict(cls, data: dict) -> Ending:
-        """Inverse of :meth:`to_dict`; ``ValueError`` naming a missing field."""
-        try:
-            return cls(float(data["exit_phase"]), float(data["length"]), float(data["blend_start"]),
-                       np.array(data["goal"], dtype=float), np.array(data["centres"], dtype=float).reshape(-1, 2),
-                       np.array(data["widths"], dtype=float), np.array(data["weights"], dtype=float),
-                       StopFading(**data["fading"]))
-        except KeyError as error:
-            raise ValueError(f"path: the DMP file's stop is missing the field {error.args[0]!r}") from error
 
     def with_weights(self, weights: np.ndarray) -> Ending:
         """The same ending with new stop weights ``[d, S]``."""
@@ -392,6 +382,8 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
                                         for name in ("delta", "smoothing", "regularization"))
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
+    if regularization is None:          # resolved per method, as in RhythmicDMP.fit
+        regularization = 1e-4 if fit_kwargs.get("method", defaults["method"].default) == "trajectory" else 1e-6
     canonical, mu = dmp.canonical, dmp.canonical.mu
     fading = StopFading(nu1_factor * mu, nu2_factor * mu, delta=delta)
     u1 = _minimum_jerk_inverse(1.0 - nu1_factor)
@@ -412,21 +404,52 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     ending = Ending(exit_phase, length, u1 * length, seg.goal, centres, widths,
                     np.zeros((dmp.n_dims, int(n_stop))), fading)
 
-    rows = slice(int(np.floor(exit_at / dt)), None)
-    t = demo.t[rows] - demo.t[0]
-    Y, Yd, Ydd = (array[rows] for array in smooth_derivatives(demo.Y, dt, smoothing))
-    phi, r = canonical.state(t, start.phi0, start.r0)
-    tau = t - exit_at
-    anchor = dmp.anchor + ending.anchor_blend(tau)[:, None] * (seg.goal - dmp.anchor)
-    target = forcing_target(Y, Yd, Ydd, anchor, canonical.omega, dmp.alpha_z)
-    normalized = normalize(ending.mixture(dmp.basis, phi, r, tau, 0.0))
-    held, free = normalized[:, : dmp.basis.n_basis], normalized[:, dmp.basis.n_basis:]
-    residual = target - held @ dmp.weights.T
-    gram = free.T @ free
-    lam = regularization * max(float(np.mean(np.diag(gram))), 1e-300)
-    stop_weights = np.linalg.solve(gram + lam * np.eye(gram.shape[0]), free.T @ residual).T
+    method = fit_kwargs.get("method", defaults["method"].default)
+    if method == "trajectory":
+        substeps = int(fit_kwargs.get("substeps", defaults["substeps"].default))
+        stop_weights = _trajectory_stop_weights(dmp.with_ending(ending), demo, exit_at, substeps, regularization)
+    else:
+        rows = slice(int(np.floor(exit_at / dt)), None)
+        t = demo.t[rows] - demo.t[0]
+        Y, Yd, Ydd = (array[rows] for array in smooth_derivatives(demo.Y, dt, smoothing))
+        phi, r = canonical.state(t, start.phi0, start.r0)
+        tau = t - exit_at
+        anchor = dmp.anchor + ending.anchor_blend(tau)[:, None] * (seg.goal - dmp.anchor)
+        target = forcing_target(Y, Yd, Ydd, anchor, canonical.omega, dmp.alpha_z)
+        normalized = normalize(ending.mixture(dmp.basis, phi, r, tau, 0.0), dmp.basis.fading.floor)
+        held, free = normalized[:, : dmp.basis.n_basis], normalized[:, dmp.basis.n_basis:]
+        stop_weights = _ridge(free, target - held @ dmp.weights.T, regularization)
     logger.info("fitted a stop: exit phase %.3f rad, stop length %.3f s, S=%d", exit_phase, length, n_stop)
     return dmp.with_ending(ending.with_weights(stop_weights))
+
+
+def _ridge(design: np.ndarray, target: np.ndarray, regularization: float) -> np.ndarray:
+    """Weights ``[d, S]`` of ``design [L, S] @ W.T ~ target [L, d]`` with a ridge relative to the mean diagonal."""
+    gram = design.T @ design
+    lam = regularization * max(float(np.mean(np.diag(gram))), 1e-300)
+    return np.linalg.solve(gram + lam * np.eye(gram.shape[0]), design.T @ target).T
+
+
+def _trajectory_stop_weights(dmp, demo: Demonstration, exit_at: float, substeps: int,
+                             regularization: float) -> np.ndarray:
+    """Stop weights ``[d, S]`` that make the DMP's own rollout (smooth start, stop at ``exit_at``) match the
+    sampled positions from the exit on, as :meth:`RhythmicDMP.fit`'s ``method="trajectory"`` does for the
+    other weights: the rollout is its path with zero stop weights plus the spring's response to each stop
+    basis function (simulated ``substeps`` times finer than the samples); one ridge problem, no derivatives
+    of the noisy samples."""
+    ending, canonical = dmp.ending, dmp.canonical
+    start = dmp.transients[0]
+    fine = np.arange((demo.n_samples - 1) * substeps + 1) * (demo.dt / substeps)
+    zero = dmp.with_ending(ending.with_weights(np.zeros_like(ending.weights)))
+    free = zero.rollout(fine, stop_at=exit_at - 1e-9, tempo=1.0)[::substeps]            # [L, d]
+    phi, r = canonical.state(fine, start.phi0, start.r0)
+    columns = normalize(ending.mixture(dmp.basis, phi, r, fine - exit_at, 0.0),
+                        dmp.basis.fading.floor)[:, dmp.basis.n_basis:]                   # [T_fine, S]
+    system = TransformationSystem(canonical.omega, demo.dt / substeps, dmp.alpha_z)
+    zeros = np.zeros(ending.n_basis)
+    response = system.rollout(system.input(zeros, columns), zeros, zeros)[0][::substeps]  # [L, S]
+    rows = slice(int(np.floor(exit_at / demo.dt)), None)
+    return _ridge(response[rows], demo.Y[rows] - free[rows], regularization)
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,6 +6,8 @@ import numpy as np
 
 __all__ = [
     "as_finite_array",
+    "check_count",
+    "check_nonnegative",
     "check_positive",
     "check_time_grid",
 ]
@@ -32,6 +34,15 @@ def as_finite_array(value: object, name: str, ndim: int | tuple[int, ...] | None
         bad = int(np.size(array) - np.count_nonzero(np.isfinite(array)))
         raise ValueError(f"{name}: contains {bad} NaN or infinite value(s)")
     return array
+
+
+def check_nonnegative(value: float, name: str) -> float:
+    """Return ``value`` as a float, raising ``ValueError`` unless it is a finite number >= 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
+    if not 0.0 <= float(value) < np.inf:
+        raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+    return float(value)
 
 
 def check_positive(value: float, name: str) -> float:
@@ -65,3 +76,13 @@ def check_time_grid(t: object, name: str = "t", *, uniform: bool = True, min_len
             raise ValueError(f"{name}: time stamps must be evenly spaced (steps range from "
                              f"{steps.min():.6g} to {steps.max():.6g}); resample the data first")
     return t
+
+
+def check_count(value: object, name: str, low: int = 0) -> int:
+    """Return ``value`` as an int, raising ``TypeError`` unless it is an integer (not a bool or a float)
+    and ``ValueError`` unless it is ``>= low``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}: expected an integer, got {value!r}")
+    if value < low:
+        raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}")
+    return int(value)

@@ -58,7 +58,7 @@ def test_cost_weights_prefer_low_cost_and_sum_to_one():
 def test_pi2_improves_from_a_perturbed_start(task):
     start = _perturbed_start(task)
     _, history = _learn(task, "pi2", start, 8, {"sigma": 0.1})
-    assert history[0] < -7.0                       # the perturbed start tracks badly
+    assert history[0] < -5.0                       # the perturbed start tracks badly (issue 7: smoother, -5.2)
     assert history[-1] > history[0] + 1.5          # a clear improvement within 8 updates (80 episodes)
     assert np.all(np.diff(history) > -0.3)         # and no collapse on the way
 

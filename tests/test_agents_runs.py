@@ -31,7 +31,7 @@ def _without_time(records):
 def test_run_directory_holds_config_log_checkpoint_best_and_curve(tmp_path):
     run = train(_config(), tmp_path / "run")
     names = {p.name for p in run.path.iterdir()}
-    assert {"config.json", "log.jsonl", "checkpoint.pkl", "best_params.npy", "best_params.json",
+    assert {"config.json", "provenance.json", "log.jsonl", "checkpoint.json", "best_params.npy", "best_params.json",
             "learning_curve.png"} <= names
     records = run.read_log()
     assert [r["update"] for r in records] == [0, 1, 2, 3]

@@ -56,9 +56,10 @@ def test_only_periodic_basis_after_transient_and_transient_before(dmp):
     act = dmp.basis.normalized(phi, r)
     periodic_share = act[:, : dmp.basis.n_periodic].sum(1)
     length = start.length
-    assert np.all(periodic_share[t >= length] > 1 - 1e-3)
+    total = act.sum(1)
+    assert np.all(total > 0.97) and np.all(total <= 1.0)          # covered everywhere (the floor takes < 3 %)
+    assert np.all(periodic_share[t >= length] > total[t >= length] - 1e-3)
     assert np.all(periodic_share[t < 0.5 * length] < 1e-3)
-    np.testing.assert_allclose(act.sum(1), 1.0, atol=1e-6)      # the path is covered everywhere
 
 
 def test_normalised_mixture_is_finite_far_from_every_support(dmp):

@@ -64,24 +64,27 @@ def test_wiping_circle_steers_around_an_obstacle_on_its_path(wiping):
     t = np.arange(0.0, 8.0, 2e-3)
     obstacle = np.array([0.05, 0.0, 0.0])                                 # on the wiped circle
     free = wiping.rollout(t)
-    term = ObstacleAvoidance(obstacle, gamma=1e5, distance_scale=0.02)
+    term = ObstacleAvoidance(obstacle, gamma=2e4, distance_scale=0.03)     # gains for the default alpha_z = 5
     y, yd = avoiding_rollout(wiping, t, term)
     periodic = t > 3.0
     free_distance = np.linalg.norm(free - obstacle, axis=1)
     assert free_distance[periodic].min() < 1e-3
-    assert np.linalg.norm(y - obstacle, axis=1)[periodic].min() > 9e-3
-    far = free_distance > 0.08                                            # the pattern is unchanged away from it
-    assert np.abs(y[far] - free[far]).max() < 1e-3
-    assert np.abs(np.gradient(yd, 2e-3, axis=0)).max() < 10.0            # m/s^2, bounded
-    # a low-passed coupling term (beyond Hoffmann et al.) keeps clear with far less jerk
-    smooth, smooth_velocity = avoiding_rollout(wiping, t, ObstacleAvoidance(obstacle, gamma=3e5, distance_scale=0.03),
-                                               smoothing=0.1)
+    assert np.linalg.norm(y - obstacle, axis=1)[periodic].min() > 0.012
+    # the pattern is back on the opposite side of the circle (the soft spring rejoins within about 0.4 s)
+    far = free_distance > 0.09
+    assert np.abs(y[far] - free[far]).max() < 2e-3
+    assert np.abs(np.gradient(yd, 2e-3, axis=0)).max() < 4.0             # m/s^2, bounded (free path 1.1)
 
     def squared_jerk(velocity):
         return np.sum(np.gradient(np.gradient(velocity, 2e-3, axis=0), 2e-3, axis=0)[periodic] ** 2)
 
+    _, free_velocity = wiping.rollout(t, return_velocity=True)
+    assert squared_jerk(yd) < 8.0 * squared_jerk(free_velocity)
+    # a low-passed coupling term (beyond Hoffmann et al.) keeps clear with less jerk still
+    smooth, smooth_velocity = avoiding_rollout(wiping, t, ObstacleAvoidance(obstacle, gamma=2e4, distance_scale=0.03),
+                                               smoothing=0.1)
     assert np.linalg.norm(smooth - obstacle, axis=1)[periodic].min() > 0.012
-    assert squared_jerk(smooth_velocity) < 0.2 * squared_jerk(yd)
+    assert squared_jerk(smooth_velocity) < 0.6 * squared_jerk(yd)
     # the stepper applies an object with an acceleration method like the explicit coupling vector
     a, b = wiping.start(2e-3), wiping.start(2e-3)
     for _ in range(1600):

@@ -11,6 +11,7 @@ from rdmp_gym import (
     segment,
     wiping_demonstration,
 )
+from rdmp_gym.dmp import PAPER_SETTINGS
 
 
 def relative_rmse(Y, reference, mask):
@@ -33,12 +34,17 @@ def dmp(demos, segs):
 
 
 @pytest.mark.parametrize("style", [1, 2, 3, 4])
-@pytest.mark.parametrize(("method", "transient_bound", "periodic_bound"), [("ridge", 0.02, 0.01), ("lwr", 0.02, 0.01)])
-def test_reproduces_four_styles(demos, segs, style, method, transient_bound, periodic_bound):
-    """Benchmark targets (N = M = 40): periodic < 1 %, transient < 2 % of the signal's range."""
+@pytest.mark.parametrize(("settings", "start_blend", "transient_bound", "periodic_bound"),
+                         [({}, True, 0.008, 0.003), ({"method": "ridge"}, True, 0.02, 0.01),
+                          ({**PAPER_SETTINGS, "method": "ridge"}, False, 0.02, 0.01),
+                          (PAPER_SETTINGS, False, 0.02, 0.01)])
+def test_reproduces_four_styles(demos, segs, style, settings, start_blend, transient_bound, periodic_bound):
+    """Position targets (N = M = 40): the defaults periodic < 0.3 %, transient < 0.8 % of the signal's range;
+    ridge on the forcing target (10) with the other defaults, and the paper's settings rolled out from the
+    demonstrated start as in the paper, < 1 % / 2 %."""
     demo = demos[style]
-    dmp = RhythmicDMP.fit(demo, method=method, segmentations=[segs[style]])
-    Y = dmp.rollout(demo.t)
+    dmp = RhythmicDMP.fit(demo, segmentations=[segs[style]], **settings)
+    Y = dmp.rollout(demo.t, start_blend=start_blend)
     transient = demo.t - demo.t[0] < demo.truth.transient_length
     assert relative_rmse(Y, demo.truth.clean, transient) < transient_bound
     assert relative_rmse(Y, demo.truth.clean, ~transient) < periodic_bound
@@ -89,8 +95,9 @@ def test_shifted_anchor_shifts_periodic_part_exactly(dmp, demos):
     base = dmp.rollout(t)
     moved = dmp.rollout(t, anchor=dmp.anchor + shift)
     periodic = t - t[0] > dmp.transients[0].length
+    # 1e-6: the start blend's input is held linearly between the 10 ms samples; the residue decays with the spring
     np.testing.assert_allclose(moved[periodic] - base[periodic], np.broadcast_to(shift, base[periodic].shape),
-                               atol=1e-9)
+                               atol=1e-6)
     np.testing.assert_allclose(moved[0], base[0])                  # same start
 
 
@@ -99,7 +106,7 @@ def test_new_start_still_converges_to_the_pattern(dmp, demos):
     base = dmp.rollout(t)
     other = dmp.rollout(t, y0=dmp.starts[0] + np.array([0.05, -0.1, 0.05]))
     periodic = t - t[0] > dmp.transients[0].length
-    assert np.max(np.abs(other[periodic] - base[periodic])) < 1e-9
+    assert np.max(np.abs(other[periodic] - base[periodic])) < 1e-6
     assert np.max(np.abs(other[:10] - base[:10])) > 0.01
 
 
@@ -115,7 +122,7 @@ def test_scaling_and_rotation_exact_on_periodic_part(dmp, demos):
     np.testing.assert_allclose(transformed, expected, atol=1e-9)          # the whole movement, from its mapped start
     periodic = t - t[0] > dmp.transients[0].length
     from_robot = dmp.rollout(t, y0=dmp.starts[0], scale=scale, rotation=angle)
-    np.testing.assert_allclose(from_robot[periodic], expected[periodic], atol=1e-9)
+    np.testing.assert_allclose(from_robot[periodic], expected[periodic], atol=1e-6)
 
 
 def test_tempo_change_is_exact(dmp):
@@ -170,6 +177,19 @@ def test_save_load_round_trip(tmp_path, dmp):
     np.testing.assert_array_equal(loaded.rollout(t), dmp.rollout(t))
 
 
+def test_version_1_files_without_a_mixture_floor_still_load(tmp_path, dmp):
+    import json
+
+    from rdmp_gym.basis import NORMALISATION_EPSILON
+    from rdmp_gym.serialization import dmp_to_dict
+
+    data = dmp_to_dict(dmp)
+    assert data["basis"]["fading"]["floor"] == dmp.basis.fading.floor
+    del data["basis"]["fading"]["floor"]                      # written before issue 7
+    (tmp_path / "old.json").write_text(json.dumps(data))
+    assert RhythmicDMP.load(tmp_path / "old.json").basis.fading.floor == NORMALISATION_EPSILON
+
+
 def test_load_rejects_other_files(tmp_path):
     path = tmp_path / "x.json"
     path.write_text('{"format": "something-else"}')
@@ -219,16 +239,16 @@ def test_start_blend_keeps_the_transient_shape_from_a_new_start(dmp, demos):
     t = demos[1].t
     offset = np.array([0.06, -0.08, 0.03])
     base = dmp.rollout(t)
-    snapped = dmp.rollout(t, y0=dmp.starts[0] + offset)
-    blended = dmp.rollout(t, y0=dmp.starts[0] + offset, start_blend=True)
+    snapped = dmp.rollout(t, y0=dmp.starts[0] + offset, start_blend=False)      # the paper's start
+    blended = dmp.rollout(t, y0=dmp.starts[0] + offset)                         # the default
     np.testing.assert_allclose(blended[0], dmp.starts[0] + offset)
-    speed = lambda Y: np.max(np.linalg.norm(np.diff(Y, axis=0), axis=1)) / 0.01  # noqa: E731
-    assert speed(blended) < 1.5 * speed(base) < speed(snapped)          # no jump towards the demonstrated start
+    peak = lambda Y: np.max(np.linalg.norm(np.diff(Y, 2, axis=0), axis=1)) / 0.01**2  # noqa: E731
+    assert peak(blended) < 1.5 * peak(base) < peak(snapped)           # no jump towards the demonstrated start
     early = t - t[0] < 0.3
     assert np.max(np.abs(blended[early] - base[early] - offset)) < 0.02   # starts out as the shifted demonstration
     late = t - t[0] > dmp.transients[0].length + 0.5
-    np.testing.assert_allclose(blended[late], base[late], atol=1e-8)     # same periodic part
-    stepper = dmp.start(0.01, y0=dmp.starts[0] + offset, start_blend=True)
+    np.testing.assert_allclose(blended[late], base[late], atol=1e-6)     # same periodic part
+    stepper = dmp.start(0.01, y0=dmp.starts[0] + offset)
     online = [stepper.state[0]] + [stepper.step()[0] for _ in range(t.size - 1)]
     np.testing.assert_allclose(np.array(online), blended, atol=1e-10)
     batch = dmp.rollout_batch(dmp.get_params()[None], t, y0=dmp.starts[0] + offset, start_blend=True)

@@ -1,9 +1,9 @@
-"""Gymnasium/SB3 contract of rdmp_gym/ArmarWipe-v0: spaces, checkers, reward terms, determinism, bad input."""
+"""Gymnasium/SB3 contract of rdmp_gym/ArmarWipe-v1: spaces, checkers, reward terms, determinism, bad input."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from rdmp_gym.envs import ENV_ID, TERMS, ArmarWipeEnv
+from rdmp_gym.envs import DEPRECATED_ENV_ID, ENV_ID, TERMS, ArmarWipeEnv
 
 import rdmp_gym  # noqa: F401  (registers the env)
 from rdmp_gym import wiping_demonstration
@@ -31,7 +31,7 @@ def test_registered_and_spaces(env):
     assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
     assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")),)
     space = env.observation_space
-    assert space.dtype == np.float32 and space.shape == (10,)
+    assert space.dtype == np.float32 and space.shape == (13,)
     assert np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
 
 
@@ -46,7 +46,7 @@ def test_gymnasium_and_sb3_checkers():
 
 
 def test_step_contract_and_reward_terms(env):
-    obs, info = env.reset(seed=3)
+    obs, info = env.reset(seed=3, options={"obstacle": 0})
     assert env.observation_space.contains(obs)
     obs2, reward, terminated, truncated, info = env.step(zero(env))
     assert terminated is True and truncated is False
@@ -59,8 +59,12 @@ def test_step_contract_and_reward_terms(env):
     assert cost.dtype == np.float64 and cost.shape == (env.unwrapped.n_steps,)
     assert cost.sum() == pytest.approx(-reward, abs=1e-9)
     assert 0.5 < reward < 1.5                                    # O(1)
-    for key in ("coverage", "force_mean", "force_in_band_fraction", "valid", "unstable", "params"):
+    for key in ("coverage", "force_mean", "force_in_band_fraction", "valid", "unstable", "params", "is_success",
+                "impact_force", "jerk_ratio", "obstacle_shift", "penetration"):
         assert key in info
+    assert type(info["is_success"]) is bool
+    assert info["jerk_ratio"] == pytest.approx(1.0)                 # action 0 is the imitation
+    assert info["reward_terms"]["smoothness"] == 0.0
     assert info["valid"] is True and info["unstable"] is False
     assert info["params"] == pytest.approx(env.unwrapped.action_map.theta0)
 
@@ -150,10 +154,23 @@ def test_reset_options(env):
     assert obs[0] == pytest.approx(0.01)
     assert obs[3:5] == pytest.approx([0.02, -0.01])
     assert obs[5:7] == pytest.approx([0.1, 0.08])
-    assert obs[7:] == pytest.approx([-0.05, 0.1, 0.08])
-    full = np.array([0, 0, 0, 0, 0, 0.12, 0.12, -0.07, 0.1, 0.08])
+    assert obs[7:10] == pytest.approx([-0.05, 0.1, 0.08])
+    assert obs[10] in (0.0, 1.0)
+    full = np.array([0, 0, 0, 0, 0, 0.12, 0.12, -0.07, 0.1, 0.08, 1.0, -0.05, 0.15])
     obs, _ = env.reset(seed=0, options={"context": full})
     assert obs == pytest.approx(full)
+    assert env.unwrapped.scene.obstacle_position()[:2] == pytest.approx(env.unwrapped.scene.to_world(
+        np.array([-0.05, 0.15, 0.0]), actual=True)[:2], abs=1e-6)
+    # dirt lives on the table only: a patch over the near edge (x = -0.14) is refused
+    with pytest.raises(ValueError, match="beyond the table"):
+        env.reset(options={"patch_centre": [-0.15, 0.0], "patch_size": [0.12, 0.12]})
+    # a cup off the table or on the patch is refused
+    with pytest.raises(ValueError, match="obstacle_position"):
+        env.reset(options={"patch_centre": [0.0, 0.0], "obstacle": 1, "obstacle_position": [0.02, 0.03]})
+    no_cup = gym.make(ENV_ID, obstacle=False, **FAST)
+    with pytest.raises(ValueError, match="obstacle=False"):
+        no_cup.reset(options={"obstacle": 1})
+    assert all(no_cup.reset(seed=s)[0][10] == 0.0 for s in range(5))
     with pytest.raises(ValueError, match="options"):
         env.reset(options={"table_height": 0.5})
     with pytest.raises(ValueError, match="options"):
@@ -178,6 +195,9 @@ def test_reset_options(env):
     ({"render_mode": "depth_array"}, "render_mode"),
     ({"xml_file": "/nonexistent.xml"}, "xml_file"),
     ({"context_ranges": {"table_height": (0.0, 1.0)}}, "context_ranges"),
+    ({"context_ranges": {"patch_centre": (-0.1, 0.0)}}, "context_ranges"),     # patches over the table edge
+    ({"obstacle": "yes"}, "obstacle"),
+    ({"wear_rate": 0.0}, "wear_rate"),
 ])
 def test_bad_constructor_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -196,6 +216,13 @@ def test_variants_frame_skip_xml_groups_demonstration():
     w.reset(seed=0)
     _, reward, *_ = w.step(np.zeros(w.action_space.shape, dtype=np.float32))
     assert reward > 0.5
+
+
+def test_v0_is_deprecated():
+    with pytest.warns(DeprecationWarning, match="ArmarWipe-v1"):
+        old = gym.make(DEPRECATED_ENV_ID, **FAST)
+    assert isinstance(old.unwrapped, ArmarWipeEnv) and old.unwrapped.obstacle is False
+    assert gym.spec(ENV_ID).kwargs["obstacle"] is True
 
 
 def test_render_and_record(tmp_path):

@@ -32,12 +32,15 @@ def scene():
 
 def test_counts_and_options(scene):
     m = scene.model
-    assert m.nu == 10 and m.njnt == 11 and m.nq == 11      # 10 hinges + the sponge slide
+    # 10 arm hinges + the sponge slide and its two tilt hinges + the obstacle's free joint
+    assert m.nu == 10 and m.njnt == 14 and m.nq == 13 + 7
     assert [m.joint(j).name for j in scene.joint_ids] == list(ARM_JOINTS)
-    # wrist force(3), torque(3), sponge touch(1), contact sensors sponge-table (found, force 3), robot-table (found)
-    assert m.nsensor == 5 and m.nsensordata == 12
+    # wrist force(3), torque(3), sponge touch(1), contact sensors sponge-table (found, force 3), robot-table
+    # (found), arm-torso and arm-platform (found, distance), arm-obstacle (found)
+    assert m.nsensor == 8 and m.nsensordata == 17
     assert [m.sensor(i).name for i in range(m.nsensor)] == ["wrist_force", "wrist_torque", "sponge_touch",
-                                                            "sponge_table", "robot_table"]
+                                                            "sponge_table", "robot_table", "arm_torso",
+                                                            "arm_platform", "arm_obstacle"]
     assert m.sensor("wrist_force").objid[0] == m.site("ft_site").id
     assert m.opt.timestep == pytest.approx(0.002)
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -57,18 +60,27 @@ def test_limits_and_masses(scene):
         assert m.body(name).mass[0] == pytest.approx(mass)
     assert 0.8 <= m.body("hand").mass[0] <= 1.0
     assert m.joint("sponge_slide").stiffness[0] == pytest.approx(2500)
+    for name in ("sponge_tilt_y", "sponge_tilt_z"):               # the pad's compliant mount
+        assert m.joint(name).stiffness[0] > 0 and m.joint(name).range[1] > 0.15
+
+
+def collide(m, a, b):
+    """Whether MuJoCo's bit masks let geoms ``a`` and ``b`` collide."""
+    return bool((m.geom_contype[a] & m.geom_conaffinity[b]) or (m.geom_contype[b] & m.geom_conaffinity[a]))
 
 
 def test_collision_filter(scene):
+    """The moving arm (hand, fingers, thumb and sponge included) collides with the table, the floor, the
+    robot's torso, head and platform and the obstacle; the arm's own links do not collide with each other."""
     m = scene.model
-    robot = np.flatnonzero(scene.is_arm_geom | (np.arange(m.ngeom) == scene.sponge_geom))
-    colliding = [g for g in robot if m.geom_contype[g] or m.geom_conaffinity[g]]
-    assert colliding, "the robot must have collision geoms"
-    for g in colliding:
-        assert (m.geom_contype[g], m.geom_conaffinity[g]) == (2, 1)
-    for name in ("table_top", "floor"):
-        g = m.geom(name).id
-        assert (m.geom_contype[g], m.geom_conaffinity[g]) == (1, 2)
+    arm = [m.geom(n).id for n in ("r_upperarm", "r_forearm", "palm", "fingers", "thumb", "sponge")]
+    body = [m.geom(n).id for n in ("torso", "head", "platform")]
+    environment = [m.geom(n).id for n in ("table_top", "floor", "obstacle")]
+    for a in arm:
+        assert all(collide(m, a, g) for g in body + environment), m.geom(a).name
+        assert not any(collide(m, a, b) for b in arm if b != a)
+    assert not any(collide(m, a, b) for a in body for b in body if a != b)
+    assert collide(m, m.geom("obstacle").id, m.geom("table_top").id)
 
 
 def test_zero_pose_forward_kinematics(scene):
@@ -113,7 +125,7 @@ def test_path_ik_reaches_a_circle_flat_and_within_limits(scene):
     ik = PathIK(kin, DEFAULT_POSTURE, DEFAULT_MOBILITY)
     t = np.linspace(0, 2 * np.pi, 300)
     path = np.c_[0.05 * np.cos(t), 0.05 * np.sin(t), np.zeros_like(t)]
-    sol = ik.solve(scene.to_world(path), scene.nominal_normal)
+    sol = ik.solve(scene.to_world(path, actual=True), scene.nominal_normal)
     assert sol.pos_error.max() < 1e-3
     assert np.degrees(sol.rot_error.max()) < 0.5
     assert np.all(sol.q >= kin.lower) and np.all(sol.q <= kin.upper)
@@ -129,7 +141,10 @@ def test_table_pose_and_dirt_grid(scene):
     origin, rot = scene.table_frame(actual=True)
     assert origin[2] == pytest.approx(0.93)
     assert rot @ rot.T == pytest.approx(np.eye(3), abs=1e-12)
+    assert scene.control_frame()[0] == pytest.approx(scene.nominal_table_pos)     # height unknown to the controller
+    assert scene.control_frame()[1] == pytest.approx(rot)                         # tilt known
     scene.set_table(TablePose())
+    assert scene.table_extent == pytest.approx((-0.14, 0.36, -0.45, 0.45))
     cells = dirt_grid(np.array([0.01, -0.02]), np.array([0.12, 0.10]), 0.01)
     assert cells.shape == (120, 2)
     assert cells.mean(axis=0) == pytest.approx([0.01, -0.02])

@@ -1,4 +1,5 @@
-"""Wiping behaviour in MuJoCo: coverage and force of the imitation, force adaptation, collisions, divergence."""
+"""Wiping behaviour in MuJoCo: coverage and force of the imitation, the pad contact at 500 Hz, Preston wear,
+force adaptation, tilted tables, collisions, divergence."""
 
 import gymnasium as gym
 import numpy as np
@@ -6,13 +7,13 @@ import pytest
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult
-from rdmp_gym.envs.reward import RewardSettings, RewardWeights, wipe_reward
-from rdmp_gym.envs.wiping import DirtCells, contact_summary, simulate_wipe
+from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
+from rdmp_gym.envs.wiping import DirtField, contact_summary, simulate_wipe
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
-           "sponge_start": [-0.07, 0.10, 0.08]}
+           "sponge_start": [-0.07, 0.22, 0.12], "obstacle": 0}
 
 
 def run(env, options, action=None, seed=0):
@@ -36,21 +37,68 @@ def rigid():
 def test_imitation_wipes_the_default_patch(adaptive):
     reward, info = run(adaptive, NOMINAL)
     assert info["valid"] and not info["unstable"]
-    assert info["coverage"] >= 0.8
+    assert info["coverage"] >= 0.95                              # calibrated: 0.998 in 3 periods
+    assert info["is_success"] is True
     assert info["force_in_band_fraction"] >= 0.8
     assert 12.0 <= info["force_mean"] <= 25.0                    # near the 18 N target
     assert info["contact_fraction"] >= 0.9
     assert info["max_force"] < 1000.0 and info["max_wrist_force"] < 1000.0   # no kN forces
     assert info["arm_collision_fraction"] == 0.0 and info["joint_limit_fraction"] == 0.0
-    assert 0.9 <= reward <= 1.3
+    assert info["self_collision_fraction"] == 0.0 and info["penetration"] == 0.0
+    assert info["impact_force"] < RewardSettings().impact_force and info["reward_terms"]["impact"] == 0.0
+    assert info["peak_joint_accel"] < RewardSettings().max_joint_accel
+    assert 1.0 <= reward <= 1.3
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_wear_needs_strokes_under_force_and_calibration_has_room(adaptive):
+    """Preston wear: a cell loses dirt in proportion to pressure x sliding distance; with half the wear rate
+    the imitation still removes 90 % of a default patch's dirt (4 periods)."""
+    u = adaptive.unwrapped
+    adaptive.reset(seed=0, options=NOMINAL)
+    half = u.scene.sponge_half
+    dirt = DirtField(u._cells_world, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
+    # the box's x axis points up (its face, the -x side, lies on the table), centred over cell 70
+    rot = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).ravel()
+    box = np.tile(u._cells_world[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
+    rots = np.tile(rot, (3, 1))
+    still = dirt.wear(np.full(3, 18.0), np.zeros(3), box, rots, half)
+    assert still.max() == 0.0                                       # pressing without sliding removes nothing
+    hover = dirt.wear(np.zeros(3), np.full(3, 0.01), box, rots, half)
+    assert hover.max() == 0.0                                       # sliding without contact removes nothing
+    wear = dirt.wear(np.array([18.0, 36.0, 18.0]), np.array([0.01, 0.01, 0.02]), box, rots, half)[:, 70]
+    step = np.diff(wear, prepend=0.0)
+    assert step[1] == pytest.approx(2 * step[0]) and step[2] == pytest.approx(2 * step[0])    # p x s
+    assert step[0] == pytest.approx(1e-3 * 18.0 / (4 * half[1] * half[2]) * 0.01)
+    slow = gym.make(ENV_ID, n_periods=4.0, wear_rate=1e-3)
+    _, info = run(slow, NOMINAL)
+    assert info["coverage"] >= 0.9
+
+
+@pytest.mark.parametrize("seed", [1, 2])
 def test_imitation_wipes_patches_anywhere_in_the_context_range(adaptive, seed):
-    _, info = run(adaptive, {"patch_size": [0.12, 0.12]}, seed=seed)
+    _, info = run(adaptive, {"patch_size": [0.12, 0.12], "obstacle": 0}, seed=seed)
     assert info["valid"] and not info["unstable"]
-    assert info["coverage"] >= 0.8
-    assert info["force_in_band_fraction"] >= 0.75
+    assert info["coverage"] >= 0.85
+    assert info["force_in_band_fraction"] >= 0.95
+
+
+def test_pad_contact_at_500_hz_is_steady(adaptive):
+    """Issue 8 item 4: on a level table the 500 Hz sponge-table force stays within 2 N (SD) of its mean near
+    the 18 N target during wiping, the contact is an area (several points), and it never drops to 0 N."""
+    u = adaptive.unwrapped
+    u.fine_force = True
+    try:
+        _, info = run(adaptive, NOMINAL)
+    finally:
+        u.fine_force = False
+    fine = info["fine_force_trace"]
+    assert fine.shape == (u.n_steps * u.frame_skip,)
+    skip = u.frame_skip
+    wiping = fine[(int(np.argmax(u.periodic)) + round(0.5 / u.dt)) * skip:]   # from 0.5 s into the wiping phase
+    assert abs(wiping.mean() - 18.0) < 1.0
+    assert wiping.std() <= 2.0                                   # measured 0.7-0.8 N (v0: 5.0 N)
+    assert wiping.min() > 5.0                                    # no single-step drops (v0: 20 per second to 0 N)
+    assert fine[skip - 1::skip] == pytest.approx(info["force_trace"], abs=1e-9)   # control rate: a subsample
 
 
 def test_lower_table_is_found_only_with_force_adaptation(adaptive, rigid):
@@ -69,9 +117,19 @@ def test_higher_table_is_pressed_with_the_target_force_only_with_adaptation(adap
     r_rigid, without = run(rigid, higher)
     assert with_adaptation["coverage"] >= 0.8
     assert abs(with_adaptation["force_mean"] - 18.0) < 4.0
-    assert without["force_mean"] > 30.0                           # pressed 3 cm too deep
+    assert without["force_mean"] > 25.0                           # pressed 3 cm too deep
     assert with_adaptation["force_error_mean"] < 0.5 * without["force_error_mean"]
     assert r_adapt > r_rigid
+
+
+@pytest.mark.parametrize("tilt", [(0.15, 0.0), (0.0, 0.15), (0.15, -0.15)])
+def test_any_tilt_in_the_range_is_wiped_like_the_level_table(adaptive, tilt):
+    """Issue 8 item 5: the sponge follows the actual table normal; coverage within 10 % of the level table."""
+    _, level = run(adaptive, NOMINAL)
+    _, tilted = run(adaptive, {**NOMINAL, "table_tilt": list(tilt)})
+    assert tilted["valid"] and not tilted["unstable"]
+    assert tilted["coverage"] >= 0.9 * level["coverage"]
+    assert tilted["force_in_band_fraction"] >= 0.95 and tilted["force_sd"] <= 2.0
 
 
 def test_tilted_table_is_followed_with_adaptation(adaptive, rigid):
@@ -107,12 +165,12 @@ def test_arm_contact_with_the_table_is_detected_and_penalised(adaptive):
     solution = IKResult(q=q, normal_dq=np.zeros_like(q), pos_error=np.zeros(150), rot_error=np.zeros(150))
     plan = JointTargetPlan(solution, u.dt, np.zeros(10), scene.joint_lower, scene.joint_upper)
     adaptation = ForceAdaptation(ForceAdaptationSettings(enabled=False), u.dt)
-    dirt = DirtCells(u._cells_world, np.array([0.0, 0.0, 1.0]))
+    dirt = DirtField(u._cells_world, np.array([0.0, 0.0, 1.0]))
     trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, dirt, u.frame_skip)
     assert not trace.unstable
     assert trace.arm_contact[:50].sum() == 0 and trace.arm_contact[-20:].mean() > 0.8   # the palm hits the table
-    terms, cost = wipe_reward(trace, np.ones(150, dtype=bool), len(u._cells_world), RewardSettings(),
-                              RewardWeights())
+    smooth = Smoothness(np.zeros(150), 1.0, np.zeros(150))
+    terms, cost = wipe_reward(trace, np.ones(150, dtype=bool), smooth, RewardSettings(), RewardWeights())
     assert terms["arm_collision"] == pytest.approx(-trace.arm_contact.mean())
     assert cost.sum() == pytest.approx(-sum(terms.values()))
 
@@ -125,26 +183,28 @@ def test_contact_sensor_force_and_coverage_match_the_contact_list(adaptive):
     scene = u.scene
     normal = scene.table_frame(actual=True)[1][:, 2]
     adr = scene.sponge_contact_adr
-    seen = {"pairs": [], "wiped": None}
+    seen = {"pairs": [], "dirt": None}
 
-    def check(k, wiped):
+    def check(k, dirt_left):
         reference, _ = contact_summary(scene, normal)
         sensor = abs(float(scene.data.sensordata[adr + 1:adr + 4] @ normal))
         seen["pairs"].append((reference, sensor))
-        seen["wiped"] = wiped.copy()
+        if k == u.n_steps - 1:
+            seen["dirt"] = dirt_left()
 
     solution = u._solve(u.rollout_path(u.action_map.theta0))
-    plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper)
+    plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
+                           scene.control_frame()[1][:, 2])
     scene.set_arm_state(solution.q[0])
     adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
     trace = simulate_wipe(scene, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
-                          DirtCells(u._cells_world, normal), u.frame_skip, callback=check)
+                          DirtField(u._cells_world, normal), u.frame_skip, callback=check)
     pairs = np.array(seen["pairs"])
     assert pairs[:, 0].max() > 10.0
     assert pairs[:, 1] == pytest.approx(pairs[:, 0], abs=1e-9)
     assert trace.contact_force == pytest.approx(pairs[:, 1], abs=1e-9)
-    assert np.array_equal(seen["wiped"], trace.wiped) and trace.wiped.mean() > 0.8
-    assert trace.new_cells.sum() == trace.wiped.sum()
+    assert seen["dirt"] == pytest.approx(trace.dirt, abs=1e-12) and trace.coverage > 0.9
+    assert trace.removed.sum() == pytest.approx(trace.coverage)
 
 
 def test_diverging_simulation_ends_with_a_flag_and_penalty():

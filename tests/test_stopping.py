@@ -139,7 +139,8 @@ def test_stop_group_save_load_and_old_files(fitted, tmp_path):
     exit_at = dmp._stop_plan(5.0, None, None, dmp.transients[0], 1.0, dmp.anchor[None],
                              dmp.amplitude[None]).exit_time
     assert not np.any(stop_columns[t < exit_at])
-    np.testing.assert_allclose(stop_columns[-1].reshape(dmp.n_dims, -1).sum(axis=1), 1.0, atol=1e-6)  # at rest
+    at_rest = stop_columns[-1].reshape(dmp.n_dims, -1).sum(axis=1)     # the origin's function is 1: sum >= 1 - floor
+    assert np.all(at_rest >= 1.0 - dmp.basis.fading.floor) and np.all(at_rest <= 1.0)
     assert np.all(weights <= 1.0 + 1e-12) and np.all(weights >= 0.0)
     path = tmp_path / "ending.json"
     dmp.save(path)

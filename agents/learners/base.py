@@ -8,12 +8,13 @@ minimises the episode cost ``J = -return``; :class:`EpisodeBatch` carries the re
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["EpisodeBatch", "Learner", "cost_weights"]
+__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_weights"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,56 @@ def cost_weights(costs: np.ndarray, h: float) -> np.ndarray:
     scaled = np.divide(costs - low, spread, out=np.zeros_like(costs, dtype=np.float64), where=spread > 0)
     weights = np.exp(-h * scaled)
     return weights / weights.sum(axis=-1, keepdims=True)
+
+
+def check_state_like(value: Any, template: Any, path: str) -> None:
+    """Raise ``ValueError`` naming ``path`` unless ``value`` has the structure of ``template``.
+
+    Dicts need the same keys; arrays the same shape except along the first axis (which may grow, e.g. a
+    history) and the same kind (float arrays finite); numbers, strings, bools, lists and Generators their
+    own kind. List lengths and first-axis lengths are left to the owner's checks.
+    """
+    def fail(expected: str) -> None:
+        raise ValueError(f"{path}: expected {expected}, got {type(value).__name__}")
+
+    if template is None:
+        return
+    if isinstance(template, Mapping):
+        if not isinstance(value, Mapping):
+            fail("a mapping")
+        missing, extra = sorted(set(template) - set(value)), sorted(set(value) - set(template))
+        if missing or extra:
+            raise ValueError(f"{path}: missing entries {missing}, unexpected entries {extra}")
+        for key in template:
+            check_state_like(value[key], template[key], f"{path}.{key}")
+    elif isinstance(template, np.ndarray):
+        if not isinstance(value, np.ndarray):
+            fail("an array")
+        if value.ndim != template.ndim or value.shape[1:] != template.shape[1:] \
+                or (value.dtype.kind == "b") != (template.dtype.kind == "b") or value.dtype.kind not in "biuf":
+            raise ValueError(f"{path}: expected an array of shape [*, {', '.join(map(str, template.shape[1:]))}] "
+                             f"like {template.shape} ({template.dtype}), got shape {value.shape} ({value.dtype})")
+        if value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            raise ValueError(f"{path}: contains NaN or infinite values")
+    elif isinstance(template, (bool, np.bool_)):
+        if not isinstance(value, (bool, np.bool_)):
+            fail("true or false")
+    elif isinstance(template, (int, np.integer)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            fail("an integer")
+    elif isinstance(template, (float, np.floating)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+            fail("a number")
+        if np.isfinite(template) and not np.isfinite(value):
+            raise ValueError(f"{path}: expected a finite number, got {value}")
+    elif isinstance(template, str):
+        if not isinstance(value, str):
+            fail("a string")
+    elif isinstance(template, (list, tuple)):
+        if not isinstance(value, (list, tuple)):
+            fail("a list")
+    elif isinstance(template, np.random.Generator) and not isinstance(value, np.random.Generator):
+        fail("a numpy Generator")
 
 
 class Learner(ABC):
@@ -125,21 +176,44 @@ class Learner(ABC):
         self.updates += 1
 
     def state_dict(self) -> dict[str, Any]:
-        """Everything needed to continue exactly where the learner is (picklable)."""
+        """Everything needed to continue exactly where the learner is.
+
+        A tree of dicts, lists, numbers, strings, numpy arrays and RNG states (``bit_generator.state``
+        dicts or Generators), which :mod:`rdmp_gym.agents.state_files` stores as JSON + ``.npz`` without
+        pickle. A learner adds its own entries through :meth:`_extra_state`.
+        """
         return {"name": self.name, "mean": self._mean.copy(), "updates": self.updates,
                 "rng": self.rng.bit_generator.state, **self._extra_state()}
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore a state written by :meth:`state_dict` (same learner type and dimension)."""
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        """Restore a state written by :meth:`state_dict` (same learner type and dimension).
+
+        The state is checked against this learner's own :meth:`state_dict` before anything is changed:
+        the same keys, the same kinds of values, arrays of the same dimensionality (finite floats);
+        a mismatch is a ``ValueError`` naming the entry.
+        """
+        if not isinstance(state, Mapping):
+            raise TypeError(f"state: expected a mapping, got {type(state).__name__}")
         if state.get("name") != self.name:
             raise ValueError(f"state: written by learner {state.get('name')!r}, this is {self.name!r}")
+        check_state_like(state, self.state_dict(), "state")
         mean = np.asarray(state["mean"], dtype=np.float64)
-        if mean.shape != self._mean.shape:
-            raise ValueError(f"state: mean has shape {mean.shape}, expected {self._mean.shape}")
-        self._mean = mean.copy()
-        self.updates = int(state["updates"])
-        self.rng.bit_generator.state = state["rng"]
-        self._load_extra_state(state)
+        if mean.shape != self._mean.shape or np.any(np.abs(mean) > 1.0):
+            raise ValueError(f"state.mean: expected shape {self._mean.shape} in [-1, 1], got shape {mean.shape}")
+        if state["updates"] < 0:
+            raise ValueError(f"state.updates: expected a count >= 0, got {state['updates']}")
+        previous = (self._mean, self.updates, self.rng.bit_generator.state)
+        try:
+            self.rng.bit_generator.state = state["rng"]
+        except (TypeError, ValueError, KeyError) as error:
+            raise ValueError(f"state.rng: not a valid {type(self.rng.bit_generator).__name__} state ({error})") \
+                from error
+        self._mean, self.updates = mean.copy(), int(state["updates"])
+        try:
+            self._load_extra_state(state)
+        except BaseException:
+            self._mean, self.updates, self.rng.bit_generator.state = previous
+            raise
 
     @abstractmethod
     def _extra_state(self) -> dict[str, Any]:

@@ -3,13 +3,14 @@
 The population size is the number of rollouts per update. The box is handled by ``cma``'s
 ``BoundTransform`` (``bounds="transform"``) or ``BoundPenalty`` (``bounds="penalty"``). ``cma`` draws its
 normal samples through the ``randn`` option, which is fed from the learner's Generator, so the run is
-reproducible and the pickled strategy (with the Generator inside) restores exactly.
+reproducible. The strategy is not stored as an object: the state holds the start (mean and RNG state)
+and the costs told so far ``[U, K]``, and loading replays the ``U`` generations, which restores the
+strategy exactly (and checks that the replay reaches the stored RNG state and mean).
 """
 
 from __future__ import annotations
 
 import math
-import pickle
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,14 +70,20 @@ class CMAES(Learner):
                  config: CMAESConfig | None = None) -> None:
         super().__init__(initial_mean, rollouts, rng)
         self.config = config or CMAESConfig()
+        self._start_rng = self.rng.bit_generator.state
+        self._start_mean = self._mean.copy()
+        self._costs: list[np.ndarray] = []
+        self.strategy = self._new_strategy()
+        self._pending: list[np.ndarray] | None = None
+
+    def _new_strategy(self) -> cma.CMAEvolutionStrategy:
         handler = cma.BoundTransform if self.config.bounds == "transform" else cma.BoundPenalty
         options = {"popsize": self.rollouts, "bounds": [-1.0, 1.0], "BoundaryHandler": handler,
                    "randn": _GeneratorNormal(self.rng), "seed": math.nan, "CMA_diagonal": self.config.diagonal,
                    "verbose": -9, "verb_disp": 0, "verb_log": 0, "tolflatfitness": 10**9,
                    "tolfun": 0.0, "tolfunhist": 0.0, "tolx": 0.0, "tolstagnation": 10**9,
                    "maxiter": 10**9, "maxfevals": 10**12}
-        self.strategy = cma.CMAEvolutionStrategy(self._mean.copy(), self.config.sigma, options)
-        self._pending: list[np.ndarray] | None = None
+        return cma.CMAEvolutionStrategy(self._start_mean.copy(), self.config.sigma, options)
 
     @property
     def exploration(self) -> float:
@@ -93,18 +100,31 @@ class CMAES(Learner):
         if not np.array_equal(asked, batch.actions):
             raise ValueError("batch.actions: not the actions returned by the last ask()")
         self.strategy.tell(self._pending, batch.costs.tolist())
+        self._costs.append(np.array(batch.costs, dtype=np.float64))
         self._pending = None
         self._mean = np.clip(np.asarray(self.strategy.result.xfavorite, dtype=np.float64), -1.0, 1.0)
 
     def _extra_state(self) -> dict[str, Any]:
         if self._pending is not None:
             raise RuntimeError("state_dict: an ask() is waiting for its tell()")
-        return {"strategy": pickle.dumps(self.strategy)}
+        costs = np.array(self._costs, dtype=np.float64).reshape(len(self._costs), self.rollouts)
+        return {"start_mean": self._start_mean.copy(), "start_rng": self._start_rng, "costs": costs}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
-        strategy = pickle.loads(state["strategy"])
-        if strategy.N != self.n_params:
-            raise ValueError(f"state: strategy has dimension {strategy.N}, expected {self.n_params}")
-        self.strategy = strategy
-        self.rng = strategy.opts["randn"].rng  # the strategy samples from the Generator pickled with it
+        costs = np.asarray(state["costs"], dtype=np.float64)
+        start = np.asarray(state["start_mean"], dtype=np.float64)
+        if costs.shape != (self.updates, self.rollouts) or start.shape != self._mean.shape:
+            raise ValueError(f"state: costs {costs.shape} and start_mean {start.shape}, expected "
+                             f"{(self.updates, self.rollouts)} and {self._mean.shape}")
+        target_rng, target_mean = self.rng.bit_generator.state, self._mean.copy()
+        self._start_mean, self._start_rng = start, state["start_rng"]
+        self.rng.bit_generator.state = self._start_rng
+        self.strategy = self._new_strategy()
+        for row in costs:
+            self.strategy.tell(self.strategy.ask(), row.tolist())
+        self._costs = list(costs)
         self._pending = None
+        self._mean = np.clip(np.asarray(self.strategy.result.xfavorite, dtype=np.float64), -1.0, 1.0)
+        if self.rng.bit_generator.state != target_rng or not np.array_equal(self._mean, target_mean):
+            raise ValueError("state: replaying the stored CMA-ES generations does not reach the stored mean and "
+                             "RNG state (the state was altered or written by another cma version)")

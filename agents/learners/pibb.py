@@ -100,5 +100,9 @@ class PIBB(Learner):
         return {"covariance": self.covariance.copy(), "factor": self._factor.copy()}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
-        self.covariance = np.array(state["covariance"], dtype=np.float64)
-        self._factor = np.array(state["factor"], dtype=np.float64)
+        covariance = np.array(state["covariance"], dtype=np.float64)
+        factor = np.array(state["factor"], dtype=np.float64)
+        if covariance.shape != self.covariance.shape or factor.shape != self._factor.shape:
+            raise ValueError(f"state: covariance/factor shapes {covariance.shape}/{factor.shape}, expected "
+                             f"{self.covariance.shape}")
+        self.covariance, self._factor = covariance, factor

@@ -1,0 +1,83 @@
+"""Hand-made sponge paths that try to game the wiping reward (for tests and ``benchmarks/bench_env.py``).
+
+Each function returns a path ``[T, 3]`` in the table frame for :meth:`ArmarWipeEnv.run_path`, built in
+the env's current context. They keep the imitation's approach (so the touchdown is the same) and then
+do something cheap instead of wiping: hold still, press and lift on a grid, reach into the robot.
+:func:`lifted_approach` is the honest counterpart: the imitation with its approach raised over a cup.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .wipe_env import ArmarWipeEnv
+
+__all__ = ["hold_still", "into_the_torso", "lifted_approach", "press_lift_grid"]
+
+
+def _smooth(x: np.ndarray) -> np.ndarray:
+    """Smoothstep of ``x`` clipped to [0, 1]."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def _imitation(env: ArmarWipeEnv) -> np.ndarray:
+    return env.rollout_path(env.action_map.theta0)
+
+
+def _blend(path: np.ndarray, target: np.ndarray, start: int, steps: int) -> np.ndarray:
+    """``path`` from step ``start`` on moved smoothly (over ``steps``) onto ``target [T, 3]``."""
+    weight = _smooth((np.arange(len(path)) - start) / max(1, steps))[:, None]
+    return (1.0 - weight) * path + weight * target
+
+
+def hold_still(env: ArmarWipeEnv, depth: float = 0.0) -> np.ndarray:
+    """The imitation's approach, then the sponge parked on the patch centre for the whole wiping phase."""
+    path = _imitation(env)
+    centre = np.array([*env.context.patch_centre, -depth])
+    start = int(np.argmax(env.periodic))
+    return _blend(path, np.tile(centre, (len(path), 1)), start, round(0.3 / env.dt))
+
+
+def press_lift_grid(env: ArmarWipeEnv, grid: int = 3, lift: float = 0.03) -> np.ndarray:
+    """The imitation's approach, then press–hold–lift at the points of a ``grid`` x ``grid`` lattice
+    over the patch (the sponge moves between points in the air)."""
+    path = _imitation(env)
+    start = int(np.argmax(env.periodic))
+    count = len(path) - start
+    size, centre = env.context.patch_size, env.context.patch_centre
+    offsets = (np.arange(grid) + 0.5) / grid - 0.5
+    points = np.array([[centre[0] + ox * size[0], centre[1] + oy * size[1]] for ox in offsets for oy in offsets])
+    slot = count / len(points)
+    target = np.zeros((len(path), 3))
+    target[:start] = path[:start]
+    for k in range(count):
+        i = min(len(points) - 1, int(k / slot))
+        phase = (k - i * slot) / slot                    # 0..1 within this point's slot
+        previous = points[max(0, i - 1)]
+        xy = previous + _smooth(phase / 0.35) * (points[i] - previous)
+        press = _smooth((phase - 0.35) / 0.15) * (1.0 - _smooth((phase - 0.8) / 0.15))
+        target[start + k] = [*xy, lift * (1.0 - press)]
+    return _blend(path, target, start, round(0.3 / env.dt))
+
+
+def into_the_torso(env: ArmarWipeEnv, point: tuple[float, float, float] = (-0.30, 0.28, 0.15)) -> np.ndarray:
+    """The imitation's approach, then a smooth reach to ``point`` (table frame), inside the robot's torso
+    (its front face is at x = -0.26 in the table frame, for y in [0.10, 0.46] and z above 0.05 m)."""
+    path = _imitation(env)
+    start = int(np.argmax(env.periodic))
+    return _blend(path, np.tile(np.asarray(point, dtype=np.float64), (len(path), 1)), start, round(1.0 / env.dt))
+
+
+def lifted_approach(env: ArmarWipeEnv, clearance: float = 0.05) -> np.ndarray:
+    """The imitation with its approach raised: the height gets ``+ clearance`` while the sponge is more
+    than 5 cm (in the table plane) from where it touches down, faded in and out smoothly."""
+    path = _imitation(env)
+    start = int(np.argmax(env.periodic))
+    touchdown = path[start, :2]
+    distance = np.linalg.norm(path[:, :2] - touchdown, axis=1)
+    raise_ = clearance * _smooth((distance - 0.05) / 0.05)
+    raise_[start:] = 0.0
+    raised = path.copy()
+    raised[:, 2] = path[:, 2] + raise_ * _smooth(np.arange(len(path)) / round(0.3 / env.dt))
+    return raised

@@ -1,0 +1,58 @@
+"""Batched rollouts with perturbed initial conditions: every rollout on its own canonical path, the same
+numbers as one rollout at a time."""
+
+import numpy as np
+import pytest
+
+from rdmp_gym import RhythmicDMP, wiping_demonstration
+from rdmp_gym.batched import batched_forcing
+
+
+@pytest.fixture(scope="module")
+def dmp():
+    return RhythmicDMP.fit(wiping_demonstration(3, rng=0), 40, 40)
+
+
+@pytest.fixture(scope="module")
+def thetas(dmp):
+    groups = ("periodic", "transient", "initial", "amplitude")
+    theta = dmp.get_params(groups)
+    rng = np.random.default_rng(1)
+    batch = theta + np.concatenate([rng.normal(0, 5.0, (8, theta.size - 5)),
+                                    rng.normal(0, [0.3, 0.3 * theta[-4]], (8, 2)),
+                                    rng.normal(0, 0.1, (8, 3))], axis=1)
+    batch[:2, -5:-3] = theta[-5:-3]             # two rollouts share the fitted canonical path
+    return groups, batch
+
+
+def test_batched_forcing_equals_the_forcing_of_each_path(dmp, thetas):
+    groups, batch = thetas
+    weights, inits, *_ = dmp._decode(batch, groups)
+    t = np.arange(1000) * 0.01
+    phi, r = dmp.canonical.state(t, inits[:, 0, 0], inits[:, 0, 1])
+    forcing = batched_forcing(dmp.basis, phi, r, weights)
+    for b in range(len(batch)):
+        single = dmp.basis.forcing(phi[b], r[b], weights[b])
+        np.testing.assert_allclose(forcing[b], single, rtol=0, atol=1e-11 * np.abs(single).max())
+    assert np.all(np.isfinite(forcing))
+
+
+def test_perturbed_initial_conditions_roll_out_like_single_rollouts(dmp, thetas):
+    groups, batch = thetas
+    t = np.arange(1000) * 0.01
+    rollouts = dmp.rollout_batch(batch, t, groups)
+    assert rollouts.shape == (len(batch), t.size, dmp.n_dims)
+    size = np.ptp(rollouts, axis=1).max()
+    for b, theta in enumerate(batch):
+        single = dmp.with_params(theta, groups).rollout(t)
+        np.testing.assert_allclose(rollouts[b], single, rtol=0, atol=1e-10 * size)
+    # the perturbed starts differ from one another: every rollout really had its own path
+    assert np.ptp(rollouts[2:, :100], axis=0).max() > 1e-3 * size
+
+
+def test_batched_forcing_rejects_mismatched_shapes(dmp):
+    phi = np.zeros((2, 10))
+    with pytest.raises(ValueError, match="phi, r"):
+        batched_forcing(dmp.basis, phi, np.ones((2, 11)), np.zeros((2, 3, dmp.basis.n_basis)))
+    with pytest.raises(ValueError, match="weights"):
+        batched_forcing(dmp.basis, phi, np.ones((2, 10)), np.zeros((3, 3, dmp.basis.n_basis)))
