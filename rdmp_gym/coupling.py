@@ -109,9 +109,10 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
     from .validation import check_time_grid
 
     t = check_time_grid(t, "t")
-    terms = [obstacles] if isinstance(obstacles, ObstacleAvoidance) else list(obstacles)
-    if not terms or not all(isinstance(term, ObstacleAvoidance) for term in terms):
-        raise TypeError("obstacles: expected one or more ObstacleAvoidance terms")
+    terms = [obstacles] if hasattr(obstacles, "acceleration") else list(obstacles)
+    if not terms or not all(callable(getattr(term, "acceleration", None)) for term in terms):
+        raise TypeError("obstacles: expected one or more terms with an acceleration(y, yd) method "
+                        "(e.g. ObstacleAvoidance)")
     if not (np.isfinite(smoothing) and smoothing >= 0.0):
         raise ValueError(f"smoothing: expected a time constant >= 0, got {smoothing!r}")
     stepper = dmp.start(float((t[-1] - t[0]) / (t.size - 1)), **start_kwargs)

@@ -102,7 +102,7 @@ def test_env_baseline_keeps_clear_of_the_obstacle_and_still_wipes():
 
     env = gym.make(ENV_ID, n_periods=3.0)
     options = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
-               "sponge_start": [-0.07, 0.10, 0.08]}
+               "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0}
     env.reset(seed=0, options=options)
     inner = env.unwrapped
     free = inner.rollout_path(inner.action_map.theta0)
@@ -114,3 +114,24 @@ def test_env_baseline_keeps_clear_of_the_obstacle_and_still_wipes():
     assert info["coverage"] >= 0.9
     with pytest.raises(ValueError, match="obstacle_xy"):
         run_avoiding(env, [0.0, np.nan])
+
+
+def test_env_baseline_reads_the_cup_from_the_context():
+    gym = pytest.importorskip("gymnasium")
+    from rdmp_gym.envs import ENV_ID
+    from rdmp_gym.envs.obstacle_baseline import avoiding_path, cup_position
+
+    env = gym.make(ENV_ID, n_periods=2.0)
+    inner = env.unwrapped
+    observation, _ = env.reset(seed=0, options={"obstacle": 0})
+    assert cup_position(env) is None
+    np.testing.assert_array_equal(avoiding_path(env), inner.rollout_path(inner.action_map.theta0))
+    seed = next(s for s in range(10_000, 10_100) if env.reset(seed=s)[0][10] > 0.5)
+    observation, _ = env.reset(seed=seed)
+    cup = cup_position(env)
+    np.testing.assert_allclose(cup, observation[11:13], atol=1e-6)          # the observation's cup fields
+    free = inner.rollout_path(inner.action_map.theta0)
+    steered = avoiding_path(env)
+    np.testing.assert_array_equal(steered, avoiding_path(env, cup))
+    clearance = np.linalg.norm(steered[:, :2] - cup, axis=1).min()
+    assert clearance > np.linalg.norm(free[:, :2] - cup, axis=1).min() + 5e-3

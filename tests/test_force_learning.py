@@ -10,6 +10,10 @@ from rdmp_gym.envs.force_learning import ForceProfileLearning, ForceProfileSetti
 import rdmp_gym  # noqa: F401  (registers the env)
 
 DT, PERIOD = 0.01, 1.5
+# The profile is learned on top of a slow admittance (gain 0.004 m/(N s)): with the env's default gain 0.02 the
+# admittance alone holds the force within the contact chatter (about 0.65 N on ArmarWipe-v1's compliant pad) and
+# there is nothing periodic left to learn (README, issue 13).
+SLOW = 0.004
 
 
 def contact_plant(controller, periods=12, stiffness=1800.0, lag=0.03):
@@ -27,7 +31,7 @@ def contact_plant(controller, periods=12, stiffness=1800.0, lag=0.03):
 
 
 def test_learning_removes_the_periodic_error_that_admittance_leaves():
-    settings = ForceAdaptationSettings(target_force=18.0)
+    settings = ForceAdaptationSettings(target_force=18.0, gain=SLOW)
     plain = period_force_errors(contact_plant(ForceAdaptation(settings, DT)), DT, 0.0, PERIOD, 18.0, smoothing=0.0)
     learned = period_force_errors(contact_plant(ForceProfileLearning(settings, DT, PERIOD)), DT, 0.0, PERIOD, 18.0,
                                   smoothing=0.0)
@@ -48,9 +52,9 @@ def test_settings_are_checked():
 
 
 def episode(force_learning, tilt):
-    env = gym.make(ENV_ID, n_periods=10.0, force_learning=force_learning)
+    env = gym.make(ENV_ID, n_periods=10.0, force_learning=force_learning, admittance_gain=SLOW)
     env.reset(seed=0, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
-                               "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08]})
+                               "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
     _, reward, _, _, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
     inner = env.unwrapped
     errors = period_force_errors(info["force_trace"], inner.dt, inner.dmp.transients[0].length, inner.dmp.period,
@@ -62,7 +66,7 @@ def test_tilted_table_force_error_falls_period_by_period_in_mujoco():
     _, plain_info, plain = episode(False, [-0.10, 0.12])
     _, info, learned = episode(True, [-0.10, 0.12])
     assert plain_info["valid"] and info["valid"] and not info["unstable"]
-    assert plain[-3:].mean() > 3.0
+    assert plain[-3:].mean() > 1.5                         # the slow admittance leaves a periodic error
     assert learned[-3:].mean() < 0.5 * plain[-3:].mean()
     assert learned[-3:].mean() < 0.6 * learned[:2].mean()
     assert info["coverage"] >= plain_info["coverage"] - 0.02

@@ -9,12 +9,11 @@ from rdmp_gym.stopping import ending_demonstration, fit_ending
 from rdmp_gym.transformation import TransformationSystem
 
 DT = 2e-3
-SMOOTH = dict(n_periodic=30, periodic_overlap=0.9, smoothing=0.3, regularization=1e-4)
 
 
 @pytest.fixture(scope="module")
 def wiping():
-    return RhythmicDMP.fit(wiping_demonstration(1, rng=0), **SMOOTH)
+    return RhythmicDMP.fit(wiping_demonstration(1, rng=0))
 
 
 def partner(dmp, duration, factor, step_at, rng=0):
@@ -58,7 +57,7 @@ def test_locks_onto_a_frequency_step_where_the_fixed_dmp_drifts(wiping, factor):
 
 
 def test_transient_and_stop_still_work_at_another_tempo():
-    dmp = fit_ending(ending_demonstration(1, rng=0), **SMOOTH)
+    dmp = fit_ending(ending_demonstration(1, rng=0))
     t, _, _, u = partner(dmp, 16.0, 1.2, 0.0)              # faster from the very start
     out = follow_rhythm(dmp, u, DT, stop_at=11.0)
     assert np.linalg.norm(out["y"][0] - dmp.transients[0].start) < 1e-3

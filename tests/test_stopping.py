@@ -8,9 +8,6 @@ import pytest
 from rdmp_gym import RhythmicDMP, wiping_demonstration
 from rdmp_gym.stopping import ending_demonstration, exit_time, fit_ending, segment_ending
 
-# A smooth periodic fit (wider periodic basis, longer derivative window): the stop's acceleration bar is
-# measured on top of the periodic fit that is active at the exit.
-SMOOTH = dict(n_periodic=30, periodic_overlap=0.9, smoothing=0.3, regularization=1e-4)
 H = 1e-3                                   # evaluation grid (1 kHz)
 
 
@@ -21,7 +18,7 @@ def _true_exit(style: int) -> float:
 
 @pytest.fixture(scope="module")
 def fitted():
-    return {style: fit_ending(ending_demonstration(style, rng=style), **SMOOTH) for style in (1, 4)}
+    return {style: fit_ending(ending_demonstration(style, rng=style)) for style in (1, 4)}   # library defaults
 
 
 @pytest.mark.parametrize("style", [1, 4])
