@@ -51,8 +51,7 @@ def measure(t: np.ndarray, omega: np.ndarray, psi: np.ndarray, phase: np.ndarray
 
 
 def main() -> None:
-    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0), n_periodic=30, periodic_overlap=0.9, smoothing=0.3,
-                          regularization=1e-4)
+    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0))      # library defaults
     rows = []
     for factor in (1.3, 0.7):
         for seed in range(5):

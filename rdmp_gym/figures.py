@@ -104,7 +104,7 @@ def write_paper_figures(out_dir: str | Path, seed: int = 0) -> list[Path]:
 def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
     """``beyond_stop.png``: start, wiping and stop from one DMP (issue 13), with its canonical path."""
     demo = ending_demonstration(1, rng=seed)
-    dmp = fit_ending(demo, n_periodic=30, periodic_overlap=0.9, smoothing=0.3, regularization=1e-4)
+    dmp = fit_ending(demo)
     t = np.arange(0.0, demo.t[-1] + 1.0, 1e-3)
     request = 5.5
     stopped = dmp.rollout(t, stop_at=request)
@@ -149,8 +149,7 @@ def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
     """``beyond_rhythm.png``: the DMP's frequency and phase lock onto a partner whose frequency steps by +-30 %."""
     from .frequency import follow_rhythm
 
-    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=seed), n_periodic=30, periodic_overlap=0.9, smoothing=0.3,
-                          regularization=1e-4)
+    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=seed))
     dt, step = 2e-3, 10.0
     t = np.arange(round(30.0 / dt)) * dt
     fig, axes = plt.subplots(3, 2, figsize=(13, 8))
@@ -196,10 +195,12 @@ def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
     tilt = [-0.138, -0.145]
     fig, (trace, bars) = plt.subplots(1, 2, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1]})
     errors = {}
-    for name, flag, color in (("admittance", False, "tab:blue"), ("learned profile", True, "tab:red")):
-        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag)
+    runs = (("admittance, gain 0.02 (default)", False, 0.02, "tab:gray"), ("admittance, gain 0.004", False, 0.004,
+            "tab:blue"), ("learned profile, gain 0.004", True, 0.004, "tab:red"))
+    for name, flag, gain, color in runs:
+        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
         env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
-                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08]})
+                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
         info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
         inner = env.unwrapped
         window = max(round(0.1 / inner.dt), 1)
@@ -212,8 +213,8 @@ def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
     trace.set(xlabel="t [s]", ylabel="contact force, 0.1 s mean [N]", ylim=(0, 40),
               title=f"table tilted by ({tilt[0]}, {tilt[1]}) rad")
     trace.legend(fontsize=8)
-    width = 0.4
-    for offset, (name, values) in zip((-width / 2, width / 2), errors.items(), strict=True):
+    width = 0.27
+    for offset, (name, values) in zip((-width, 0.0, width), errors.items(), strict=True):
         bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name)
     bars.set(xlabel="period", ylabel="mean |F - 18 N| [N]", title="force error period by period")
     bars.legend(fontsize=8)
