@@ -4,17 +4,17 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
-# torch is pinned in the same pip command so that pip takes the small CPU build.
-PIP_PKGS := -e ".[agents,dev,ray]" torch==2.13.0
+# .ci/constraints-cpu.txt pins torch to the small CPU build (the agents extra only bounds torch).
+PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray]"
 export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
 
-.PHONY: install run test lint bench clean
+.PHONY: install run test wheel-check lint bench clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
 
-$(VENV)/.installed: $(BIN)/activate pyproject.toml
+$(VENV)/.installed: $(BIN)/activate pyproject.toml setup.py .ci/constraints-cpu.txt
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet $(PIP_PKGS)
 	bash .ci/system-gl.sh
@@ -22,20 +22,29 @@ $(VENV)/.installed: $(BIN)/activate pyproject.toml
 
 install: $(VENV)/.installed
 
+# A second `make run` continues the finished run in runs/main (--resume: nothing left to train) and redoes
+# the figures and the evaluation instead of refusing to overwrite it.
+RUN_OUT   ?= runs/main
+RUN_FLAGS ?=
 run: install
-	$(BIN)/rdmp-gym main --out runs/main
+	$(BIN)/rdmp-gym main --out $(RUN_OUT) $(RUN_FLAGS) $$(test -f $(RUN_OUT)/train/config.json && echo --resume)
 
 test: install
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 
+# The packaging check of CI: build the wheel, install it (not editable) in a fresh venv, use it.
+wheel-check:
+	bash .ci/wheel-check.sh
+
+# Benchmarks write runs/benchmarks/; `make bench BENCH_FLAGS=--save` rewrites the committed benchmarks/results/.
 bench: install
-	$(BIN)/python benchmarks/bench_fidelity.py
-	$(BIN)/python benchmarks/bench_speed.py
-	$(BIN)/python benchmarks/bench_env.py
-	$(BIN)/python benchmarks/bench_throughput.py
-	$(BIN)/python benchmarks/bench_agents.py
-	$(BIN)/python benchmarks/bench_memory.py
+	$(BIN)/python benchmarks/bench_fidelity.py $(BENCH_FLAGS)
+	$(BIN)/python benchmarks/bench_speed.py $(BENCH_FLAGS)
+	$(BIN)/python benchmarks/bench_env.py $(BENCH_FLAGS)
+	$(BIN)/python benchmarks/bench_throughput.py $(BENCH_FLAGS)
+	$(BIN)/python benchmarks/bench_agents.py $(BENCH_FLAGS)
+	$(BIN)/python benchmarks/bench_memory.py $(BENCH_FLAGS)
 
 clean:
 	rm -rf $(VENV) runs figures

@@ -5,13 +5,18 @@ Examples::
     rdmp-gym train --agent pi2 --updates 30 --rollouts 10 --seed 0 --out runs/pi2
     rdmp-gym train --out runs/pi2 --resume             # continue a killed run
     rdmp-gym evaluate runs/pi2 --episodes 10 --video
-    rdmp-gym fit --style 3 --plot
+    rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
     rdmp-gym main --out runs/main
+
+``fit`` needs only the core install; ``train``, ``evaluate`` and ``main`` need the ``agents`` extra
+(``pip install "rdmp-gym[agents]"``) and say so when it is missing.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import importlib.util
 import json
 import logging
 import os
@@ -22,12 +27,46 @@ from typing import Any
 
 import numpy as np
 
-from .evaluation import WorkerError
-from .tasks import WIPE_ID
+from rdmp_gym import __version__
+
+from . import EXTRA_MODULES
+from .errors import WorkerError
 
 __all__ = ["main"]
 
 logger = logging.getLogger(__name__)
+
+WIPE_ID = "rdmp_gym/ArmarWipe-v0"
+_EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
+
+
+class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the description's line breaks and appends ``(default: ...)`` to every option's help that
+    does not already say what its default is."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (not action.option_strings or action.required or "default" in text
+                or action.default is argparse.SUPPRESS):
+            return text
+        value = "off" if action.default is False else "%(default)s"
+        return f"{text} (default: {value})"
+
+
+def _missing_extra() -> str | None:
+    """The first missing module of the ``agents`` extra that training needs, or None if all are there."""
+    try:
+        importlib.import_module("rdmp_gym.agents.training")
+    except ModuleNotFoundError as error:
+        if error.name and error.name.split(".")[0] in EXTRA_MODULES:
+            return error.name
+        raise
+    return None
+
+
+def _needs_extra(args: argparse.Namespace) -> None:
+    raise ModuleNotFoundError(f"needs the agents extra (missing module {args.missing!r}): {_EXTRA_HINT}",
+                              name=args.missing)
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -43,24 +82,34 @@ def _key_value(text: str) -> tuple[str, Any]:
 
 def _add_task_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("task")
-    group.add_argument("--env", default=WIPE_ID, help="episodic env id (default %(default)s; "
-                       "rdmp_gym/DMPTracking-v0 is a MuJoCo-free DMP task)")
-    group.add_argument("--style", type=int, help="built-in demonstration style 1-4")
-    group.add_argument("--demo", default="", help="a CSV/NPZ demonstration to imitate instead of --style")
-    group.add_argument("--groups", nargs="+", help="parameter groups to refine: periodic transient initial")
-    group.add_argument("--n-periodic", type=int, help="periodic basis functions")
-    group.add_argument("--n-transient", type=int, help="transient basis functions")
-    group.add_argument("--duration", type=float, help="episode length (s)")
+    group.add_argument("--env", default=WIPE_ID, help="episodic env id (one step = one DMP rollout; "
+                       "rdmp_gym/DMPTracking-v0 is a physics-free DMP task)")
+    group.add_argument("--style", type=int, help="built-in demonstration style 1-4 (default: the env's)")
+    group.add_argument("--demo", default="", help="a CSV/NPZ demonstration to imitate instead of --style, in the "
+                       "table frame in metres (x, y on the table, z above it) (default: none)")
+    group.add_argument("--time-column", default="t", help="name of the --demo CSV's time column (seconds)")
+    group.add_argument("--rate", type=float, default=None, help="resample --demo onto an even grid at this rate "
+                       "in Hz (default: keep the samples, which must be evenly spaced)")
+    group.add_argument("--dmp", default="", help="a saved DMP (dmp.json, e.g. a run's refined DMP) to start from "
+                       "instead of fitting (default: none)")
+    group.add_argument("--groups", nargs="+", help="parameter groups to refine: periodic transient initial "
+                       "amplitude (default: the env's)")
+    group.add_argument("--n-periodic", type=int, help="periodic basis functions (default: the env's)")
+    group.add_argument("--n-transient", type=int, help="transient basis functions (default: the env's)")
+    group.add_argument("--duration", type=float, help="episode length in s (default: the env's)")
     group.add_argument("--env-option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
-                       help="any other gym.make keyword (repeatable)")
+                       help="any other gym.make keyword (repeatable; default: none)")
     group.add_argument("--reset-option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
-                       help="a reset option applied to every episode, e.g. to fix the context (repeatable)")
+                       help="a reset option applied to every episode, e.g. to fix the context "
+                       "(repeatable; default: none)")
 
 
 def _env_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     kwargs = {name: value for name, value in (("style", args.style), ("groups", args.groups),
                                               ("n_periodic", args.n_periodic), ("n_transient", args.n_transient),
                                               ("duration", args.duration)) if value is not None}
+    if args.dmp:
+        kwargs["dmp"] = str(Path(args.dmp).resolve())
     for key, value in args.env_option:
         if key in kwargs:
             raise ValueError(f"--env-option: {key} is also given by its own flag")
@@ -82,27 +131,42 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     from .training import AGENTS, START_MODES
 
     if agent:
-        parser.add_argument("--agent", choices=AGENTS, default="pi2", help="learner (default %(default)s)")
-    parser.add_argument("--updates", type=int, default=updates, help="updates (default %(default)s)")
-    parser.add_argument("--rollouts", type=int, default=10, help="episodes per update (default %(default)s)")
-    parser.add_argument("--seed", type=int, default=0, help="run seed (default %(default)s)")
+        parser.add_argument("--agent", choices=AGENTS, default="pi2", help="learner")
+    parser.add_argument("--updates", type=int, default=updates, help="updates")
+    parser.add_argument("--rollouts", type=int, default=10, help="episodes per update")
+    parser.add_argument("--seed", type=int, default=0, help="run seed")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                         help="worker processes (default: all cores, %(default)s)")
     _add_backend_arguments(parser)
     parser.add_argument("--option", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
-                        help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable)")
+                        help="learner setting, e.g. sigma=0.2 decay=0.9 (repeatable; default: the learner's)")
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
     parser.add_argument("--perturbation", type=float, default=0.3, help="std of the perturbed start")
     parser.add_argument("--eval-episodes", type=int, default=eval_episodes,
-                        help="policy evaluation episodes (fixed contexts) per update (default %(default)s)")
+                        help="policy evaluation episodes (fixed contexts) per update")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint, with "
                         "its own config.json (flags only to extend --updates or change --workers)")
     _add_task_arguments(parser)
 
 
+def _prepare_demo(args: argparse.Namespace) -> None:
+    """With ``--time-column`` or ``--rate``, read ``--demo`` now and point ``args.demo`` at an even-grid copy
+    ``<out>/demo.npz`` (the run then holds the demonstration it was trained on)."""
+    if not args.demo or (args.time_column == "t" and args.rate is None):
+        return
+    from .imitation import load_demonstration
+
+    demo = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate)
+    folder = Path(args.out)
+    folder.mkdir(parents=True, exist_ok=True)
+    demo.to_npz(folder / "demo.npz")
+    args.demo, args.time_column, args.rate = str((folder / "demo.npz").resolve()), "t", None
+
+
 def _train_config(args: argparse.Namespace, agent: str) -> Any:
     from .training import TrainConfig
 
+    _prepare_demo(args)
     return TrainConfig(agent=agent, updates=args.updates, rollouts=args.rollouts, seed=args.seed,
                        workers=args.workers, env_id=args.env, env_kwargs=_env_kwargs(args),
                        reset_options=dict(args.reset_option) or None, options=dict(args.option),
@@ -209,7 +273,7 @@ def _command_fit(args: argparse.Namespace) -> None:
     from .imitation import fit_dmp, load_demonstration
     from .plots import plot_fit
 
-    demo = load_demonstration(args.demo if args.demo else args.style)
+    demo = load_demonstration(args.demo if args.demo else args.style, time_column=args.time_column, rate=args.rate)
     dmp = fit_dmp(demo, args.n_periodic, args.n_transient, args.method)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -254,21 +318,26 @@ def _command_main(args: argparse.Namespace) -> None:
     print(f"wrote {out / 'summary.json'}, {out / 'fit.png'}, {run.curve_png}, {run.path / 'evaluation.png'}")
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="rdmp-gym", description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
-    commands = parser.add_subparsers(dest="command", required=True)
+def _add_agents_commands(commands: Any) -> None:
+    """``train``, ``evaluate`` and ``main``; when the ``agents`` extra is missing, stand-ins that say so."""
+    missing = _missing_extra()
+    about = {"train": "train an agent (pi2, pibb, cmaes, ppo)", "evaluate": "evaluate a run against the imitation",
+             "main": "imitation, PI² refinement and evaluation, end to end"}
+    if missing is not None:
+        for name, text in about.items():
+            stub = commands.add_parser(name, help=f"{text} [needs the agents extra]", add_help=False)
+            stub.set_defaults(handler=_needs_extra, missing=missing)
+        return
 
-    train = commands.add_parser("train", help="train an agent (pi2, pibb, cmaes, ppo)")
-    train.add_argument("--out", required=True, help="run directory")
+    train = commands.add_parser("train", help=about["train"], formatter_class=_HelpFormatter)
+    train.add_argument("--out", required=True, help="run directory (required)")
     train.add_argument("--video", action="store_true", help="record the best policy's episode (best_episode.mp4)")
     _add_training_arguments(train, updates=30, agent=True, eval_episodes=1)
     train.set_defaults(handler=_command_train)
 
-    evaluate = commands.add_parser("evaluate", help="evaluate a run against the imitation")
+    evaluate = commands.add_parser("evaluate", help=about["evaluate"], formatter_class=_HelpFormatter)
     evaluate.add_argument("run", help="run directory")
-    evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy (default %(default)s)")
+    evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy")
     evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
     evaluate.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes")
     _add_backend_arguments(evaluate)
@@ -276,38 +345,62 @@ def _parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
     evaluate.set_defaults(handler=_command_evaluate)
 
-    fit = commands.add_parser("fit", help="fit the rhythmic DMP to a demonstration")
+    job = commands.add_parser("main", help=about["main"], formatter_class=_HelpFormatter)
+    job.add_argument("--out", default="runs/main", help="output directory")
+    job.add_argument("--episodes", type=int, default=6, help="evaluation episodes")
+    job.add_argument("--video", action="store_true", help="record the best evaluation episode")
+    _add_training_arguments(job, updates=30, agent=False, eval_episodes=4)
+    job.set_defaults(handler=_command_main)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rdmp-gym", description=__doc__, formatter_class=_HelpFormatter)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    fit = commands.add_parser("fit", help="fit the rhythmic DMP to a demonstration (core install)",
+                              formatter_class=_HelpFormatter)
     fit.add_argument("--style", type=int, default=1, help="built-in demonstration style 1-4")
-    fit.add_argument("--demo", default="", help="a CSV/NPZ demonstration instead of --style")
+    fit.add_argument("--demo", default="", help="a CSV/NPZ demonstration instead of --style (default: none)")
+    fit.add_argument("--time-column", default="t", help="name of the CSV's time column (seconds)")
+    fit.add_argument("--rate", type=float, default=None,
+                     help="resample the demonstration onto an even grid at this rate in Hz, for uneven time "
+                     "stamps (default: keep the samples, which must be evenly spaced)")
     fit.add_argument("--n-periodic", type=int, default=40, help="periodic basis functions")
     fit.add_argument("--n-transient", type=int, default=40, help="transient basis functions")
     fit.add_argument("--method", choices=("ridge", "lwr"), default="ridge", help="regression")
     fit.add_argument("--plot", action="store_true", help="write fit.png (demonstration vs reproduction)")
-    fit.add_argument("--out", default="runs/fit", help="output directory (default %(default)s)")
+    fit.add_argument("--out", default="runs/fit", help="output directory")
     fit.set_defaults(handler=_command_fit)
 
-    job = commands.add_parser("main", help="imitation, PI² refinement and evaluation, end to end")
-    job.add_argument("--out", default="runs/main", help="output directory (default %(default)s)")
-    job.add_argument("--episodes", type=int, default=6, help="evaluation episodes (default %(default)s)")
-    job.add_argument("--video", action="store_true", help="record the best evaluation episode")
-    _add_training_arguments(job, updates=30, agent=False, eval_episodes=4)
-    job.set_defaults(handler=_command_main)
+    _add_agents_commands(commands)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``rdmp-gym``; returns the exit status."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args, unknown = parser.parse_known_args(argv)
+    if unknown and args.handler is not _needs_extra:   # the stand-ins take any arguments
+        parser.error(f"unrecognized arguments: {' '.join(unknown)}")
     args.given_flags = _given_flags(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
         if getattr(args, "video", False) and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
             raise ValueError("--video: no display; run with MUJOCO_GL=egl (or osmesa) set in the environment")
-        import torch
+        if args.command != "fit" and importlib.util.find_spec("torch") is not None:
+            import torch
 
-        torch.set_num_threads(1)
+            torch.set_num_threads(1)
         args.handler(args)
+    except ModuleNotFoundError as error:
+        if not error.name or error.name.split(".")[0] not in EXTRA_MODULES:
+            raise
+        print(f"rdmp-gym {args.command}: error: {error}" + ("" if "extra" in str(error) else
+              f"; it comes with the agents extra: {_EXTRA_HINT}"), file=sys.stderr)
+        return 2
     except (ValueError, TypeError, OSError, FloatingPointError, ImportError, WorkerError) as error:
         print(f"rdmp-gym {args.command}: error: {error}", file=sys.stderr)
         return 2

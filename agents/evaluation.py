@@ -31,6 +31,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
+from .errors import WorkerError
 from .learners.base import EpisodeBatch
 from .tasks import TaskSpec, episode_metrics
 
@@ -43,10 +44,6 @@ WATCHDOG_PERIOD = 0.25
 """Seconds between a local worker's checks that the process that started it is alive."""
 
 _WORKER: dict[str, Any] = {}
-
-
-class WorkerError(RuntimeError):
-    """A worker (process or Ray actor) died while running episodes; the run's last checkpoint is intact."""
 
 
 def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None

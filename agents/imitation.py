@@ -18,17 +18,23 @@ __all__ = ["fit_dmp", "load_demonstration"]
 logger = logging.getLogger(__name__)
 
 
-def load_demonstration(source: int | str | Path) -> Demonstration:
-    """A built-in wiping style (int 1-4, seed 0) or a ``.csv`` / ``.npz`` file (see ``Demonstration``)."""
+def load_demonstration(source: int | str | Path, time_column: str = "t", rate: float | None = None
+                       ) -> Demonstration:
+    """A built-in wiping style (int 1-4, seed 0) or a ``.csv`` / ``.npz`` file (see ``Demonstration``).
+
+    ``time_column`` names a CSV's time column; ``rate`` (Hz) resamples a file onto an even grid (uneven time
+    stamps or another rate; ``Demonstration.from_samples``).
+    """
     if isinstance(source, (int, np.integer)) and not isinstance(source, bool):
         return wiping_demonstration(int(source), rng=0)
     path = Path(source)
     if not path.exists():
         raise FileNotFoundError(f"demo: no such file {path}")
     if path.suffix.lower() == ".csv":
-        return Demonstration.from_csv(path)
+        return Demonstration.from_csv(path, time_column=time_column, rate=rate)
     if path.suffix.lower() == ".npz":
-        return Demonstration.from_npz(path)
+        demo = Demonstration.from_npz(path)
+        return demo if rate is None else demo.resample(rate)
     raise ValueError(f"demo: expected a .csv or .npz file, got {path.name!r}")
 
 

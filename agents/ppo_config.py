@@ -44,6 +44,7 @@ class PPOConfig:
         ent_coef: entropy bonus.
         target_kl: early stop of an update's epochs at this approximate KL divergence; 0 = never.
         envs: parallel envs of the vector env (at most; the largest divisor of ``rollouts`` not above it).
+        tensorboard: write SB3's training statistics to ``<run>/tensorboard`` (needs the ``tensorboard`` extra).
     """
 
     sigma: float = 0.6
@@ -55,6 +56,7 @@ class PPOConfig:
     ent_coef: float = 0.0
     target_kl: float = 0.05
     envs: int = 2
+    tensorboard: bool = False
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)

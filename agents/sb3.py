@@ -11,15 +11,18 @@ objects, is never loaded.
 
 from __future__ import annotations
 
+import importlib.util
 import io
 import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.logger import Logger, configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
@@ -72,6 +75,18 @@ def _vector_env(task: TaskSpec, envs: int, workers: int) -> VecEnv:
     return SubprocVecEnv(makers, start_method="spawn")
 
 
+def _logger(tensorboard: bool, log_dir: str | Path | None) -> Logger:
+    """SB3's logger: TensorBoard files in ``log_dir/tensorboard``, or no output at all. Setting one keeps
+    every ``learn()`` from leaving an empty ``SB3-<date>`` folder in the temporary directory (SB3's default)."""
+    if not tensorboard:
+        return Logger(folder=None, output_formats=[])
+    if log_dir is None:
+        raise ValueError("ppo.tensorboard: needs a run directory to write to")
+    if importlib.util.find_spec("tensorboard") is None:
+        raise ModuleNotFoundError('ppo.tensorboard: needs the tensorboard extra: pip install "rdmp-gym[tensorboard]"',
+                                  name="tensorboard")
+    return configure(str(Path(log_dir) / "tensorboard"), ["tensorboard"])
+
 class PPOAgent:
     """PPO with one iteration (``rollouts`` episodes, then the gradient epochs) per update.
 
@@ -86,8 +101,9 @@ class PPOAgent:
     """
 
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
-                 options: Mapping[str, Any] | None = None) -> None:
+                 options: Mapping[str, Any] | None = None, log_dir: str | Path | None = None) -> None:
         self.config = from_options(PPOConfig, options, "ppo")
+        self._logger = _logger(self.config.tensorboard, log_dir)
         envs = parallel_envs(rollouts, self.config.envs)
         self.rollouts = rollouts
         self.env = _vector_env(task, envs, workers)
@@ -101,6 +117,7 @@ class PPOAgent:
                          gae_lambda=1.0, seed=seed, device="cpu", verbose=0,
                          policy_kwargs={"net_arch": {"pi": hidden, "vf": hidden},
                                         "log_std_init": math.log(self.config.sigma)})
+        self.model.set_logger(self._logger)
         with torch.no_grad():
             self.model.policy.action_net.bias.copy_(torch.as_tensor(initial_action, dtype=torch.float32))
         self._collector = _EpisodeCollector()

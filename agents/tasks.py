@@ -14,6 +14,7 @@ from .imitation import load_demonstration
 __all__ = ["WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v0"
+_EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 
 @dataclass(frozen=True)
@@ -35,16 +36,23 @@ class TaskSpec:
 
     def make(self, render_mode: str | None = None) -> gym.Env:
         """Build the environment (importing the packages that register the ids)."""
-        import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
-
-        from . import tracking  # noqa: F401  (registers rdmp_gym/DMPTracking-v0)
+        import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0 and rdmp_gym/DMPTracking-v0)
 
         kwargs = dict(self.env_kwargs)
         if render_mode is not None:
             kwargs["render_mode"] = render_mode
         if self.demo:
             kwargs["demonstration"] = load_demonstration(self.demo)
-        return gym.make(self.env_id, disable_env_checker=True, **kwargs)
+        try:
+            env = gym.make(self.env_id, disable_env_checker=True, **kwargs)
+        except gym.error.Error as error:   # unknown id, namespace or version
+            raise ValueError(f"env_id: {error}") from error
+        if not all(hasattr(env.unwrapped, name) for name in _EPISODIC_API):
+            env.close()
+            raise ValueError(f"env_id: {self.env_id} is not an episodic DMP env (one step = one DMP rollout, "
+                             f"with {', '.join(_EPISODIC_API)} and info['cost_trace']), which the agents need; "
+                             f"use {WIPE_ID} or rdmp_gym/DMPTracking-v0")
+        return env
 
     def make_with_options(self) -> gym.Env:
         """The environment, wrapped so that every reset without options uses ``reset_options``."""

@@ -217,11 +217,12 @@ def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Ge
 
 
 def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np.random.Generator],
-                initial: np.ndarray) -> Agent:
+                initial: np.ndarray, run_path: Path) -> Agent:
     if config.agent == "ppo":
         from .sb3 import PPOAgent
 
-        return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options)
+        return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options,
+                        log_dir=run_path)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights)
@@ -391,7 +392,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
             eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
             observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                      for s in eval_seeds])
-            agent = _make_agent(config, evaluator, streams, initial)
+            agent = _make_agent(config, evaluator, streams, initial, run.path)
             try:
                 if resume:
                     _resume_session(run, config)
@@ -442,6 +443,13 @@ def _invalid_reasons(evaluator: Evaluator, config: TrainConfig, batch: EpisodeBa
     return dict(counts.most_common())
 
 
+def _save_refined_dmp(env: Any, params: np.ndarray, path: Path) -> None:
+    """Write the env's DMP with the refined ``params [P]`` (its action groups) as ``dmp.json`` (core format),
+    for ``gym.make(env_id, dmp=path)`` or ``RhythmicDMP.load``; envs without a DMP write nothing."""
+    if hasattr(env, "dmp") and hasattr(env, "groups"):
+        env.dmp.with_params(params, env.groups).save(path)
+
+
 def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,
           observations: np.ndarray, resume: bool, progress: bool) -> None:
     state = run.load_checkpoint() if resume else None
@@ -469,6 +477,7 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
                     "eval_seed": int(eval_seeds[0])}
             params = evaluator.env.unwrapped.action_to_params(actions[0])
             run.save_best(actions[0], params, best)
+            _save_refined_dmp(evaluator.env.unwrapped, params, run.path / "dmp.json")
         record["best_eval_return"] = best["eval_return_mean"]
         record["time_s"] = round(time.perf_counter() - started, 3)
         run.append_log(record)

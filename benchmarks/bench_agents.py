@@ -32,6 +32,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from output import add_save_argument, results_dir
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from tqdm import tqdm
@@ -39,7 +40,6 @@ from tqdm import tqdm
 import rdmp_gym  # noqa: F401  (registers the env)
 
 COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
-RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def _parse() -> argparse.Namespace:
@@ -62,6 +62,7 @@ def _parse() -> argparse.Namespace:
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
+    add_save_argument(parser)
     return parser.parse_args()
 
 
@@ -206,6 +207,7 @@ def main() -> None:
 
     torch.set_num_threads(1)
     args = _parse()
+    RESULTS = results_dir(args.save)
     if args.replot:
         document = json.loads((RESULTS / f"{args.name}.json").read_text())
         settings = document["settings"]

@@ -33,6 +33,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID, probes
 from rdmp_gym.envs.controller import JointTargetPlan
 
@@ -262,9 +263,12 @@ def main() -> None:
     parser.add_argument("--contexts", type=int, default=20, help="seeded contexts for the statistics")
     parser.add_argument("--repeats", type=int, default=7, help="timing repetitions (median reported)")
     parser.add_argument("--n-periods", type=float, default=4.0)
-    parser.add_argument("--out", type=Path, default=RESULTS / "env.json")
-    parser.add_argument("--plot", type=Path, default=RESULTS / "env_force.png")
+    parser.add_argument("--out", type=Path, default=None, help="output JSON (default: env.json, see --save)")
+    parser.add_argument("--plot", type=Path, default=None, help="force plot (default: env_force.png, see --save)")
+    add_save_argument(parser)
     args = parser.parse_args()
+    args.out = args.out or results_dir(args.save) / "env.json"
+    args.plot = args.plot or results_dir(args.save) / "env_force.png"
 
     env = gym.make(ENV_ID, n_periods=args.n_periods)
     u = env.unwrapped

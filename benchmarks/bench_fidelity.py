@@ -17,16 +17,15 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, segment, wiping_demonstration
 from rdmp_gym.dmp import PAPER_SETTINGS
 from rdmp_gym.smoothness import finite_derivatives, motion_metrics, random_test_signal
 
 DT = 1e-3
-RESULTS = Path(__file__).parent / "results" / "fidelity.json"
 MODELS = {"default": ({}, True), "paper lwr": (PAPER_SETTINGS, False),
           "paper ridge": ({**PAPER_SETTINGS, "method": "ridge"}, False)}
 
@@ -54,7 +53,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--signals", type=int, default=6)
+    add_save_argument(parser)
     args = parser.parse_args()
+    RESULTS = results_dir(args.save) / "fidelity.json"
     rows = []
     for name, demo, t, reference, length in cases(args.seed, args.signals):
         seg = segment(demo)
@@ -87,7 +88,6 @@ def main() -> None:
                "signals": [r["case"] for r in defaults if not r["case"].startswith("style") and not met(r)]}
     print(f"issue-7 targets met by the defaults on the four styles: {verdict['styles']}; "
           f"own signals missing a target: {verdict['signals']}")
-    RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({"seed": args.seed, "rows": rows, "targets": verdict}, indent=1))
     print(f"wrote {RESULTS}")
 

@@ -17,17 +17,17 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import argparse
 import json
 import platform
 import tracemalloc
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, basis, wiping_demonstration
 
-RESULTS = Path(__file__).parent / "results" / "memory.json"
 RATE = 1000.0
 
 
@@ -50,6 +50,9 @@ def stepper_peak(dmp: RhythmicDMP, seconds: float) -> float:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    RESULTS = results_dir(parser.parse_args().save) / "memory.json"
     dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0), n_periodic=40, n_transient=40)
     blocked = basis.FORCING_BLOCK
     rows = []
@@ -72,7 +75,6 @@ def main() -> None:
         print(f"{row['seconds']:>7.0f}s {row['samples']:>9} {row['output_mb']:>10.1f} {row['rollout_peak_mb']:>9.1f} "
               f"{row['rollout_peak_mb'] / row['output_mb']:>12.1f} {row.get('unblocked_peak_mb', float('nan')):>13.1f} "
               f"{row.get('stepper_seconds', float('nan')):>10.0f} {row.get('stepper_peak_mb', float('nan')):>11.2f}")
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
     RESULTS.write_text(json.dumps({"setting": "3 DoF, N = M = 40, 1 kHz, tracemalloc peaks", "block": blocked,
                                    "machine": platform.machine(), "python": platform.python_version(),
                                    "numpy": np.__version__, "rows": rows}, indent=2) + "\n")

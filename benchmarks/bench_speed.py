@@ -17,17 +17,16 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")       # one core, before numpy is 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
+import argparse
 import json
 import platform
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, segment, wiping_demonstration
-
-RESULTS = Path(__file__).parent / "results" / "speed.json"
 
 
 def timed(function: Callable[[], object], repeats: int) -> tuple[float, float, float]:
@@ -43,6 +42,9 @@ def timed(function: Callable[[], object], repeats: int) -> tuple[float, float, f
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    RESULTS = results_dir(parser.parse_args().save) / "speed.json"
     demo = wiping_demonstration(1, rng=0)
     seg = segment(demo)
     dmp = RhythmicDMP.fit(demo, 40, 40, segmentations=[seg])
@@ -97,7 +99,6 @@ def main() -> None:
     print(f"batch of 64 with perturbed initial conditions / weights only, interleaved CPU time: "
           f"{interleaved['ratio_median']:.2f} (range {ratio.min():.2f}-{ratio.max():.2f}; "
           f"{1e3 * interleaved['median_cpu_s']['own']:.1f} vs {1e3 * interleaved['median_cpu_s']['shared']:.1f} ms)")
-    RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({"machine": platform.processor() or platform.machine(),
                                    "python": platform.python_version(), "rows": rows,
                                    "own_paths_vs_shared_path": interleaved}, indent=1))

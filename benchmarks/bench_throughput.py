@@ -42,12 +42,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+from output import add_save_argument, results_dir
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
-RESULTS = Path(__file__).resolve().parent / "results" / "throughput.json"
 _TICK = os.sysconf("SC_CLK_TCK")
 
 
@@ -284,8 +284,10 @@ def main() -> None:
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray backend")
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                         help="a gym.make keyword of the env (default: its defaults)")
-    parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument("--out", type=Path, default=None, help="result file (default: throughput.json, see --save)")
+    add_save_argument(parser)
     args = parser.parse_args()
+    args.out = args.out or results_dir(args.save) / "throughput.json"
     env_kwargs = {key: json.loads(value) for key, value in (item.split("=", 1) for item in args.env_option)}
     episodes = args.episodes or 4 * args.workers
     use_ray = not args.no_ray

@@ -27,6 +27,8 @@ import gymnasium as gym
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .reward import TERMS, RewardWeights
 from .scene import ARM_JOINTS, TablePose, WipeScene
+from .tracking import TRACKING_ID, TrackingEnv
+from .video import RecordEpisodeVideo
 from .wipe_env import ArmarWipeEnv
 
 __all__ = [
@@ -34,12 +36,16 @@ __all__ = [
     "CONTEXT_FIELDS",
     "DEPRECATED_ENV_ID",
     "ENV_ID",
+    "STEP_ID",
     "TERMS",
+    "TRACKING_ID",
     "ArmarWipeEnv",
     "Context",
     "ContextSpec",
+    "RecordEpisodeVideo",
     "RewardWeights",
     "TablePose",
+    "TrackingEnv",
     "WipeScene",
 ]
 
@@ -52,3 +58,8 @@ if ENV_ID not in gym.registry:
     gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv", kwargs={"obstacle": True})
 if DEPRECATED_ENV_ID not in gym.registry:
     gym.register(id=DEPRECATED_ENV_ID, entry_point="rdmp_gym.envs.wipe_env:deprecated_v0")
+if TRACKING_ID not in gym.registry:
+    gym.register(id=TRACKING_ID, entry_point="rdmp_gym.envs.tracking:TrackingEnv")
+STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
+if STEP_ID not in gym.registry:
+    gym.register(id=STEP_ID, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv")

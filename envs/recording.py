@@ -63,6 +63,16 @@ class SceneRenderer:
             self._add_dirt(renderer.scene, cells_world, dirt, cell_half, table_rot)
         return renderer.render().copy()
 
+    def render_depth(self) -> np.ndarray:
+        """Depth frame ``[H, W]`` float32: distance (m) from the camera plane to the nearest surface."""
+        renderer = self._get()
+        renderer.update_scene(self.scene.data, camera=self.camera)
+        renderer.enable_depth_rendering()
+        try:
+            return renderer.render().astype(np.float32)
+        finally:
+            renderer.disable_depth_rendering()
+
     @staticmethod
     def _add_dirt(scn: mujoco.MjvScene, cells: np.ndarray, dirt: np.ndarray | None, half: float,
                   rot: np.ndarray | None) -> None:

@@ -34,6 +34,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
 
@@ -47,6 +48,7 @@ from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
 from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
+from .viewer import HumanViewer
 from .wiping import DirtField, WipeTrace, simulate_wipe
 
 __all__ = ["ArmarWipeEnv", "deprecated_v0"]
@@ -69,12 +71,30 @@ def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> Rh
                            n_transient=n_transient, method=method)
 
 
+def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
+    """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against the workspace."""
+    if not isinstance(dmp, RhythmicDMP):
+        if not isinstance(dmp, (str, Path)):
+            raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
+        if not Path(dmp).is_file():
+            raise FileNotFoundError(f"dmp: no such file {dmp}")
+        dmp = RhythmicDMP.load(dmp)
+    if dmp.n_dims != 3:
+        raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
+    t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
+    check_frame(dmp.rollout(t), WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="dmp")
+    return dmp
+
+
 class ArmarWipeEnv(gym.Env):
     """Episodic wiping env; see the module docstring.
 
     Args:
         style: synthetic demonstration style 1..4 (1/2 circle, 3/4 figure-eight; 2/4 complex approach).
-        demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame (overrides ``style``).
+        demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame, in metres: x, y on
+            the table, z above its surface (overrides ``style``; checked against the workspace before fitting).
+        dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
+            imitation without fitting (overrides ``style``; excludes ``demonstration``).
         n_periodic, n_transient, fit_method: DMP fit settings.
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude).
@@ -102,17 +122,20 @@ class ArmarWipeEnv(gym.Env):
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
         max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid.
         xml_file: MJCF of the scene (default: the packaged ``armar3_wipe.xml``).
-        render_mode: ``None`` or ``"rgb_array"``; width, height, camera: of the rendered frames.
+        render_mode: ``None``, ``"rgb_array"`` (RGB frames), ``"depth_array"`` (depth in m) or ``"human"``
+            (MuJoCo's viewer, following every control step; needs a display); width, height, camera: of the
+            rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
 
     def __init__(
         self,
         style: int = 1,
         demonstration: Demonstration | None = None,
+        dmp: str | Path | RhythmicDMP | None = None,
         n_periodic: int = 40,
         n_transient: int = 40,
         fit_method: str = "ridge",
@@ -156,13 +179,18 @@ class ArmarWipeEnv(gym.Env):
         # --- the DMP and the action map
         if fit_method not in FIT_METHODS:
             raise ValueError(f"fit_method: expected one of {FIT_METHODS}, got {fit_method!r}")
-        if demonstration is not None:
+        if dmp is not None:
+            if demonstration is not None:
+                raise ValueError("dmp: give either dmp or demonstration, not both")
+            self.dmp = _saved_dmp(dmp)
+        elif demonstration is not None:
             if not isinstance(demonstration, Demonstration):
                 raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
                                  f"got {type(demonstration).__name__}")
             if demonstration.n_dims != 3:
                 raise ValueError("demonstration: expected 3 dimensions (x, y, z in the table frame), "
                                  f"got {demonstration.n_dims}")
+            demonstration.check_frame(WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="demonstration")
             self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
                                        method=fit_method)
         else:
@@ -252,7 +280,8 @@ class ArmarWipeEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.control_rate / self.frame_stride))}
         self._render_args = (int(width), int(height), camera)
         self._renderer: SceneRenderer | None = None
-        if render_mode is not None or record_frames:
+        self._viewer = HumanViewer(self.scene) if render_mode == "human" else None
+        if render_mode in ("rgb_array", "depth_array") or record_frames:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.record_frames = bool(record_frames)
         #: record the sponge-table force at every physics step into ``info["fine_force_trace"]``
@@ -322,10 +351,18 @@ class ArmarWipeEnv(gym.Env):
         return self._observation(), reward, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """RGB frame ``[height, width, 3]`` uint8 of the current state (``render_mode="rgb_array"``)."""
+        """The current state: RGB frame ``[height, width, 3]`` uint8 (``"rgb_array"``), depth ``[height, width]``
+        float32 in m (``"depth_array"``), or None after updating the viewer (``"human"``)."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to the env")
             return None
+        if self._viewer is not None:
+            self._viewer.sync()
+            return None
+        if self.render_mode == "depth_array":
+            if self._renderer is None:
+                self._renderer = SceneRenderer(self.scene, *self._render_args)
+            return self._renderer.render_depth()
         return self._frame()
 
     def close(self) -> None:
@@ -333,6 +370,8 @@ class ArmarWipeEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+        if self._viewer is not None:
+            self._viewer.close()
 
     def record_episode(self, action: np.ndarray, path: str | Path, fps: float | None = None
                        ) -> tuple[np.ndarray, float, bool, bool, dict]:
@@ -418,7 +457,7 @@ class ArmarWipeEnv(gym.Env):
                                                 self.dmp.transients[0].phi0, self.force_learning))
         dirt = DirtField(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
                          contact_threshold=self.reward_settings.contact_threshold)
-        callback = self._capture if self.record_frames else None
+        callback = self._capture if self.record_frames or self._viewer is not None else None
         self._dirt = np.ones(len(self._cells_world))
         if callback is not None:
             self.frames.append(self._frame())
@@ -504,7 +543,9 @@ class ArmarWipeEnv(gym.Env):
                                      0.5 * self.cell_size, rot)
 
     def _capture(self, k: int, dirt_left: Callable[[], np.ndarray]) -> None:
-        if (k + 1) % self.frame_stride == 0:
+        if self._viewer is not None:
+            self._viewer.sync()
+        if self.record_frames and (k + 1) % self.frame_stride == 0:
             self.frames.append(self._frame(dirt_left()))
 
 

@@ -1,7 +1,9 @@
 """Fit a rhythmic DMP with a transient to a wiping demonstration and generalise it.
 
-    python examples/fit_and_reproduce.py      # writes examples_output.png
+    python examples/fit_and_reproduce.py      # writes runs/examples/fit_and_reproduce.png
 """
+
+from pathlib import Path
 
 import matplotlib
 
@@ -43,5 +45,7 @@ right.plot(t, online[:, 2], label="z, with coupling term")
 right.set(xlabel="t [s]", ylabel="z [m]")
 right.legend(fontsize=8)
 fig.tight_layout()
-fig.savefig("examples_output.png", dpi=100)
-print("wrote examples_output.png")
+out = Path("runs/examples/fit_and_reproduce.png")
+out.parent.mkdir(parents=True, exist_ok=True)
+fig.savefig(out, dpi=100)
+print(f"wrote {out}")

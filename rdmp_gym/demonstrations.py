@@ -19,16 +19,23 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from rdmp_gym.validation import as_finite_array, check_positive, check_time_grid
 
 __all__ = [
+    "TABLE_WORKSPACE",
     "Demonstration",
     "SyntheticTruth",
+    "check_frame",
     "multi_transient_demonstrations",
     "wiping_demonstration",
 ]
 
+#: ``(low [3], high [3])`` box (m) in the table frame that the wiping env's paths must stay inside: x, y on
+#: the table about the dirt patch centre, z above the table surface.
+TABLE_WORKSPACE = ((-0.35, -0.40, -0.05), (0.35, 0.40, 0.30))
+_MILLIMETRE_SPAN = 5.0  # m: a demonstration spanning more than this is taken to be in millimetres
 _DEFAULT_START = (-0.15, 0.20, 0.12)
 _CIRCLE_RADIUS = 0.05
 _EIGHT_HALF_SIZE = (0.06, 0.03)  # figure-eight of 0.12 m x 0.06 m
@@ -171,11 +178,13 @@ class Demonstration:
                    comments="")
 
     @classmethod
-    def from_csv(cls, path: str | Path, time_column: str = "t") -> Demonstration:
+    def from_csv(cls, path: str | Path, time_column: str = "t", rate: float | None = None) -> Demonstration:
         """Read a CSV file written by :meth:`to_csv` (or any file with that layout).
 
         The first row names the columns; the column ``time_column`` holds the time (s), every other
         column, in file order, is one dimension of ``Y``. The demonstration is named after the file.
+        ``rate`` (Hz) resamples the samples onto an even grid (see :meth:`from_samples`): for uneven
+        time stamps, or another rate.
         """
         path = Path(path)
         with _open_text(path) as handle:
@@ -199,7 +208,37 @@ class Demonstration:
             raise ValueError(f"path: {path} has {len(header)} header names "
                              f"but {data.shape[1]} columns")
         column = header.index(time_column)
-        return cls(t=data[:, column], Y=np.delete(data, column, axis=1), name=path.stem)
+        return cls.from_samples(data[:, column], np.delete(data, column, axis=1), name=path.stem, rate=rate)
+
+    @classmethod
+    def from_samples(cls, t: np.ndarray, Y: np.ndarray, name: str = "", rate: float | None = None) -> Demonstration:
+        """A demonstration from samples ``Y [L, d]`` at time stamps ``t [L]`` (strictly increasing).
+
+        With ``rate`` (Hz) the samples are resampled onto the even grid ``t[0] + k / rate`` within
+        ``[t[0], t[-1]]`` by a cubic spline through them (not-a-knot ends): uneven time stamps (a
+        recorder's jitter) or another rate. Without it the stamps must already be evenly spaced.
+        """
+        if rate is None:
+            return cls(t=t, Y=Y, name=name)
+        rate = check_positive(rate, "rate")
+        t = check_time_grid(t, "t", uniform=False, min_length=4)
+        Y = as_finite_array(Y, "Y", ndim=(1, 2))
+        if Y.shape[0] != t.size:
+            raise ValueError(f"Y: expected {t.size} rows (one per time stamp in t), got shape {Y.shape}")
+        grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) * rate + 1e-9)) + 1) / rate
+        if grid.size < 2:
+            raise ValueError(f"rate: {rate} Hz gives fewer than 2 samples over {t[-1] - t[0]:.3g} s")
+        return cls(t=grid, Y=CubicSpline(t, Y, axis=0)(grid), name=name)
+
+    def resample(self, rate: float) -> Demonstration:
+        """The demonstration on an even grid at ``rate`` Hz (cubic spline, :meth:`from_samples`);
+        ``truth`` is dropped (it belongs to the original samples)."""
+        return type(self).from_samples(self.t, self.Y, name=self.name, rate=rate)
+
+    def check_frame(self, low: Sequence[float] = TABLE_WORKSPACE[0], high: Sequence[float] = TABLE_WORKSPACE[1],
+                    *, centre_dims: Sequence[int] = (), name: str = "demonstration") -> None:
+        """Raise ``ValueError`` unless the samples lie in the box ``[low, high]`` (m); see :func:`check_frame`."""
+        check_frame(self.Y, low, high, centre_dims=centre_dims, name=name)
 
     def to_npz(self, path: str | Path) -> None:
         """Write an ``.npz`` archive: arrays ``t`` ``[L]``, ``Y`` ``[L, d]``, ``name`` (0-d str).
@@ -239,6 +278,36 @@ def _open_text(path: Path) -> io.StringIO:
     except UnicodeDecodeError as error:
         raise ValueError(f"path: {path} is not UTF-8 or UTF-16 text ({error.reason} at byte {error.start})") \
             from error
+
+
+def check_frame(Y: np.ndarray, low: Sequence[float], high: Sequence[float], *, centre_dims: Sequence[int] = (),
+                name: str = "demonstration") -> None:
+    """Check that samples ``Y [L, d]`` are in metres and inside the box ``[low, high]`` (``[d]`` each, m).
+
+    ``centre_dims`` are measured from the middle of their range (dimensions that a user of the samples
+    re-anchors, e.g. x and y of a wiping pattern that is moved onto the dirt patch). Raises ``ValueError``
+    naming ``name``, the dimension and the range found: a span over 5 m is taken for millimetres, any
+    other excursion for the wrong frame (for the wiping env: x, y on the table, z above its surface).
+    """
+    Y = as_finite_array(Y, name, ndim=2)
+    low_box, high_box = as_finite_array(low, "low", ndim=1), as_finite_array(high, "high", ndim=1)
+    if low_box.shape != (Y.shape[1],) or high_box.shape != low_box.shape or np.any(low_box >= high_box):
+        raise ValueError(f"low, high: expected {Y.shape[1]} values each with low < high")
+    span = np.ptp(Y, axis=0)
+    if np.any(span > _MILLIMETRE_SPAN):
+        k = int(np.argmax(span))
+        raise ValueError(f"{name}: dimension {k} spans {span[k]:.4g}, which looks like millimetres; "
+                         "expected metres (divide the samples by 1000)")
+    shifted = Y.copy()
+    for k in centre_dims:
+        shifted[:, k] -= 0.5 * (Y[:, k].min() + Y[:, k].max())
+    below, above = shifted.min(axis=0) < low_box, shifted.max(axis=0) > high_box
+    if np.any(below | above):
+        k = int(np.argmax(below | above))
+        where = "about the middle of its range " if k in centre_dims else ""
+        raise ValueError(f"{name}: dimension {k} ranges {where}from {shifted[:, k].min():.4g} to "
+                         f"{shifted[:, k].max():.4g} m, outside the reachable [{low_box[k]:.4g}, {high_box[k]:.4g}] m; "
+                         "expected the table frame in metres (x, y on the table, z above the table surface)")
 
 
 def _as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:

@@ -41,6 +41,7 @@ __all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "TransientStart", "sta
 logger = logging.getLogger(__name__)
 
 GroupSelection = str | Iterable[str] | None
+_MIN_TRANSIENT = 0.05  # shortest transient that fit() encodes, as a fraction of the period
 
 
 @dataclass(frozen=True)
@@ -302,8 +303,13 @@ class RhythmicDMP:
                          else float(np.mean([seg.period for seg in segmentations])))
         canonical = CanonicalSystem(common_period, mu=mu, eta=eta, alpha=alpha, beta=beta)
         anchor = np.mean([seg.anchor for seg in segmentations], axis=0)
-        lengths = [check_positive(seg.transient_length, "segmentations.transient_length")
-                   for seg in segmentations]
+        lengths = [seg.transient_length for seg in segmentations]
+        for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True)):
+            if seg.transient_length < max(_MIN_TRANSIENT * seg.period, demo.dt):
+                raise ValueError(f"demos[{k}]: {demo.name or 'the demonstration'} is periodic from its first samples "
+                                 f"(transient {seg.transient_length:.3g} s, period {seg.period:.3g} s): this DMP "
+                                 "encodes a start from rest into the pattern, so record the approach too, or use "
+                                 "rdmp_gym.PeriodicDMP for a purely periodic movement")
 
         reference = int(np.argmin(lengths))
         entrance = [canonical.omega * phase_shift(demos[reference], segmentations[reference], demo, seg,

@@ -91,8 +91,11 @@ def _coarse_period(Z: np.ndarray, dt: float) -> float:
         raise ValueError("demo: no periodicity found (the autocorrelation never turns negative)")
     lags = np.arange(negative[0] + 1, max_lag - 1)
     peaks = lags[(acf[lags] >= acf[lags - 1]) & (acf[lags] > acf[lags + 1])]
-    if peaks.size == 0 or acf[peaks].max() < _MIN_CORRELATION:
-        best = acf[peaks].max() if peaks.size else float("nan")
+    if peaks.size == 0:
+        raise ValueError(f"demo: no periodicity found: the last half of the demonstration ({n * dt:.3g} s) "
+                         "does not repeat a pattern; record at least two more periods after the transient")
+    if acf[peaks].max() < _MIN_CORRELATION:
+        best = acf[peaks].max()
         raise ValueError(f"demo: no periodicity found (best autocorrelation peak {best:.2f}, "
                          f"need {_MIN_CORRELATION})")
     lag = peaks[np.argmax(acf[peaks] >= 0.9 * acf[peaks].max())]

@@ -74,7 +74,8 @@ def check_time_grid(t: object, name: str = "t", *, uniform: bool = True, min_len
         mean_step = (t[-1] - t[0]) / steps.size
         if np.max(np.abs(steps - mean_step)) > rtol * mean_step:
             raise ValueError(f"{name}: time stamps must be evenly spaced (steps range from "
-                             f"{steps.min():.6g} to {steps.max():.6g}); resample the data first")
+                             f"{steps.min():.6g} to {steps.max():.6g}); resample them, e.g. "
+                             "Demonstration.from_samples(t, Y, rate=...) or rdmp-gym fit --rate")
     return t
 
 

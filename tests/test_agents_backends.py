@@ -20,8 +20,8 @@ from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator, WorkerError
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
-from rdmp_gym.agents.tracking import TRACKING_ID
 from rdmp_gym.agents.training import TrainConfig, train
+from rdmp_gym.envs.tracking import TRACKING_ID
 
 import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
 

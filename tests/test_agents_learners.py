@@ -7,7 +7,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np
 import pytest
 from rdmp_gym.agents.learners import PI2, EpisodeBatch, cost_weights, make_learner
-from rdmp_gym.agents.tracking import TrackingEnv
+from rdmp_gym.envs.tracking import TrackingEnv
 
 
 @pytest.fixture(scope="module")

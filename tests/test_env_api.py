@@ -192,7 +192,7 @@ def test_reset_options(env):
     ({"force_band": (30.0, 10.0)}, "force_band"),
     ({"reward_weights": {"coverage": -1.0}}, "reward_weights"),
     ({"reward_weights": {"typo": 1.0}}, "reward_weights"),
-    ({"render_mode": "depth_array"}, "render_mode"),
+    ({"render_mode": "ansi"}, "render_mode"),
     ({"xml_file": "/nonexistent.xml"}, "xml_file"),
     ({"context_ranges": {"table_height": (0.0, 1.0)}}, "context_ranges"),
     ({"context_ranges": {"patch_centre": (-0.1, 0.0)}}, "context_ranges"),     # patches over the table edge

@@ -9,7 +9,8 @@ per-step cost is the squared tracking error, ``c(t) = (|y(t) - y*(t)| / 1 cm)² 
 return ``-sum_t c(t)`` is minus the mean squared error in cm². Actions ``a in [-1, 1]^n`` map to
 ``theta = theta_imitation + scales * a``.
 
-Registered as ``rdmp_gym/DMPTracking-v0``; the tests and quick CLI runs use it where MuJoCo is not needed.
+Registered as ``rdmp_gym/DMPTracking-v0`` by ``rdmp_gym.envs``; the tests and quick CLI runs use it where
+MuJoCo's physics is not needed.
 """
 
 from __future__ import annotations
@@ -147,5 +148,3 @@ class TrackingEnv(gym.Env):
                 "rms_error": float(np.sqrt(np.mean(error**2))) * _ERROR_UNIT}
         return self._observation(), reward, True, False, info
 
-
-gym.register(TRACKING_ID, entry_point=TrackingEnv)

@@ -1,0 +1,14 @@
+"""Residual RL on a DMP: plain SB3 SAC on the step-based wiping env (``rdmp_gym/ArmarWipeStep-v1``).
+
+    MUJOCO_GL=egl python examples/step_env_sac.py      # writes runs/examples/step_sac.zip
+"""
+
+import gymnasium as gym
+from stable_baselines3 import SAC
+
+import rdmp_gym  # noqa: F401  (registers the envs)
+
+env = gym.make("rdmp_gym/ArmarWipeStep-v1", n_periods=2)
+model = SAC("MlpPolicy", env, learning_starts=500, device="cpu", seed=0).learn(total_timesteps=2_000)
+model.save("runs/examples/step_sac")
+print("mean reward of the last episodes:", [round(e["r"], 3) for e in list(model.ep_info_buffer)[-3:]])

@@ -1,0 +1,139 @@
+"""Packaging and the ``rdmp-gym`` command: the wheel holds every package, the core-only install runs ``fit``
+and names the extra the other commands need, ``--version``, defaults in every help text, ``--time-column``
+and ``--rate``, a non-episodic ``--env`` is a clear error."""
+
+import argparse
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rdmp_gym.agents import cli
+
+from rdmp_gym import Demonstration, wiping_demonstration
+
+ROOT = Path(__file__).resolve().parent.parent
+LAYERS = {"rdmp_gym": ROOT / "rdmp_gym", "rdmp_gym/envs": ROOT / "envs", "rdmp_gym/agents": ROOT / "agents"}
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dist")
+    result = subprocess.run([sys.executable, "-m", "pip", "wheel", "-v", "--no-deps", "--wheel-dir", str(out),
+                             str(ROOT)], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    return next(out.glob("rdmp_gym-*.whl")), result.stdout + result.stderr
+
+
+def test_wheel_holds_every_module_of_the_three_layers_the_xml_and_the_license(wheel):
+    path, _ = wheel
+    names = set(zipfile.ZipFile(path).namelist())
+    expected = {f"{prefix}/{file.relative_to(folder).as_posix()}" for prefix, folder in LAYERS.items()
+                for file in folder.rglob("*.py") if "__pycache__" not in file.parts}
+    assert "rdmp_gym/agents/learners/__init__.py" in expected
+    assert expected <= names, sorted(expected - names)
+    assert "rdmp_gym/envs/assets/armar3_wipe.xml" in names
+    assert any(name.endswith(".dist-info/licenses/LICENSE") for name in names)
+    metadata = zipfile.ZipFile(path).read(f"rdmp_gym-{cli.__version__}.dist-info/METADATA").decode()
+    assert f"Version: {cli.__version__}\n" in metadata and "License-Expression: BSD-3-Clause" in metadata
+
+
+def test_build_prints_no_setuptools_warning_and_the_metadata_is_clean(wheel):
+    _, log = wheel
+    warnings = [line for line in log.splitlines() if "Warning" in line or "deprecated" in line.lower()]
+    assert warnings == []
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    assert 'license = "BSD-3-Clause"' in pyproject and (ROOT / "LICENSE").read_text().startswith("BSD 3-Clause")
+    agents = next(line for line in pyproject.splitlines() if line.startswith("agents = "))
+    assert '"torch>=2.3,<3"' in agents   # bounded in the extra; the exact CPU build is pinned by the constraints file
+    assert "torch==2.13.0" in (ROOT / ".ci" / "constraints-cpu.txt").read_text()
+
+
+_BLOCK_EXTRAS = """
+import sys
+class _Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in {"gymnasium", "mujoco", "cma", "tqdm", "stable_baselines3", "torch", "imageio"}:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, _Block())
+from rdmp_gym.agents.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def _core_only(*args, cwd):
+    """Run the command as on an install without the extras (their modules cannot be imported)."""
+    return subprocess.run([sys.executable, "-c", _BLOCK_EXTRAS, *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=120, env={**os.environ, "PYTHONPATH": ""})
+
+
+def test_core_install_runs_help_and_fit_and_names_the_extra_for_train(tmp_path):
+    help_text = _core_only("--help", cwd=tmp_path)
+    assert help_text.returncode == 0 and "fit" in help_text.stdout and "agents extra" in help_text.stdout
+    fit = _core_only("fit", "--n-periodic", "10", "--n-transient", "10", "--out", str(tmp_path / "fit"), cwd=tmp_path)
+    assert fit.returncode == 0, fit.stderr
+    assert (tmp_path / "fit" / "dmp.json").is_file()
+    train = _core_only("train", "--out", str(tmp_path / "run"), "--agent", "pi2", cwd=tmp_path)
+    assert train.returncode == 2 and 'pip install "rdmp-gym[agents]"' in train.stderr
+    assert "Traceback" not in train.stderr and not (tmp_path / "run").exists()
+
+
+def test_version_flag(capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"rdmp-gym {cli.__version__}"
+
+
+def _subparsers(parser):
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return action.choices
+
+
+def test_every_option_help_states_its_default():
+    parser = cli._parser()
+    for name, sub in [("rdmp-gym", parser), *_subparsers(parser).items()]:
+        formatter = sub._get_formatter()
+        for action in sub._actions:
+            if not action.option_strings or action.default is argparse.SUPPRESS or action.required:
+                continue
+            text = formatter._expand_help(action) if action.help else ""
+            assert "default" in text, f"{name} {action.option_strings}: {text!r}"
+
+
+def test_fit_reads_a_time_column_and_resamples_uneven_stamps(tmp_path, capsys):
+    demo = wiping_demonstration(1, rng=0)
+    jitter = demo.t + np.random.default_rng(0).uniform(-2e-3, 2e-3, demo.t.size) * (np.arange(demo.t.size) > 0)
+    path = tmp_path / "recording.csv"
+    np.savetxt(path, np.column_stack([jitter, demo.Y]), delimiter=",", header="time,x,y,z", comments="")
+    refused = cli.main(["fit", "--demo", str(path), "--time-column", "time", "--out", str(tmp_path / "a")])
+    assert refused == 2 and "evenly spaced" in capsys.readouterr().err
+    code = cli.main(["fit", "--demo", str(path), "--time-column", "time", "--rate", "100", "--n-periodic", "20",
+                     "--n-transient", "20", "--out", str(tmp_path / "b")])
+    output = capsys.readouterr().out
+    assert code == 0 and (tmp_path / "b" / "dmp.json").is_file()
+    assert float(output.split("RMS error ")[1].split(" mm")[0]) < 3.0
+
+
+def test_a_non_episodic_env_is_a_clear_error(tmp_path, capsys):
+    code = cli.main(["train", "--env", "CartPole-v1", "--updates", "1", "--rollouts", "2", "--workers", "1",
+                     "--out", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == 2 and "not an episodic DMP env" in err and "Traceback" not in err
+
+
+def test_train_takes_a_recording_with_a_time_column_and_uneven_stamps(tmp_path):
+    demo = wiping_demonstration(1, rng=0)
+    jitter = demo.t + np.random.default_rng(1).uniform(-2e-3, 2e-3, demo.t.size) * (np.arange(demo.t.size) > 0)
+    path = tmp_path / "recording.csv"
+    np.savetxt(path, np.column_stack([jitter, demo.Y]), delimiter=",", header="time,x,y,z", comments="")
+    out = tmp_path / "run"
+    code = cli.main(["train", "--env", "rdmp_gym/DMPTracking-v0", "--demo", str(path), "--time-column", "time",
+                     "--rate", "100", "--updates", "1", "--rollouts", "2", "--workers", "1", "--n-periodic", "8",
+                     "--n-transient", "8", "--duration", "3", "--out", str(out)])
+    assert code == 0
+    saved = Demonstration.from_npz(out / "demo.npz")
+    assert np.allclose(np.diff(saved.t), 0.01) and (out / "dmp.json").is_file()
