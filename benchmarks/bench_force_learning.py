@@ -7,25 +7,29 @@ nominal flat table, with the admittance law only and with the learned periodic d
 the default before ArmarWipe-v1). Force error: mean |F - 18 N| of the contact force averaged over 0.1 s (the
 chatter of the contact above the control bandwidth removed), per period after the transient.
 
-    python benchmarks/bench_force_learning.py
+    python benchmarks/bench_force_learning.py [--save]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.force_learning import period_force_errors
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
-RESULTS = Path(__file__).parent / "results" / "force_learning.json"
+NAME = "force_learning.json"
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    args = parser.parse_args()
     tilts = np.vstack([[0.0, 0.0], np.random.default_rng(0).uniform(-0.15, 0.15, size=(8, 2))])
     envs = {f"{name}{suffix}": gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
             for suffix, gain in (("", 0.02), (" slow", 0.004))
@@ -57,9 +61,9 @@ def main() -> None:
                          "mean_coverage": float(np.mean([r["coverage"] for r in rows if r["controller"] == name]))}
         print(f"{name:<21} mean over the tilted tables: " + " ".join(f"{v:.2f}" for v in group.mean(axis=0))
               + f"   coverage {summary[name]['mean_coverage']:.3f}")
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"rows": rows, "summary": summary}, indent=1))
-    print(f"wrote {RESULTS}")
+    results = results_dir(args.save) / NAME
+    results.write_text(json.dumps({"rows": rows, "summary": summary}, indent=1))
+    print(f"wrote {results}")
 
 
 if __name__ == "__main__":

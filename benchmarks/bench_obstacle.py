@@ -10,24 +10,28 @@ Reported on the periodic part (t > 3 s): the smallest clearance
 without and with the coupling, the peak acceleration, the largest change of the path where the free path
 is more than 8 cm from the obstacle, and the integrated squared jerk against the free path.
 
-    python benchmarks/bench_obstacle.py
+    python benchmarks/bench_obstacle.py [--save]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
 from rdmp_gym.coupling import ObstacleAvoidance, avoiding_rollout
 
-RESULTS = Path(__file__).parent / "results" / "obstacle.json"
+NAME = "obstacle.json"
 DT = 2e-3
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    args = parser.parse_args()
     dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0), n_periodic=30, periodic_overlap=0.9, smoothing=0.3,
                           regularization=1e-4)      # alpha_z: the library default (5)
     t = np.arange(0.0, 8.0, DT)
@@ -66,9 +70,9 @@ def main() -> None:
     print(f"free path: peak acceleration {free_peak:.2f} m/s^2")
     env_rows = env_baseline()
     cups = cup_contexts()
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"rows": rows, "env": env_rows, "cup_contexts": cups}, indent=1))
-    print(f"wrote {RESULTS}")
+    results = results_dir(args.save) / NAME
+    results.write_text(json.dumps({"rows": rows, "env": env_rows, "cup_contexts": cups}, indent=1))
+    print(f"wrote {results}")
 
 
 def env_baseline() -> list[dict]:

@@ -7,20 +7,21 @@ runs at its fixed frequency. Lock-in: the time after the step from which the fre
 within 2 % of the partner's and the phase relation within 0.1 rad of its value before the step. Steady phase
 error: RMS over the last 5 s of the change of that relation (and of the absolute phase difference).
 
-    python benchmarks/bench_rhythm.py
+    python benchmarks/bench_rhythm.py [--save]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
 from rdmp_gym.frequency import follow_rhythm
 
-RESULTS = Path(__file__).parent / "results" / "rhythm.json"
+NAME = "rhythm.json"
 DT, DURATION, STEP = 2e-3, 30.0, 10.0
 
 
@@ -51,6 +52,9 @@ def measure(t: np.ndarray, omega: np.ndarray, psi: np.ndarray, phase: np.ndarray
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    args = parser.parse_args()
     dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0))      # library defaults
     rows = []
     for factor in (1.3, 0.7):
@@ -81,9 +85,9 @@ def main() -> None:
             summary[f"{model}/{factor}"] = {"lock_in": lock_text, "steady_change_rms": change,
                                             "steady_abs_rms": absolute, "peak_acc_ratio": peak}
             print(f"{model:<9} {factor - 1:>+5.0%} {lock_text:>22} {change:>17.3f} {absolute:>18.3f} {peak:>14.2f}")
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"rows": rows, "summary": summary}, indent=1))
-    print(f"wrote {RESULTS}")
+    results = results_dir(args.save) / NAME
+    results.write_text(json.dumps({"rows": rows, "summary": summary}, indent=1))
+    print(f"wrote {results}")
 
 
 if __name__ == "__main__":

@@ -8,19 +8,20 @@ speed at the end; and the segmentation's errors. Two periodic fits: the library 
 one (wider periodic basis), because the periodic family is still active at the exit. Bars: position
 <= 1 %, acceleration relative RMSE <= 15 %, peak <= 1.3x, rest within 1 mm and 1 mm/s.
 
-    python benchmarks/bench_stop.py
+    python benchmarks/bench_stop.py [--save]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from output import add_save_argument, results_dir
 
 from rdmp_gym.stopping import ending_demonstration, fit_ending, segment_ending
 
-RESULTS = Path(__file__).parent / "results" / "stop.json"
+NAME = "stop.json"
 H = 1e-3
 FITS = {"default": {}, "smooth": dict(n_periodic=30, periodic_overlap=0.9, smoothing=0.3, regularization=1e-4)}
 
@@ -48,6 +49,9 @@ def evaluate(style: int, seed: int, fit: str) -> dict:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_save_argument(parser)
+    args = parser.parse_args()
     rows = [evaluate(style, seed, fit) for fit in FITS for style in (1, 2, 3, 4) for seed in range(5)]
     print(f"{'fit':<8} {'style':>5} {'pos % max':>9} {'acc rRMSE max':>13} {'peak max':>8} {'end mm max':>10} "
           f"{'end mm/s max':>12} {'exit lag s':>10} {'rest lead s':>11}")
@@ -63,9 +67,9 @@ def main() -> None:
             print(f"{fit:<8} {style:>5} {100 * worst['position']:>9.3f} {worst['acc_rel_rmse']:>13.3f} "
                   f"{worst['acc_peak_ratio']:>8.3f} {worst['end_distance_mm']:>10.3f} {worst['end_speed_mm_s']:>12.2e} "
                   f"{lag:>10.3f} {lead:>11.3f}")
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"rows": rows, "worst": summary}, indent=1))
-    print(f"wrote {RESULTS}")
+    results = results_dir(args.save) / NAME
+    results.write_text(json.dumps({"rows": rows, "worst": summary}, indent=1))
+    print(f"wrote {results}")
 
 
 if __name__ == "__main__":
