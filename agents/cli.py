@@ -2,9 +2,10 @@
 
 Examples::
 
+    rdmp-gym train --agent creps --updates 30 --rollouts 10 --seed 0 --out runs/creps
     rdmp-gym train --agent pi2 --updates 30 --rollouts 10 --seed 0 --out runs/pi2
     rdmp-gym train --out runs/pi2 --resume             # continue a killed run
-    rdmp-gym evaluate runs/pi2 --episodes 10 --video
+    rdmp-gym evaluate runs/creps --episodes 20 --video     # final policy on the 20 test contexts
     rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
     rdmp-gym main --out runs/main
 
@@ -15,12 +16,15 @@ Examples::
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import importlib.util
 import json
 import logging
 import os
+import shutil
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -67,6 +71,9 @@ def _missing_extra() -> str | None:
 def _needs_extra(args: argparse.Namespace) -> None:
     raise ModuleNotFoundError(f"needs the agents extra (missing module {args.missing!r}): {_EXTRA_HINT}",
                               name=args.missing)
+
+#: updates of ``rdmp-gym main`` (x 10 rollouts): about two minutes on 2 cores with the evaluations
+MAIN_UPDATES = 20
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -126,8 +133,8 @@ def _add_backend_arguments(parser: argparse.ArgumentParser) -> None:
                              "Ray instance with --workers CPUs)")
 
 
-def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool, eval_episodes: int
-                            ) -> None:
+def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent: bool, eval_episodes: int,
+                            eval_every: int = 1) -> None:
     from .training import AGENTS, START_MODES
 
     if agent:
@@ -143,7 +150,8 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
     parser.add_argument("--start", choices=START_MODES, default="imitation", help="start of the search")
     parser.add_argument("--perturbation", type=float, default=0.3, help="std of the perturbed start")
     parser.add_argument("--eval-episodes", type=int, default=eval_episodes,
-                        help="policy evaluation episodes (fixed contexts) per update")
+                        help="validation contexts the policy is evaluated on")
+    parser.add_argument("--eval-every", type=int, default=eval_every, help="updates between policy evaluations")
     parser.add_argument("--resume", action="store_true", help="continue the run in --out from its checkpoint, with "
                         "its own config.json (flags only to extend --updates or change --workers)")
     _add_task_arguments(parser)
@@ -151,19 +159,21 @@ def _add_training_arguments(parser: argparse.ArgumentParser, updates: int, agent
 
 def _prepare_demo(args: argparse.Namespace) -> None:
     """With ``--time-column`` or ``--rate``, read ``--demo`` now and point ``args.demo`` at an even-grid copy
-    ``<out>/demo.npz`` (the run then holds the demonstration it was trained on)."""
+    in a temporary folder (removed at exit); the run copies it in as ``demo.npz``, so it holds the
+    demonstration it was trained on."""
     if not args.demo or (args.time_column == "t" and args.rate is None):
         return
     from .imitation import load_demonstration
 
     demo = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate)
-    folder = Path(args.out)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="rdmp-gym-demo-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
     demo.to_npz(folder / "demo.npz")
-    args.demo, args.time_column, args.rate = str((folder / "demo.npz").resolve()), "t", None
+    args.demo, args.time_column, args.rate = str(folder / "demo.npz"), "t", None
 
 
 def _train_config(args: argparse.Namespace, agent: str) -> Any:
+    from .learners import CONTEXTUAL
     from .training import TrainConfig
 
     _prepare_demo(args)
@@ -171,23 +181,8 @@ def _train_config(args: argparse.Namespace, agent: str) -> Any:
                        workers=args.workers, env_id=args.env, env_kwargs=_env_kwargs(args),
                        reset_options=dict(args.reset_option) or None, options=dict(args.option),
                        start=args.start, perturbation=args.perturbation, demo=args.demo,
-                       eval_episodes=args.eval_episodes)
-
-
-def _print_table(rows: Sequence[dict[str, Any]]) -> None:
-    keys = list(rows[0])
-    cells = [[("-" if row[k] is None else f"{row[k]:.4g}" if isinstance(row[k], float) else str(row[k]))
-              for k in keys] for row in rows]
-    widths = [max(len(k), *(len(c[i]) for c in cells)) for i, k in enumerate(keys)]
-    print("  ".join(k.rjust(w) for k, w in zip(keys, widths, strict=True)))
-    for c in cells:
-        print("  ".join(v.rjust(w) for v, w in zip(c, widths, strict=True)))
-
-
-def _evaluation_rows(result: dict[str, Any]) -> list[dict[str, Any]]:
-    return [{"policy": name, "return": result[name]["return_mean"], "coverage": result[name]["coverage_mean"],
-             "force_in_band": result[name]["force_in_band_mean"], "valid": result[name]["valid_fraction"]}
-            for name in ("imitation", "trained")]
+                       eval_episodes=args.eval_episodes, eval_every=args.eval_every,
+                       shared_context=agent not in CONTEXTUAL)
 
 
 #: command-line flags that set a field of the run's config: ``dest -> (field, flag)``
@@ -195,6 +190,7 @@ _RUN_FLAGS = {"agent": ("agent", "--agent"), "updates": ("updates", "--updates")
               "rollouts": ("rollouts", "--rollouts"), "seed": ("seed", "--seed"),
               "workers": ("workers", "--workers"), "start": ("start", "--start"),
               "perturbation": ("perturbation", "--perturbation"), "eval_episodes": ("eval_episodes", "--eval-episodes"),
+              "eval_every": ("eval_every", "--eval-every"),
               "env": ("env_id", "--env"), "demo": ("demo", "--demo"), "style": ("env_kwargs.style", "--style"),
               "groups": ("env_kwargs.groups", "--groups"), "n_periodic": ("env_kwargs.n_periodic", "--n-periodic"),
               "n_transient": ("env_kwargs.n_transient", "--n-transient"),
@@ -219,7 +215,7 @@ def _given_flags(argv: Sequence[str]) -> set[str]:
     for action in _all_actions(parser):
         if action.option_strings:
             action.default = argparse.SUPPRESS
-    return set(vars(parser.parse_args(argv)))
+    return set(vars(parser.parse_known_args(argv)[0]))
 
 
 def _resume_changes(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, str]]:
@@ -262,9 +258,9 @@ def _command_train(args: argparse.Namespace) -> None:
 def _command_evaluate(args: argparse.Namespace) -> None:
     from .assessment import evaluate_run
 
-    result = evaluate_run(args.run, args.episodes, seed=args.seed, workers=args.workers, policy=args.policy,
+    result = evaluate_run(args.run, args.episodes, workers=args.workers, policy=args.policy,
                           video=args.video, progress=True, backend=args.backend, ray_address=args.ray_address)
-    _print_table(_evaluation_rows(result))
+    _print_comparison(result)
     print(f"wrote {Path(args.run) / 'evaluation.json'} and evaluation.png" +
           (f" and {result['video']}" if "video" in result else ""))
 
@@ -287,6 +283,26 @@ def _command_fit(args: argparse.Namespace) -> None:
         print(f"wrote {figure}")
 
 
+def _interval_text(summary: dict[str, Any], metric: str) -> str:
+    found = summary["intervals"].get(metric)
+    return "-" if found is None else f"{found['estimate']:.3f} [{found['low']:.3f}, {found['high']:.3f}]"
+
+
+def _print_comparison(result: dict[str, Any]) -> None:
+    """Imitation vs trained on the test contexts: means with 95 % bootstrap intervals over the contexts."""
+    print(f"{'policy':>10} {'success rate':>22} {'coverage':>22} {'jerk / imitation':>22}")
+    for name in ("imitation", "trained"):
+        summary = result[name]
+        print(f"{name:>10} {_interval_text(summary, 'success'):>22} {_interval_text(summary, 'coverage'):>22} "
+              f"{_interval_text(summary, 'jerk_ratio'):>22}")
+    gain = np.array(result["trained"]["coverage"], dtype=float) - np.array(result["imitation"]["coverage"], dtype=float)
+    paired = np.array(result["trained"]["success"], dtype=float) - np.array(result["imitation"]["success"], dtype=float)
+    from .protocol import interval
+
+    print(f"paired gain over the imitation on the same {len(gain)} test contexts (mean, 95 % CI): coverage "
+          f"{interval(gain, 'mean')}, success {interval(paired, 'mean')}")
+
+
 def _command_main(args: argparse.Namespace) -> None:
     from rdmp_gym.figures import write_paper_figures
 
@@ -296,7 +312,7 @@ def _command_main(args: argparse.Namespace) -> None:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    config = _train_config(args, "pi2")
+    config = _train_config(args, args.agent)
     style = config.env_kwargs.get("style", 1)
     demo = load_demonstration(args.demo if args.demo else style)
     print(f"[1/4] imitation: fitting the rhythmic DMP to {demo.name!r}")
@@ -304,15 +320,22 @@ def _command_main(args: argparse.Namespace) -> None:
     plot_fit(demo.t - demo.t[0], demo.Y, dmp.rollout(demo.t), out / "fit.png", title=f"{demo.name}: imitation")
     print(f"[2/4] the paper's figures (2, 6, 7, 8, 9, 12) for the built-in demonstrations -> {out / 'figures'}")
     write_paper_figures(out / "figures")
-    print(f"[3/4] PI² refinement: {config.updates} updates x {config.rollouts} rollouts on {config.workers} worker(s)")
-    run = _train_or_resume(args, "pi2", out / "train")
-    print(f"[4/4] evaluation of the refined policy against the imitation ({args.episodes} episodes)")
-    result = evaluate_run(run.path, args.episodes, workers=config.workers, video=args.video, progress=True,
-                          backend=args.backend, ray_address=args.ray_address)
-    _print_table(_evaluation_rows(result))
+    print(f"[3/4] {config.agent}: {config.updates} updates x {config.rollouts} rollouts on random training contexts, "
+          f"{config.workers} worker(s); policy checked on {config.eval_episodes} validation contexts every "
+          f"{config.eval_every} updates")
+    run = _train_or_resume(args, config.agent, out / "train")
+    curve = [(r["episodes"], r["eval_success"], r["eval_coverage"]) for r in run.read_log()
+             if r.get("eval_coverage") is not None]
+    print("held-out (validation) curve, episodes: success rate / coverage  " +
+          "  ".join(f"{e}: {s:.2f}/{c:.3f}" for e, s, c in curve))
+    print(f"[4/4] the final policy against the imitation on {args.episodes} test contexts (never trained on)")
+    result = evaluate_run(run.path, args.episodes, workers=config.workers, policy="last", video=args.video,
+                          progress=True)
+    _print_comparison(result)
     summary = {"fit": str(out / "fit.png"), "figures": str(out / "figures"), "run": str(run.path),
-               "learning_curve": str(run.curve_png),
-               "evaluation": {name: {k: v for k, v in result[name].items() if k.endswith(("_mean", "_fraction"))}
+               "learning_curve": str(run.curve_png), "validation_curve": curve,
+               "evaluation": {name: {k: v for k, v in result[name].items()
+                                     if k.endswith(("_mean", "_fraction", "_rate")) or k == "intervals"}
                               for name in ("imitation", "trained")}}
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(f"wrote {out / 'summary.json'}, {out / 'fit.png'}, {run.curve_png}, {run.path / 'evaluation.png'}")
@@ -321,8 +344,9 @@ def _command_main(args: argparse.Namespace) -> None:
 def _add_agents_commands(commands: Any) -> None:
     """``train``, ``evaluate`` and ``main``; when the ``agents`` extra is missing, stand-ins that say so."""
     missing = _missing_extra()
-    about = {"train": "train an agent (pi2, pibb, cmaes, ppo)", "evaluate": "evaluate a run against the imitation",
-             "main": "imitation, PI² refinement and evaluation, end to end"}
+    about = {"train": "train an agent (creps, cpi2, pi2, pibb, cmaes, ppo, sac, ...)",
+             "evaluate": "evaluate a run's final policy against the imitation on the test contexts",
+             "main": "imitation, contextual refinement and evaluation on test contexts, end to end"}
     if missing is not None:
         for name, text in about.items():
             stub = commands.add_parser(name, help=f"{text} [needs the agents extra]", add_help=False)
@@ -337,19 +361,20 @@ def _add_agents_commands(commands: Any) -> None:
 
     evaluate = commands.add_parser("evaluate", help=about["evaluate"], formatter_class=_HelpFormatter)
     evaluate.add_argument("run", help="run directory")
-    evaluate.add_argument("--episodes", type=int, default=10, help="episodes per policy")
-    evaluate.add_argument("--seed", type=int, default=12345, help="seed of the evaluation contexts")
+    evaluate.add_argument("--episodes", type=int, default=20, help="test contexts")
     evaluate.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes")
+    evaluate.add_argument("--policy", choices=("last", "best"), default="last",
+                          help="the final policy (default) or the best on the validation contexts (shared θ only)")
     _add_backend_arguments(evaluate)
-    evaluate.add_argument("--policy", choices=("best", "last"), default="best", help="which policy of the run")
     evaluate.add_argument("--video", action="store_true", help="record the best episode (best_episode.mp4)")
     evaluate.set_defaults(handler=_command_evaluate)
 
     job = commands.add_parser("main", help=about["main"], formatter_class=_HelpFormatter)
     job.add_argument("--out", default="runs/main", help="output directory")
-    job.add_argument("--episodes", type=int, default=6, help="evaluation episodes")
+    job.add_argument("--episodes", type=int, default=20, help="test contexts")
     job.add_argument("--video", action="store_true", help="record the best evaluation episode")
-    _add_training_arguments(job, updates=30, agent=False, eval_episodes=4)
+    job.add_argument("--agent", default="creps", help="learner")
+    _add_training_arguments(job, updates=MAIN_UPDATES, agent=False, eval_episodes=6, eval_every=4)
     job.set_defaults(handler=_command_main)
 
 

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["plot_evaluation", "plot_fit", "plot_learning_curve"]
+__all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison"]
 
 
 def _column(records: Sequence[dict[str, Any]], key: str) -> np.ndarray:
@@ -22,12 +22,14 @@ def _column(records: Sequence[dict[str, Any]], key: str) -> np.ndarray:
 def plot_learning_curve(records: Sequence[dict[str, Any]], path: str | Path, title: str = "") -> None:
     """Return, coverage and force-in-band of the policy (and of the rollouts) against training episodes."""
     episodes = _column(records, "episodes")
-    panels = [("return", "eval_return_mean", "return_mean"), ("coverage", "eval_coverage", "coverage"),
-              ("force in band", "eval_force_in_band", "force_in_band")]
+    panels = [("return", "eval_return_mean", "return_mean"), ("success rate", "eval_success", "success"),
+              ("coverage", "eval_coverage", "coverage"), ("force in band", "eval_force_in_band", "force_in_band")]
     panels = [p for p in panels if np.any(np.isfinite(_column(records, p[1])))]
     figure, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.4), squeeze=False)
     for axis, (label, policy_key, rollout_key) in zip(axes[0], panels, strict=True):
-        axis.plot(episodes, _column(records, policy_key), "o-", ms=3, label="policy")
+        values = _column(records, policy_key)
+        shown = np.isfinite(values)      # the policy is evaluated every eval_every updates
+        axis.plot(episodes[shown], values[shown], "o-", ms=3, label="policy (validation contexts)")
         axis.plot(episodes, _column(records, rollout_key), ".", alpha=0.6, label="rollouts (mean)")
         if label == "return":
             axis.plot(episodes, _column(records, "return_best"), "x", ms=3, alpha=0.5, label="rollouts (best)")
@@ -65,25 +67,40 @@ def plot_fit(t: np.ndarray, demo: np.ndarray, reproduction: np.ndarray, path: st
     plt.close(figure)
 
 
-def plot_evaluation(paths: dict[str, np.ndarray], metrics: dict[str, dict[str, float]], path: str | Path,
-                    title: str = "") -> None:
-    """Left: x-y paths ``[T, >=2]`` of named policies; right: their mean metrics as grouped bars."""
-    figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
-    for index, (name, points) in enumerate(paths.items()):
-        left.plot(points[:, 0], points[:, 1], color=f"C{index}", lw=1.0, label=name)
-    left.set_aspect("equal", adjustable="datalim")
-    left.set_xlabel("x (m)")
-    left.set_ylabel("y (m)")
-    left.legend(fontsize=8)
-    left.grid(alpha=0.3)
-    keys = sorted({key for values in metrics.values() for key in values})
-    width = 0.8 / max(len(metrics), 1)
-    for index, (name, values) in enumerate(metrics.items()):
-        heights = [values.get(key, np.nan) for key in keys]
-        right.bar(np.arange(len(keys)) + index * width, heights, width, label=name, color=f"C{index}")
-    right.set_xticks(np.arange(len(keys)) + 0.4 - width / 2, keys, fontsize=8)
-    right.grid(alpha=0.3, axis="y")
-    right.legend(fontsize=8)
+def plot_policy_comparison(paths: dict[str, np.ndarray], summaries: dict[str, dict[str, Any]], path: str | Path,
+                           title: str = "") -> None:
+    """Sponge paths ``[T, >=2]`` of named policies side by side (same axes), then their success rate,
+    coverage and jerk ratio with 95 % intervals (``summaries[name]["intervals"][metric]``)."""
+    figure, axes = plt.subplots(1, len(paths) + 1, figsize=(4.2 * (len(paths) + 1), 4))
+    points = np.concatenate([p[:, :2] for p in paths.values()])
+    low, high = points.min(axis=0), points.max(axis=0)
+    margin = 0.05 * float(np.max(high - low))
+    for index, (axis, (name, values)) in enumerate(zip(axes[:-1], paths.items(), strict=True)):
+        axis.plot(values[:, 0], values[:, 1], color=f"C{index}", lw=0.8)
+        axis.plot(values[0, 0], values[0, 1], "ko", ms=4)
+        axis.set_xlim(low[0] - margin, high[0] + margin)
+        axis.set_ylim(low[1] - margin, high[1] + margin)
+        axis.set_aspect("equal")
+        axis.set_title(name, fontsize=10)
+        axis.set_xlabel("x (m)")
+        axis.set_ylabel("y (m)")
+        axis.grid(alpha=0.3)
+    bars = axes[-1]
+    keys = ("success", "coverage", "jerk_ratio")
+    width = 0.8 / max(len(summaries), 1)
+    for index, (name, summary) in enumerate(summaries.items()):
+        found = [summary["intervals"].get(key) for key in keys]
+        heights = [np.nan if f is None else f["estimate"] for f in found]
+        errors = np.array([[0.0, 0.0] if f is None else [f["estimate"] - f["low"], f["high"] - f["estimate"]]
+                           for f in found]).T
+        bars.bar(np.arange(len(keys)) + index * width, heights, width, yerr=errors, capsize=3, label=name,
+                 color=f"C{index}")
+    bars.set_xticks(np.arange(len(keys)) + 0.4 - width / 2, ["success rate", "coverage", "jerk / imitation"],
+                    fontsize=8)
+    bars.axhline(1.0, color="k", lw=0.6, ls=":")
+    bars.grid(alpha=0.3, axis="y")
+    bars.legend(fontsize=8)
+    bars.set_title("test contexts: mean, 95 % CI", fontsize=10)
     figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)

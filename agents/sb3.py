@@ -1,8 +1,8 @@
-"""stable-baselines3 PPO on the same episodic env: a contextual bandit, one step per episode.
+"""stable-baselines3 PPO and SAC on the same episodic env: a contextual bandit, one step per episode.
 
-Settings: see :mod:`rdmp_gym.agents.ppo_config`.
+Settings: see :mod:`rdmp_gym.agents.ppo_config` and :mod:`rdmp_gym.agents.sac_config`.
 
-``PPOAgent`` implements the training loop's agent interface (see ``rdmp_gym.agents.training``).
+``PPOAgent`` and ``SACAgent`` implement the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
 random streams restart). Its checkpoint is SB3's own ``.zip``, of which only the weights are read
 (``set_parameters``: torch ``weights_only`` loading); SB3's ``data`` entry, which may hold pickled
@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3 import PPO
+from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
@@ -28,21 +28,24 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 from .learners.base import EpisodeBatch
 from .options import from_options
 from .ppo_config import PPOConfig
+from .sac_config import SACConfig
 from .tasks import TaskSpec, episode_metrics
 
-__all__ = ["PPOAgent", "parallel_envs"]
+__all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]
 
 
 class _EpisodeCollector(BaseCallback):
-    """Collects the executed actions and episode metrics of one PPO rollout phase."""
+    """Collects the executed actions and episode metrics of one rollout phase (``key``: the name of the
+    executed actions among the algorithm's locals: ``clipped_actions`` for PPO, ``actions`` for SAC)."""
 
-    def __init__(self) -> None:
+    def __init__(self, key: str = "clipped_actions") -> None:
         super().__init__()
+        self.key = key
         self.actions: list[np.ndarray] = []
         self.metrics: list[dict[str, Any]] = []
 
     def _on_step(self) -> bool:
-        for action, reward, info in zip(self.locals["clipped_actions"], self.locals["rewards"],
+        for action, reward, info in zip(self.locals[self.key], self.locals["rewards"],
                                         self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
             # float32 as PPO learns from it (DummyVecEnv keeps rewards in float32, SubprocVecEnv in float64)
@@ -86,6 +89,21 @@ def _logger(tensorboard: bool, log_dir: str | Path | None) -> Logger:
         raise ModuleNotFoundError('ppo.tensorboard: needs the tensorboard extra: pip install "rdmp-gym[tensorboard]"',
                                   name="tensorboard")
     return configure(str(Path(log_dir) / "tensorboard"), ["tensorboard"])
+
+def load_weights(model: PPO | SAC, state: Mapping[str, Any], name: str) -> None:
+    """Load ``state["model"]`` (SB3's zip) into ``model`` weights-only (``set_parameters``: torch
+    ``weights_only``); SB3's ``data`` entry, which may hold pickled objects, is never read."""
+    if not isinstance(state.get("model"), bytes):
+        raise ValueError("state.model: expected the bytes of an SB3 model zip")
+    for key in ("num_timesteps", "n_updates"):
+        if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
+            raise ValueError(f"state.{key}: expected a count >= 0, got {state.get(key)!r}")
+    try:
+        model.set_parameters(io.BytesIO(state["model"]), exact_match=True, device="cpu")
+    except (ValueError, KeyError, RuntimeError) as error:
+        raise ValueError(f"state.model: not a {name} model of this run's shape ({error})") from error
+    model.num_timesteps, model._n_updates = state["num_timesteps"], state["n_updates"]
+
 
 class PPOAgent:
     """PPO with one iteration (``rollouts`` episodes, then the gradient epochs) per update.
@@ -152,16 +170,73 @@ class PPOAgent:
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         """Restore the policy and optimiser weights from SB3's zip (weights only, nothing unpickled)."""
-        if not isinstance(state.get("model"), bytes):
-            raise ValueError("state.model: expected the bytes of an SB3 model zip")
-        for key in ("num_timesteps", "n_updates"):
-            if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
-                raise ValueError(f"state.{key}: expected a count >= 0, got {state.get(key)!r}")
-        try:
-            self.model.set_parameters(io.BytesIO(state["model"]), exact_match=True, device="cpu")
-        except (ValueError, KeyError, RuntimeError) as error:
-            raise ValueError(f"state.model: not a PPO model of this run's shape ({error})") from error
-        self.model.num_timesteps, self.model._n_updates = state["num_timesteps"], state["n_updates"]
+        load_weights(self.model, state, "PPO")
+
+    def close(self) -> None:
+        self.env.close()
+
+
+class SACAgent:
+    """SAC with ``rollouts`` environment steps (episodes) and their gradient steps per update.
+
+    Args:
+        task: the env.
+        initial_action: ``[n]`` the policy mean at the start (in ``(-1, 1)``).
+        rollouts: episodes per update.
+        seed: seeds torch, the policy and the env.
+        options: fields of :class:`SACConfig`.
+    """
+
+    def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, seed: int,
+                 options: Mapping[str, Any] | None = None) -> None:
+        self.config = from_options(SACConfig, options, "sac")
+        self.rollouts = rollouts
+        self.env = DummyVecEnv([task.make_with_options])
+        self.env.seed(seed)
+        hidden = [self.config.hidden, self.config.hidden]
+        self.model = SAC("MlpPolicy", self.env, learning_rate=self.config.learning_rate,
+                         buffer_size=self.config.buffer_size, learning_starts=0, batch_size=self.config.batch_size,
+                         gamma=0.0, train_freq=(rollouts, "step"), gradient_steps=self.config.gradient_steps * rollouts,
+                         seed=seed, device="cpu", verbose=0,
+                         policy_kwargs={"net_arch": hidden})
+        start = np.arctanh(np.clip(np.asarray(initial_action, dtype=np.float64), -0.999, 0.999))
+        actor = self.model.actor
+        with torch.no_grad():    # mean at the start action and std = sigma for every context, at first
+            actor.mu.weight.mul_(0.01)
+            actor.mu.bias.copy_(torch.as_tensor(start, dtype=torch.float32))
+            actor.log_std.weight.mul_(0.01)
+            actor.log_std.bias.fill_(math.log(self.config.sigma))
+        self._collector = _EpisodeCollector("actions")
+
+    @property
+    def exploration(self) -> float:
+        """Mean standard deviation of the pre-squash Gaussian for a zero context."""
+        with torch.no_grad():
+            features = self.model.actor.extract_features(torch.zeros((1, *self.env.observation_space.shape)),
+                                                         self.model.actor.features_extractor)
+            log_std = self.model.actor.log_std(self.model.actor.latent_pi(features))
+        return float(torch.exp(log_std).mean())
+
+    def train_update(self) -> EpisodeBatch:
+        self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
+        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
+            raise FloatingPointError("sac: the policy diverged (NaN or inf weights); lower learning_rate "
+                                     "(--option learning_rate=...)")
+        return self._collector.pop_batch()
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+
+    def state_dict(self) -> dict[str, Any]:
+        buffer = io.BytesIO()
+        self.model.save(buffer)
+        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
+                "n_updates": int(self.model._n_updates)}
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        """Restore the networks and optimisers from SB3's zip (weights only; the replay buffer starts empty)."""
+        load_weights(self.model, state, "SAC")
 
     def close(self) -> None:
         self.env.close()

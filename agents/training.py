@@ -5,7 +5,10 @@ context observations to actions with ``policy_actions``. :class:`ESAgent` wraps 
 (PI², PI^BB, CMA-ES); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
 
 Seeds: the run seed makes a ``SeedSequence`` whose children drive the learner, the training episodes'
-reset seeds, the perturbed start and the fixed evaluation seeds; the same config gives the same log.
+reset seeds (drawn from ``[0, 2**30)``), the perturbed start and the contexts that standardise a
+contextual learner's features; the same config gives the same log. The policy is evaluated after every
+update on the first ``eval_episodes`` validation contexts (:mod:`rdmp_gym.agents.protocol`), which no
+training episode uses; "best" is chosen there, never on the test contexts.
 """
 
 from __future__ import annotations
@@ -27,10 +30,12 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .evaluation import Evaluator
-from .learners import LEARNERS, EpisodeBatch, Learner, make_learner
+from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
 from .options import check_choice, check_range, from_options, to_options
 from .ppo_config import PPOConfig
+from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
 from .runs import RunDirectory, write_atomic
+from .sac_config import SACConfig
 from .tasks import WIPE_ID, TaskSpec
 
 __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_summary", "environment_record",
@@ -38,9 +43,11 @@ __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_su
 
 logger = logging.getLogger(__name__)
 
-AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig}
+AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig,
+                                  "sac": SACConfig}
 AGENTS = tuple(AGENT_CONFIGS)
 START_MODES = ("imitation", "perturbed", "shrunk")
+_FEATURE_CONTEXTS = 64   # training contexts whose mean and spread standardise a contextual learner's features
 _SEED_LIMIT = 2**31 - 1
 
 
@@ -49,7 +56,8 @@ class TrainConfig:
     """Everything that defines a training run (stored as ``config.json``).
 
     Attributes:
-        agent: ``pi2``, ``pibb``, ``cmaes`` or ``ppo``.
+        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``creps``, ``cpibb``, ``cpi2``, ``pi2``, ``pibb``,
+            ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``.
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
@@ -65,7 +73,9 @@ class TrainConfig:
         perturbation: size of the perturbed or shrunk start.
         demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
         eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
-        shared_context: all rollouts of one update use the same reset seed (same context).
+        eval_every: evaluate the policy every this many updates (and after the last one).
+        shared_context: all rollouts of one update use the same reset seed (same context); the contextual
+            learners (``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context per rollout.
     """
 
     agent: str = "pi2"
@@ -82,6 +92,7 @@ class TrainConfig:
     demo: str = ""
     eval_episodes: int = 1
     shared_context: bool = True
+    eval_every: int = 1
 
     def __post_init__(self) -> None:
         check_choice(self.agent, "agent", AGENTS)
@@ -91,6 +102,7 @@ class TrainConfig:
         check_range(self.workers, "workers", 1, None)
         check_range(self.perturbation, "perturbation", 0.0, 1.0)
         check_range(self.eval_episodes, "eval_episodes", 1, None)
+        check_range(self.eval_every, "eval_every", 1, None)
         check_choice(self.start, "start", START_MODES)
         for name in ("env_kwargs", "options"):
             if not isinstance(getattr(self, name), Mapping):
@@ -152,15 +164,19 @@ class ESAgent:
         return self.learner.exploration
 
     def train_update(self) -> EpisodeBatch:
-        actions = self.learner.ask()
-        count = 1 if self.shared_context else actions.shape[0]
-        seeds = self.episode_rng.integers(_SEED_LIMIT, size=count)
-        batch = self.evaluator.run(actions, np.broadcast_to(seeds, (actions.shape[0],)).copy())
+        rollouts = self.learner.rollouts
+        count = 1 if self.shared_context and not self.learner.uses_context else rollouts
+        seeds = np.broadcast_to(self.episode_rng.integers(TRAIN_SEED_LIMIT, size=count), (rollouts,)).copy()
+        observations = None
+        if self.learner.uses_context:
+            observations = context_observations(self.evaluator.env, seeds, self.evaluator.spec.options())
+        actions = self.learner.ask(observations)
+        batch = self.evaluator.run(actions, seeds)
         self.learner.tell(batch)
         return batch
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
-        return np.repeat(self.learner.mean[None], len(observations), axis=0)
+        return self.learner.policy_actions(observations)
 
     def state_dict(self) -> dict[str, Any]:
         return {"learner": self.learner.state_dict(), "episode_rng": self.episode_rng.bit_generator.state}
@@ -184,8 +200,9 @@ def _nanmean(values: np.ndarray) -> float:
 
 
 def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
-    """Mean/best return, mean coverage, force-in-band fraction and valid fraction of a batch."""
+    """Mean/best return, mean coverage, force-in-band fraction, success rate and valid fraction of a batch."""
     return {f"{prefix}return_mean": _number(np.mean(batch.returns)),
+            f"{prefix}success": _number(np.mean(success(batch))),
             f"{prefix}return_best": _number(np.max(batch.returns)),
             f"{prefix}coverage": _number(_nanmean(batch.coverage)),
             f"{prefix}force_in_band": _number(_nanmean(batch.force_in_band)),
@@ -193,7 +210,7 @@ def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
 
 
 def _seed_streams(seed: int) -> dict[str, np.random.Generator]:
-    names = ("learner", "episodes", "start", "evaluation")
+    names = ("learner", "episodes", "start", "features")
     children = np.random.SeedSequence(seed).spawn(len(names))
     return {name: np.random.default_rng(child) for name, child in zip(names, children, strict=True)}
 
@@ -223,9 +240,18 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
 
         return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options,
                         log_dir=run_path)
+    if config.agent == "sac":
+        from .sb3 import SACAgent
+
+        return SACAgent(config.task, initial, config.rollouts, config.seed, config.options)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
-    learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights)
+    space = None
+    if config.agent in CONTEXTUAL:
+        seeds = streams["features"].integers(TRAIN_SEED_LIMIT, size=_FEATURE_CONTEXTS)
+        space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, seeds, config.task.options()))
+    learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights,
+                           space)
     return ESAgent(learner, evaluator, streams["episodes"], config.shared_context)
 
 
@@ -389,7 +415,7 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
         streams = _seed_streams(config.seed)
         with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
             initial = _initial_action(config, evaluator, streams["start"])
-            eval_seeds = streams["evaluation"].integers(_SEED_LIMIT, size=config.eval_episodes)
+            eval_seeds = validation_seeds(config.eval_episodes)
             observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                      for s in eval_seeds])
             agent = _make_agent(config, evaluator, streams, initial, run.path)
@@ -465,13 +491,21 @@ def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evalu
 
     def evaluate_and_log(batch: EpisodeBatch | None) -> None:
         nonlocal best
-        actions = agent.policy_actions(observations)
-        policy = evaluator.run(actions, eval_seeds)
         record: dict[str, Any] = {"update": update, "episodes": episodes,
-                                  "eval_episodes": (update + 1) * len(eval_seeds),
-                                  "exploration": _number(agent.exploration), **batch_summary(policy, "eval_")}
+                                  "exploration": _number(agent.exploration)}
         if batch is not None:
             record.update(batch_summary(batch, ""))
+        if update % config.eval_every and update < config.updates:
+            record["best_eval_return"] = None if best is None else best["eval_return_mean"]
+            record["time_s"] = round(time.perf_counter() - started, 3)
+            run.append_log(record)
+            run.save_checkpoint({"agent": agent.state_dict(), "update": update, "episodes": episodes,
+                                 "best": best, "elapsed": record["time_s"]})
+            return
+        actions = agent.policy_actions(observations)
+        evaluations = 1 + update // config.eval_every + (1 if update % config.eval_every else 0)
+        record["eval_episodes"] = evaluations * len(eval_seeds)
+        record.update(batch_summary(evaluator.run(actions, eval_seeds), "eval_"))
         if best is None or record["eval_return_mean"] > best["eval_return_mean"]:
             best = {**{k: v for k, v in record.items() if k.startswith("eval_")}, "update": update,
                     "eval_seed": int(eval_seeds[0])}

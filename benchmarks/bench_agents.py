@@ -1,17 +1,26 @@
-"""Benchmark the learners on the wiping task: the same episode budget for PI², PI^BB, CMA-ES and PPO.
+"""Benchmark the learners on the wiping task under the evaluation protocol of ``rdmp_gym.agents.protocol``.
 
-For every agent, start (the imitation, and a "shrunk" start whose DMP weights are scaled by 0.7) and
-seed, a run of ``budget / rollouts`` updates; after every update the policy is evaluated on fixed
-contexts (``--eval-contexts`` per seed, the same for every agent). Contexts: ``random`` (the env's
-default, a new table/patch/start per update, shared by that update's rollouts) or ``fixed`` (one
-context per seed for training and evaluation).
+For every agent and seed: one training run of ``budget`` episodes (``budget / rollouts`` updates) on
+random training contexts (reset seeds in ``[0, 2**30)``), its policy evaluated every ``eval_every``
+updates on the validation contexts (the held-out learning curves), then the **final** policy (never a
+"best") evaluated once on the test contexts, which no run trains or selects on. Beside the learners,
+every table shows the imitation (``a = 0``), the amplitude-only search (``amplitude``: one θ over the 3
+amplitude factors) and the random-return control (``random``: contextual REPS fed random returns).
 
-Writes ``benchmarks/results/agents.json`` (settings, curves, summary) and ``agents.png``, and prints
-the table. Target checked: coverage >= 0.95 with force in band >= 0.9 (policy evaluation).
+Per agent: the interquartile mean over seeds of each seed's test-context mean, with a 95 % percentile
+bootstrap interval over seeds (success rate, coverage, path jerk relative to the imitation's, return),
+and the training episodes until the validation success rate first reaches 90 %. The imitation is one
+deterministic policy: its interval is over the test contexts.
 
-    python benchmarks/bench_agents.py                     # the full benchmark (about 20-40 min on 2 cores)
-    python benchmarks/bench_agents.py --seeds 1 --budget 60 --agents pi2 cmaes   # a quick look
-    python benchmarks/bench_agents.py --backend ray      # every run a Ray task (RAY_ADDRESS: a cluster)
+Writes ``benchmarks/results/<name>.json`` (settings, per-run curves and per-context test scores, summary)
+and ``<name>.png``, and prints the table.
+
+    # the full protocol (10 seeds x 9 agents x 1000 episodes; several hours on 2 cores):
+    python benchmarks/bench_agents.py
+    # a reduced run (what benchmarks/results/agents.json holds; see its settings):
+    python benchmarks/bench_agents.py --agents creps cpibb cpi2 amplitude random --seeds 3 --budget 300 \\
+        --rollouts 10 --val-contexts 6 --eval-every 5
+    # on ArmarWipe-v1 (issue 8) the same protocol is a flag: --env-id rdmp_gym/ArmarWipe-v1
 """
 
 from __future__ import annotations
@@ -33,31 +42,40 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from output import add_save_argument, results_dir
+from rdmp_gym.agents.assessment import trained_actions
+from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.protocol import (
+    PolicyScores,
+    context_observations,
+    evaluate_actions,
+    final_test_seeds,
+    interval,
+    path_jerk,
+)
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from tqdm import tqdm
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
-COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
+SUCCESS_TARGET = 0.9
+METRICS = ("success", "coverage", "jerk_ratio", "returns")
 
 
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--agents", nargs="+", default=["pi2", "pibb", "cmaes", "ppo"])
-    parser.add_argument("--starts", nargs="+", default=["imitation", "shrunk"])
-    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..n-1")
-    parser.add_argument("--budget", type=int, default=300, help="training episodes per run")
-    parser.add_argument("--rollouts", type=int, default=10, help="episodes per update")
-    parser.add_argument("--contexts", choices=("random", "fixed"), default="random")
-    parser.add_argument("--eval-contexts", type=int, default=6, help="evaluation contexts (random mode)")
-    parser.add_argument("--workers", type=int, default=2, help="processes per run (local backend)")
-    parser.add_argument("--backend", choices=("local", "ray"), default="local",
-                        help="ray: the runs (agent x start x seed) are Ray tasks of one CPU each, each run on "
-                             "1 worker; the same result files")
-    parser.add_argument("--ray-address", default=None, help="Ray cluster (default $RAY_ADDRESS, else a local one)")
+    parser.add_argument("--agents", nargs="+",
+                        default=["creps", "cpibb", "cpi2", "pibb", "cmaes", "ppo", "amplitude", "random"])
+    parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")
+    parser.add_argument("--budget", type=int, default=1000, help="training episodes per run")
+    parser.add_argument("--rollouts", type=int, default=20, help="episodes per update")
+    parser.add_argument("--test-contexts", type=int, default=20, help="test contexts (final policy)")
+    parser.add_argument("--val-contexts", type=int, default=10, help="validation contexts (learning curves)")
+    parser.add_argument("--eval-every", type=int, default=5, help="updates between validation evaluations")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--env-id", default=WIPE_ID)
     parser.add_argument("--option", action="append", default=[], metavar="AGENT.KEY=VALUE",
-                        help="override a learner setting, e.g. pi2.sigma=0.5 (repeatable)")
+                        help="override a learner setting, e.g. creps.epsilon=1.0 (repeatable)")
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
@@ -82,124 +100,101 @@ def _options(args: argparse.Namespace) -> dict[str, dict]:
     return options
 
 
-def _first_reaching(records: list[dict]) -> int | None:
+def _episodes_to_target(records: list[dict]) -> int | None:
     for record in records:
-        if (record["eval_coverage"] or 0) >= COVERAGE_TARGET and (record["eval_force_in_band"] or 0) >= FORCE_TARGET:
+        if record.get("eval_success") is not None and record["eval_success"] >= SUCCESS_TARGET:
             return int(record["episodes"])
     return None
 
 
-def _run(agent: str, start: str, seed: int, args: argparse.Namespace, env_kwargs: dict, options: dict,
-         scratch: Path) -> dict:
-    reset_options = None
-    eval_episodes = args.eval_contexts
-    if args.contexts == "fixed":
-        env = TaskSpec(WIPE_ID, env_kwargs).make()          # (also registers the env in a Ray worker)
-        reset_options = {"context": env.reset(seed=seed)[1]["context"].tolist()}
-        env.close()
-        eval_episodes = 1
-    config = TrainConfig(agent=agent, env_id=WIPE_ID, updates=args.budget // args.rollouts, rollouts=args.rollouts,
-                         seed=seed, workers=args.workers, env_kwargs=env_kwargs, reset_options=reset_options,
-                         options=options, start=start, perturbation=0.3, eval_episodes=eval_episodes)
+def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.ndarray, observations: np.ndarray,
+             reference_jerk: np.ndarray) -> dict:
+    """One training run and the test evaluation of its final policy. Every episode goes through an
+    ``Evaluator`` (``train`` builds its own): this is the one place where a run is dispatched."""
     began = time.perf_counter()
-    run = train(config, scratch / f"{agent}-{start}-{seed}")
+    run = train(config, scratch / f"{config.agent}-{config.seed}")
     records = run.read_log()
-    return {"agent": agent, "start": start, "seed": seed, "seconds": round(time.perf_counter() - began, 1),
-            "options": options, "episodes_to_target": _first_reaching(records),
-            "curve": [{key: record.get(key) for key in ("update", "episodes", "eval_return_mean", "eval_coverage",
-                                                        "eval_force_in_band", "return_mean", "coverage",
-                                                        "force_in_band", "valid", "exploration")}
-                      for record in records]}
+    actions = trained_actions(run, config, "last", observations, tester.n_actions)
+    scores = evaluate_actions(tester, actions, seeds, reference_jerk)
+    curve = [{key: record.get(key) for key in ("update", "episodes", "eval_success", "eval_coverage",
+                                               "eval_return_mean", "return_mean", "exploration")}
+             for record in records if record.get("eval_return_mean") is not None]
+    return {"agent": config.agent, "seed": config.seed, "seconds": round(time.perf_counter() - began, 1),
+            "options": config.options, "episodes_to_target": _episodes_to_target(records), "curve": curve,
+            "test": scores.to_dict(), "test_means": scores.means()}
 
 
-def _run_on_ray(jobs: list[tuple[str, str, int]], args: argparse.Namespace, env_kwargs: dict,
-                options: dict[str, dict], scratch: Path) -> list[dict]:
-    """Every run as a Ray task (one CPU, one worker inside); results in the order of ``jobs``."""
-    from rdmp_gym.agents.ray_backend import import_ray, init_ray
-
-    ray = import_ray()
-    owns = init_ray(os.cpu_count() or 1, args.ray_address)
-    remote = ray.remote(num_cpus=1)(_run)
-    serial = argparse.Namespace(**{**vars(args), "workers": 1})
-    try:
-        pending = [remote.remote(agent, start, seed, serial, env_kwargs, options.get(agent, {}), scratch)
-                   for agent, start, seed in jobs]
-        with tqdm(total=len(pending), desc="runs (ray)", unit="run") as bar:
-            for ref in pending:
-                ray.wait([ref], num_returns=1)
-                bar.update(1)
-        return ray.get(pending)
-    finally:
-        if owns:
-            ray.shutdown()
-
-
-def _summary(runs: list[dict], agents: list[str], starts: list[str]) -> list[dict]:
-    rows = []
-    for start in starts:
-        for agent in agents:
-            group = [r for r in runs if r["agent"] == agent and r["start"] == start]
-            if not group:
-                continue
-            first, last = (np.array([[r["curve"][i][k] for k in ("eval_return_mean", "eval_coverage",
-                                                                  "eval_force_in_band")] for r in group], dtype=float)
-                           for i in (0, -1))
-            best_cov = np.array([max(c["eval_coverage"] for c in r["curve"]) for r in group])
-            reached = [r["episodes_to_target"] for r in group if r["episodes_to_target"] is not None]
-            rows.append({"start": start, "agent": agent, "seeds": len(group),
-                         "return_0": float(first[:, 0].mean()), "return": float(last[:, 0].mean()),
-                         "return_std": float(last[:, 0].std()), "coverage_0": float(first[:, 1].mean()),
-                         "coverage": float(last[:, 1].mean()), "coverage_std": float(last[:, 1].std()),
-                         "force_in_band": float(last[:, 2].mean()), "best_coverage": float(best_cov.mean()),
-                         "reached": len(reached),
-                         "episodes_to_target": float(np.median(reached)) if reached else None,
-                         "seconds": float(np.mean([r["seconds"] for r in group]))})
+def _summary(runs: list[dict], imitation: dict) -> list[dict]:
+    rows = [{"agent": "imitation", "n": len(imitation["success"]), "over": "contexts",
+             **{m: interval(np.asarray(imitation[m], dtype=float), "mean").to_dict() for m in METRICS},
+             "reached": None, "episodes_to_target": None}]
+    for agent in dict.fromkeys(r["agent"] for r in runs):
+        group = [r for r in runs if r["agent"] == agent]
+        reached = [r["episodes_to_target"] for r in group if r["episodes_to_target"] is not None]
+        rows.append({"agent": agent, "n": len(group), "over": "seeds",
+                     **{m: interval([r["test_means"][m] for r in group], "iqm").to_dict() for m in METRICS},
+                     "reached": len(reached), "episodes_to_target": float(np.median(reached)) if reached else None})
     return rows
 
 
-def _print(rows: list[dict], budget: int) -> None:
-    header = (f"{'start':>9} {'agent':>6} {'return 0->end':>17} {'coverage 0->end':>19} {'force in band':>13} "
-              f"{'best cov':>8} {'target reached':>14} {'median ep.':>10} {'s/run':>6}")
+def _cell(entry: dict) -> str:
+    return f"{entry['estimate']:.3f} [{entry['low']:.3f}, {entry['high']:.3f}]"
+
+
+def _print(rows: list[dict], settings: dict) -> None:
+    header = (f"{'agent':>10} {'n':>9} {'success rate':>22} {'coverage':>22} {'jerk / imitation':>22} "
+              f"{'return':>22} {'val. success >= 0.9 (median ep.)':>32}")
     print(header)
     for r in rows:
-        print(f"{r['start']:>9} {r['agent']:>6} {r['return_0']:7.3f} -> {r['return']:.3f}±{r['return_std']:.3f} "
-              f"{r['coverage_0']:7.3f} -> {r['coverage']:.3f}±{r['coverage_std']:.3f} {r['force_in_band']:13.3f} "
-              f"{r['best_coverage']:8.3f} {r['reached']:>9}/{r['seeds']:<4} "
-              f"{'-' if r['episodes_to_target'] is None else int(r['episodes_to_target']):>10} {r['seconds']:6.0f}")
-    print(f"(policy evaluated after each update; budget {budget} training episodes; target coverage >= "
-          f"{COVERAGE_TARGET} and force in band >= {FORCE_TARGET})")
+        median = "-" if r["episodes_to_target"] is None else str(int(r["episodes_to_target"]))
+        target = "-" if r["reached"] is None else f"{r['reached']}/{r['n']} seeds ({median})"
+        count = f"{r['n']} {r['over']}"
+        print(f"{r['agent']:>10} {count:>9} {_cell(r['success']):>22} {_cell(r['coverage']):>22} "
+              f"{_cell(r['jerk_ratio']):>22} {_cell(r['returns']):>22} {target:>32}")
+    print(f"(final policies on {settings['test_contexts']} test contexts; IQM over seeds with 95 % bootstrap CI; "
+          f"imitation: mean over contexts with CI; budget {settings['budget']} episodes; env {settings['env_id']})")
 
 
-def _plot(runs: list[dict], agents: list[str], starts: list[str], path: Path, title: str) -> None:
-    keys = [("eval_return_mean", "return"), ("eval_coverage", "coverage"), ("eval_force_in_band", "force in band")]
-    figure, axes = plt.subplots(len(starts), 3, figsize=(13, 3.6 * len(starts)), squeeze=False)
-    for row, start in enumerate(starts):
-        for col, (key, label) in enumerate(keys):
-            axis = axes[row][col]
-            shown: list[np.ndarray] = []
-            for index, agent in enumerate(agents):
-                group = [r for r in runs if r["agent"] == agent and r["start"] == start]
-                if not group:
-                    continue
-                episodes = np.array([c["episodes"] for c in group[0]["curve"]])
-                values = np.array([[c[key] for c in r["curve"]] for r in group], dtype=float)
-                axis.plot(episodes, np.median(values, axis=0), color=f"C{index}", label=agent)
-                axis.fill_between(episodes, values.min(axis=0), values.max(axis=0), color=f"C{index}", alpha=0.12)
-                shown.append(np.median(values, axis=0))
-            if key == "eval_coverage":
-                axis.axhline(COVERAGE_TARGET, color="k", ls=":", lw=0.8)
-            if key == "eval_force_in_band":
-                axis.axhline(FORCE_TARGET, color="k", ls=":", lw=0.8)
-            low, high = np.min(shown), np.max(shown)      # frame the medians; a rare invalid episode dips below
-            axis.set_ylim(low - 0.15 * (high - low) - 1e-3, high + 0.15 * (high - low) + 1e-3)
-            axis.set_title(f"{start} start: {label} (median, min-max over seeds)", fontsize=9)
-            axis.set_xlabel("training episodes")
-            axis.grid(alpha=0.3)
-        axes[row][0].legend(fontsize=8)
+def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
+    figure, axes = plt.subplots(1, 4, figsize=(18, 4))
+    agents = list(dict.fromkeys(r["agent"] for r in runs))
+    imitation = next(r for r in rows if r["agent"] == "imitation")
+    curves = ((0, "eval_success", "validation success rate"), (1, "eval_coverage", "validation coverage"))
+    for col, key, label in curves:
+        axis = axes[col]
+        for index, agent in enumerate(agents):
+            group = [r for r in runs if r["agent"] == agent]
+            length = min(len(r["curve"]) for r in group)
+            episodes = np.array([c["episodes"] for c in group[0]["curve"][:length]])
+            values = np.array([[np.nan if c[key] is None else c[key] for c in r["curve"][:length]] for r in group])
+            axis.plot(episodes, np.nanmedian(values, axis=0), color=f"C{index}", label=agent)
+            axis.fill_between(episodes, np.nanpercentile(values, 25, axis=0), np.nanpercentile(values, 75, axis=0),
+                              color=f"C{index}", alpha=0.15)
+        axis.set_title(f"{label} (median, IQR over seeds)", fontsize=9)
+        axis.set_xlabel("training episodes")
+        axis.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    for col, metric, label in ((2, "success", "test success rate"), (3, "jerk_ratio", "test jerk / imitation")):
+        axis = axes[col]
+        shown = [imitation] + [r for r in rows if r["agent"] != "imitation"]
+        estimates = [r[metric]["estimate"] for r in shown]
+        errors = np.array([[r[metric]["estimate"] - r[metric]["low"], r[metric]["high"] - r[metric]["estimate"]]
+                           for r in shown]).T
+        axis.bar(range(len(shown)), estimates, yerr=errors, capsize=3,
+                 color=["0.6"] + [f"C{agents.index(r['agent'])}" for r in shown[1:]])
+        axis.set_xticks(range(len(shown)), [r["agent"] for r in shown], rotation=45, fontsize=8)
+        axis.set_title(f"{label} (IQM, 95 % CI)", fontsize=9)
+        axis.grid(alpha=0.3, axis="y")
+    axes[3].axhline(2.0, color="k", ls=":", lw=0.8)
     figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
+
+
+def _title(settings: dict) -> str:
+    return (f"{settings['env_id']}: {settings['budget']} episodes, {settings['seeds']} seed(s), "
+            f"{settings['test_contexts']} test contexts")
 
 
 def main() -> None:
@@ -210,34 +205,38 @@ def main() -> None:
     RESULTS = results_dir(args.save)
     if args.replot:
         document = json.loads((RESULTS / f"{args.name}.json").read_text())
-        settings = document["settings"]
-        _print(document["summary"], settings["budget"])
-        _plot(document["runs"], settings["agents"], settings["starts"], RESULTS / f"{args.name}.png",
-              f"{settings['contexts']} contexts, {settings['budget']} episodes, {settings['seeds']} seed(s)")
+        _print(document["summary"], document["settings"])
+        _plot(document["runs"], document["summary"], RESULTS / f"{args.name}.png", _title(document["settings"]))
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
+    spec = TaskSpec(args.env_id, env_kwargs)
+    seeds = final_test_seeds(args.test_contexts)
     scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
-    jobs = [(agent, start, seed) for start in args.starts for agent in args.agents for seed in range(args.seeds)]
     runs = []
     try:
-        if args.backend == "ray":
-            runs = _run_on_ray(jobs, args, env_kwargs, options, scratch)
-        else:
-            for agent, start, seed in tqdm(jobs, desc="runs", unit="run"):
-                runs.append(_run(agent, start, seed, args, env_kwargs, options.get(agent, {}), scratch))
+        with Evaluator(spec, args.workers) as tester:
+            observations = context_observations(tester.env, seeds)
+            n = tester.n_actions
+            reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
+            imitation: PolicyScores = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference)
+            jobs = [(agent, seed) for agent in args.agents for seed in range(args.seeds)]
+            for agent, seed in tqdm(jobs, desc="runs", unit="run"):
+                config = TrainConfig(agent=agent, env_id=args.env_id, updates=args.budget // args.rollouts,
+                                     rollouts=args.rollouts, seed=seed, workers=args.workers, env_kwargs=env_kwargs,
+                                     options=options.get(agent, {}), eval_episodes=args.val_contexts,
+                                     eval_every=args.eval_every, shared_context=False)
+                runs.append(_run_job(config, scratch, tester, seeds, observations, reference))
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-    rows = _summary(runs, args.agents, args.starts)
-    _print(rows, args.budget)
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    settings = {key: value for key, value in vars(args).items() if key not in ("option", "env_option")}
-    settings.update({"env_kwargs": env_kwargs, "options": options, "perturbation": 0.3, "cpus": os.cpu_count()})
-    document = {"settings": settings, "targets": {"coverage": COVERAGE_TARGET, "force_in_band": FORCE_TARGET},
-                "summary": rows, "runs": runs}
+    rows = _summary(runs, imitation.to_dict())
+    settings = {key: value for key, value in vars(args).items() if key not in ("option", "env_option", "replot")}
+    settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
+                     "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
+    _print(rows, settings)
+    document = {"settings": settings, "summary": rows, "imitation": imitation.to_dict(), "runs": runs}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
-    _plot(runs, args.agents, args.starts, RESULTS / f"{args.name}.png",
-          f"{args.contexts} contexts, {args.budget} episodes, {args.seeds} seed(s)")
+    _plot(runs, rows, RESULTS / f"{args.name}.png", _title(settings))
     print(f"wrote {RESULTS / (args.name + '.json')} and {args.name}.png")
 
 

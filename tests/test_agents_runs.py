@@ -92,7 +92,7 @@ def test_parallel_evaluation_gives_the_serial_numbers():
 
 def test_bad_configs_fail_clearly(tmp_path):
     with pytest.raises(ValueError, match="agent"):
-        _config(agent="sac")
+        _config(agent="td3")
     with pytest.raises(ValueError, match="sigmaa"):
         _config(options={"sigmaa": 0.1})
     with pytest.raises(ValueError, match="ppo"):

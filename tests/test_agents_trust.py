@@ -177,9 +177,16 @@ def test_a_run_whose_first_update_is_all_invalid_stops_with_the_reasons(tmp_path
 
     demo = wiping_demonstration(1, rng=0)
     Demonstration(demo.t, demo.Y * 1000.0, name="millimetres").to_csv(tmp_path / "mm.csv")
-    config = TrainConfig(agent="pibb", updates=5, rollouts=3, env_id=WIPE_ID, demo=str(tmp_path / "mm.csv"),
-                         env_kwargs={"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50})
-    with pytest.raises(NoValidEpisodesError, match=r"all 3 episodes.*invalid_reason: workspace x3.*units"):
+    small = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
+    # a demonstration in millimetres is refused before any episode (the env's frame check) ...
+    mm = TrainConfig(agent="pibb", updates=5, rollouts=3, env_id=WIPE_ID, demo=str(tmp_path / "mm.csv"),
+                     env_kwargs=small)
+    with pytest.raises(ValueError, match=r"demonstration.*millimetres"):
+        train(mm, tmp_path / "mm_run")
+    # ... and settings under which no plan is executable stop the run after its first update, reasons counted
+    config = TrainConfig(agent="pibb", updates=5, rollouts=3, env_id=WIPE_ID,
+                         env_kwargs={**small, "max_joint_speed": 1e-3})
+    with pytest.raises(NoValidEpisodesError, match=r"all 3 episodes.*invalid_reason: joint_speed x3.*units"):
         train(config, tmp_path / "run")
     assert _updates(tmp_path / "run") == [0, 1]                # stopped after the first update
 

@@ -94,8 +94,15 @@ def test_a_saved_refined_dmp_replays_the_refined_episode_without_refitting(tmp_p
     replay = gym.make(ENV_ID, dmp=str(tmp_path / "dmp.json"), n_periods=2)
     replay.reset(seed=4)
     _, replayed, *_, replay_info = replay.step(np.zeros(replay.action_space.shape, np.float32))
-    assert info["valid"] and replayed == pytest.approx(reward, abs=1e-9)
-    assert replay_info["coverage"] == pytest.approx(info["coverage"], abs=1e-12)
+    assert info["valid"] and replay_info["coverage"] == pytest.approx(info["coverage"], abs=1e-12)
+    # the same episode: every reward term agrees except smoothness, whose reference (the env's DMP at
+    # a = 0, ArmarWipe-v1) is now the refined DMP itself
+    terms, replayed_terms = info["reward_terms"], replay_info["reward_terms"]
+    assert replayed_terms["smoothness"] == 0.0 and terms["smoothness"] < 0.0
+    for term in terms:
+        if term != "smoothness":
+            assert replayed_terms[term] == pytest.approx(terms[term], abs=1e-9), term
+    assert replayed == pytest.approx(reward - terms["smoothness"], abs=1e-9)
     with pytest.raises(FileNotFoundError, match="dmp"):
         gym.make(ENV_ID, dmp=str(tmp_path / "missing.json"))
 

@@ -1,4 +1,10 @@
-"""Episodic learners behind one ask/tell interface: PI², PI^BB and CMA-ES."""
+"""Episodic learners behind one ask/tell interface.
+
+Shared-θ learners: PI², PI^BB and CMA-ES. Contextual learners (:mod:`.contextual`, a linear-Gaussian
+policy θ = θ̄ + K·φ(s) with smooth exploration): ``creps`` (contextual REPS), ``cpibb`` (contextual
+PI^BB), ``cpi2`` (contextual PI²); and the two baselines every table shows beside them: ``amplitude``
+(one θ over the 3 amplitude factors only) and ``random`` (contextual REPS fed random returns).
+"""
 
 from __future__ import annotations
 
@@ -10,22 +16,41 @@ import numpy as np
 from ..options import from_options
 from .base import EpisodeBatch, Learner, cost_weights
 from .cmaes import CMAES, CMAESConfig
+from .contextual import (
+    AmplitudeConfig,
+    ContextualConfig,
+    ContextualSearch,
+    CPI2Config,
+    CPIBBConfig,
+    CREPSConfig,
+    RandomReturnConfig,
+    SearchSpace,
+)
 from .pi2 import PI2, PI2Config
 from .pibb import PIBB, PIBBConfig
 
-__all__ = ["CMAES", "LEARNERS", "PI2", "PIBB", "CMAESConfig", "EpisodeBatch", "Learner", "PI2Config",
-           "PIBBConfig", "cost_weights", "make_learner"]
+__all__ = ["CMAES", "CONTEXTUAL", "LEARNERS", "PI2", "PIBB", "CMAESConfig", "ContextualConfig", "ContextualSearch",
+           "EpisodeBatch", "Learner", "PI2Config", "PIBBConfig", "SearchSpace", "cost_weights", "make_learner"]
 
 LEARNERS: dict[str, tuple[type[Learner], type]] = {
     "pi2": (PI2, PI2Config),
     "pibb": (PIBB, PIBBConfig),
     "cmaes": (CMAES, CMAESConfig),
+    "creps": (ContextualSearch, CREPSConfig),
+    "cpibb": (ContextualSearch, CPIBBConfig),
+    "cpi2": (ContextualSearch, CPI2Config),
+    "amplitude": (ContextualSearch, AmplitudeConfig),
+    "random": (ContextualSearch, RandomReturnConfig),
 }
+
+#: the learners built on :class:`ContextualSearch` (they need a :class:`SearchSpace`)
+CONTEXTUAL = tuple(name for name, (cls, _) in LEARNERS.items() if cls is ContextualSearch)
 
 
 def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator,
-                 options: Mapping[str, Any] | None = None, time_weights: np.ndarray | None = None) -> Learner:
-    """Create the learner ``agent`` (``"pi2"``, ``"pibb"`` or ``"cmaes"``) with validated ``options``.
+                 options: Mapping[str, Any] | None = None, time_weights: np.ndarray | None = None,
+                 space: SearchSpace | None = None) -> Learner:
+    """Create the learner ``agent`` (a key of :data:`LEARNERS`) with validated ``options``.
 
     Args:
         agent: learner name.
@@ -34,6 +59,7 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         rng: the learner's random generator.
         options: fields of the learner's config dataclass (a misspelt name is a ``ValueError``).
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only).
+        space: action layout and context standardisation (the contextual learners only).
     """
     if agent not in LEARNERS:
         raise ValueError(f"agent: expected one of {sorted(LEARNERS)}, got {agent!r}")
@@ -43,4 +69,8 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         if time_weights is None:
             raise ValueError("time_weights: PI² needs the activation of each parameter per control step")
         return PI2(initial_mean, rollouts, rng, time_weights, config)
+    if cls is ContextualSearch:
+        if space is None:
+            raise ValueError(f"space: {agent} needs the action layout and context standardisation (SearchSpace)")
+        return ContextualSearch(initial_mean, rollouts, rng, space, config, name=agent)
     return cls(initial_mean, rollouts, rng, config)

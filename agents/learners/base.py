@@ -126,6 +126,8 @@ class Learner(ABC):
     """
 
     name: str = ""
+    #: whether :meth:`ask` needs the rollouts' contexts (observations) and the policy depends on them
+    uses_context: bool = False
 
     def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator) -> None:
         mean = np.array(initial_mean, dtype=np.float64)
@@ -158,8 +160,13 @@ class Learner(ABC):
         """The current exploration level: the mean standard deviation of the search distribution."""
 
     @abstractmethod
-    def ask(self) -> np.ndarray:
-        """``[K, n]`` actions in ``[-1, 1]`` to evaluate next."""
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
+        """``[K, n]`` actions in ``[-1, 1]`` to evaluate next; ``observations [K, o]`` are the rollouts'
+        contexts (used by contextual learners, ignored by the others)."""
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        """``[E, n]`` the policy's action for contexts ``observations [E, o]`` (here: the mean for all)."""
+        return np.repeat(self._mean[None], len(observations), axis=0)
 
     @abstractmethod
     def _update(self, batch: EpisodeBatch) -> None:

@@ -89,7 +89,7 @@ class CMAES(Learner):
     def exploration(self) -> float:
         return float(np.mean(self.strategy.sigma * np.sqrt(self.strategy.sm.variances)))
 
-    def ask(self) -> np.ndarray:
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         self._pending = self.strategy.ask()
         return np.clip(np.array(self._pending, dtype=np.float64), -1.0, 1.0)
 

@@ -84,7 +84,7 @@ class PI2(Learner):
     def exploration(self) -> float:
         return float(self.sigma)
 
-    def ask(self) -> np.ndarray:
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         noise = self.sigma * self.rng.standard_normal((self.rollouts, self.n_params))
         return np.clip(self._mean + noise, -1.0, 1.0)
 

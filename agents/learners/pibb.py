@@ -73,7 +73,7 @@ class PIBB(Learner):
     def exploration(self) -> float:
         return float(np.mean(np.sqrt(np.diag(self.covariance))))
 
-    def ask(self) -> np.ndarray:
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         noise = self.rng.standard_normal((self.rollouts, self.n_params)) @ self._factor.T
         return np.clip(self._mean + noise, -1.0, 1.0)
 

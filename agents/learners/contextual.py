@@ -1,0 +1,383 @@
+"""Contextual episodic policy search: a linear-Gaussian upper-level policy over DMP parameters.
+
+Policy: ``u = W x(s) + ε``, ``x(s) = [1, φ(s)]`` with standardised context features ``φ(s) [F]`` (the
+observation minus its centre, over its scale), ``W = [θ̄, K]`` ``[n, F + 1]``; the executed action is
+``squash(u)`` in ``(-1, 1)`` (:func:`~rdmp_gym.agents.learners.smooth.squash`, monotone; nothing is clipped).
+``ε`` is smooth per weight block (:class:`~rdmp_gym.agents.learners.smooth.SmoothNoise`) with one
+standard deviation per block. Each update keeps the last ``reuse`` batches and weights their samples:
+
+* ``reps``: contextual REPS (Kupcsik et al. 2013; Deisenroth, Neumann, Peters 2013, sec. 2.4.2):
+  ``d_k ∝ exp((R_k - V(s_k)) / η)`` with ``V(s) = vᵀφ(s)`` and ``η``, ``v`` from the dual
+  ``g = η ε + mean_k vᵀφ_k + η log mean_k exp((R_k - vᵀφ_k) / η)`` (KL bound ``ε``);
+* ``pibb``: PI^BB's ``exp(-h (A - min A) / (max A - min A))`` on the advantage ``A_k = J_k - b(s_k)``
+  over a ridge-regression baseline ``b(s) = βᵀx(s)`` (a context-dependent baseline);
+* ``pi2``: PI² per time step: the cost-to-go ``S_k(t)`` minus a per-step baseline ``b_t(s)``, per-step
+  weights, a per-step weighted fit ``W(t)``, averaged over time per parameter with weights
+  ``(T - t) · activation_i(t)`` (parameters that are never active take the episode-level fit).
+
+The new ``W`` is the weighted maximum-likelihood (MAP) fit ``argmin Σ d_k |u_k - W x_k|² + |(W - W_old) Λ^½|²``,
+where the prior ``Λ = diag(0, gain_prior, ...)`` keeps the gains from following a few samples. Each
+block's standard deviation is adapted by weighted ML of its whitened sampling noise
+(``σ_b² <- (1 - rate) σ_b² + rate Σ d_k |L_b⁻¹ ε_kb|² / m_b``) within ``[min_sigma, max_sigma]``.
+The control cost ``control_cost · ½ Σ_b a_bᵀ A_bᵀA_b a_b`` is added to every sample's cost.
+With ``random_returns`` the learner sees standard-normal returns instead (a control: it never sees the
+reward). With ``contextual=False`` the gains stay 0 (one θ for all contexts).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..options import check_choice, check_range
+from .base import EpisodeBatch, Learner, cost_weights
+from .smooth import SmoothNoise, block_layout, squash, unsquash
+
+__all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
+           "ContextualSearch", "RandomReturnConfig", "SearchSpace", "policy_from_state"]
+
+WEIGHTINGS = ("reps", "pibb", "pi2")
+_BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
+
+
+@dataclass(frozen=True)
+class ContextualConfig:
+    """Settings of :class:`ContextualSearch`.
+
+    Attributes:
+        sigma: initial per-weight standard deviation (action units).
+        length: correlation length of the exploration in neighbouring weights (0 = isotropic).
+        weighting: ``reps``, ``pibb`` or ``pi2`` (see the module docstring).
+        epsilon: REPS's KL bound.
+        h: PI^BB's / PI²'s eliteness.
+        contextual: learn the gains ``K`` (False: one θ for every context).
+        groups: comma-separated action groups to search (``""`` = all; e.g. ``"amplitude"``).
+        control_cost: weight of ``½ aᵀRa`` in the cost.
+        reuse: batches (this one and earlier ones) whose samples enter each update.
+        gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
+        adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
+        min_sigma, max_sigma: bounds of each block's standard deviation.
+        random_returns: the control: replace every return by a standard-normal draw.
+    """
+
+    sigma: float = 0.3
+    length: float = 5.0
+    weighting: str = "reps"
+    epsilon: float = 1.0
+    h: float = 10.0
+    contextual: bool = True
+    groups: str = ""
+    control_cost: float = 0.05
+    reuse: int = 4
+    gain_prior: float = 0.3
+    adapt_rate: float = 0.5
+    min_sigma: float = 0.02
+    max_sigma: float = 0.6
+    random_returns: bool = False
+
+    def __post_init__(self) -> None:
+        check_range(self.sigma, "sigma", 0.0, None, low_open=True)
+        check_range(self.length, "length", 0.0, None)
+        check_choice(self.weighting, "weighting", WEIGHTINGS)
+        check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
+        check_range(self.h, "h", 0.0, None, low_open=True)
+        check_range(self.control_cost, "control_cost", 0.0, None)
+        check_range(self.reuse, "reuse", 1, None)
+        check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
+        check_range(self.adapt_rate, "adapt_rate", 0.0, 1.0)
+        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+        check_range(self.max_sigma, "max_sigma", self.sigma, None)
+
+
+@dataclass(frozen=True)
+class CREPSConfig(ContextualConfig):
+    """Contextual REPS (the defaults)."""
+
+
+@dataclass(frozen=True)
+class CPIBBConfig(ContextualConfig):
+    """Contextual PI^BB: episode-level weights over a context-dependent baseline."""
+
+    weighting: str = "pibb"
+
+
+@dataclass(frozen=True)
+class CPI2Config(ContextualConfig):
+    """Contextual PI²: per-step weights over per-step context-dependent baselines."""
+
+    weighting: str = "pi2"
+
+
+@dataclass(frozen=True)
+class RandomReturnConfig(ContextualConfig):
+    """The random-return control: contextual REPS fed standard-normal returns."""
+
+    random_returns: bool = True
+
+
+@dataclass(frozen=True)
+class AmplitudeConfig(ContextualConfig):
+    """The amplitude-only baseline: one shared θ over the ``amplitude`` group (3 numbers), isotropic."""
+
+    groups: str = "amplitude"
+    contextual: bool = False
+    length: float = 0.0
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """What a contextual learner needs to know about the env's action and context.
+
+    Attributes:
+        slices: ``{group: slice}`` of the action (one slice ``{"all": slice(0, n)}`` if the env has no groups).
+        n_dims: degrees of freedom of the DMP (weight blocks per group).
+        context_center, context_scale: ``[o]`` standardisation of the observation (scale 0 = unused feature).
+        time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only), or None.
+    """
+
+    slices: Mapping[str, slice]
+    n_dims: int
+    context_center: np.ndarray
+    context_scale: np.ndarray
+    time_weights: np.ndarray | None = None
+
+    @classmethod
+    def from_env(cls, env: Any, observations: np.ndarray) -> SearchSpace:
+        """From an env (``unwrapped``: ``dmp``, ``groups``, ``action_time_weights()``) and sample
+        observations ``[E, o]`` of its contexts (their mean and standard deviation standardise φ)."""
+        base = env.unwrapped
+        n = int(env.action_space.shape[0])
+        if hasattr(base, "dmp") and hasattr(base, "groups"):
+            slices, n_dims = dict(base.dmp.param_slices(base.groups)), int(base.dmp.n_dims)
+        else:
+            slices, n_dims = {"all": slice(0, n)}, 1
+        observations = np.asarray(observations, dtype=np.float64)
+        scale = observations.std(axis=0)
+        scale[scale < 1e-9 * (1.0 + np.abs(observations.mean(axis=0)))] = 0.0
+        weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
+        return cls(slices, n_dims, observations.mean(axis=0), scale, weights)
+
+
+def _ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:
+    """``[N, N]`` hat matrix of a ridge regression on ``x [N, F+1]`` (the constant column unpenalised)."""
+    penalty = prior * np.eye(x.shape[1])
+    penalty[0, 0] = 1e-9
+    return x @ np.linalg.solve(x.T @ x + penalty, x.T)
+
+
+def _reps_weights(returns: np.ndarray, features: np.ndarray, epsilon: float) -> np.ndarray:
+    """``[N]`` contextual REPS weights of returns ``[N]`` with value features ``[N, F]`` (may be F = 0)."""
+    spread = returns.std()
+    if spread == 0:
+        return np.full(returns.size, 1.0 / returns.size)
+    r = (returns - returns.mean()) / spread
+    mean_features = features.mean(axis=0)
+
+    def dual(z: np.ndarray) -> tuple[float, np.ndarray]:
+        eta, v = np.exp(z[0]), z[1:]
+        delta = r - features @ v
+        top = delta.max()
+        weights = np.exp((delta - top) / eta)
+        total = weights.sum()
+        log_mean = top / eta + np.log(total / r.size)
+        weights /= total
+        value = eta * epsilon + mean_features @ v + eta * log_mean + 1e-6 * v @ v
+        d_eta = epsilon + log_mean - weights @ delta / eta
+        d_v = mean_features - weights @ features + 2e-6 * v
+        return float(value), np.concatenate([[d_eta * eta], d_v])
+
+    start = np.zeros(1 + features.shape[1])
+    result = minimize(dual, start, jac=True, method="L-BFGS-B",
+                      bounds=[(np.log(1e-3), np.log(1e3))] + [(None, None)] * features.shape[1])
+    eta, v = np.exp(result.x[0]), result.x[1:]
+    delta = r - features @ v
+    weights = np.exp((delta - delta.max()) / eta)
+    return weights / weights.sum()
+
+
+class ContextualSearch(Learner):
+    """Contextual policy search with smooth exploration, smoothly bounded actions and sample reuse.
+
+    Args:
+        initial_mean: ``[n]`` start action (the policy for every context at first).
+        rollouts: rollouts per update ``K``.
+        rng: the only source of randomness.
+        space: the action layout and context standardisation.
+        config: the settings.
+        name: the learner's registry name (``creps``, ``cpibb``, ``cpi2``, ``random``, ``amplitude``).
+    """
+
+    uses_context = True
+
+    def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, space: SearchSpace,
+                 config: ContextualConfig | None = None, name: str = "creps") -> None:
+        super().__init__(initial_mean, rollouts, rng)
+        self.config = config or ContextualConfig()
+        self.name = name
+        slices = dict(space.slices)
+        if self.config.groups:
+            wanted = [g.strip() for g in self.config.groups.split(",") if g.strip()]
+            chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
+            if not chosen:
+                raise ValueError(f"groups: {self.config.groups!r} selects none of the action's groups {sorted(slices)}")
+            slices = chosen
+        self.noise = SmoothNoise(self.n_params, block_layout(slices, space.n_dims), self.config.length)
+        self._explored = self.noise.mask()
+        self.center = np.asarray(space.context_center, dtype=np.float64)
+        scale = np.asarray(space.context_scale, dtype=np.float64)
+        if self.center.ndim != 1 or scale.shape != self.center.shape or np.any(scale < 0):
+            raise ValueError("space: context_center and context_scale must be 1-D of one length, scale >= 0")
+        self._used = scale > 0
+        self.scale = scale
+        n_features = 1 + int(self._used.sum()) if self.config.contextual else 1
+        self.gains = np.zeros((self.n_params, n_features))        # W = [θ̄, K]
+        self.gains[:, 0] = unsquash(self._mean)
+        self.sigmas = np.full(self.noise.n_blocks, self.config.sigma)
+        self.time_weights = None
+        if self.config.weighting == "pi2":
+            if space.time_weights is None:
+                raise ValueError("space.time_weights: contextual PI² needs the activation of each parameter per step")
+            weights = np.asarray(space.time_weights, dtype=np.float64)
+            if weights.ndim != 2 or weights.shape[1] != self.n_params:
+                raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
+            steps = weights.shape[0]
+            self.time_weights = (steps - np.arange(steps))[:, None] * weights       # [T, n]
+        self._pending: dict[str, np.ndarray] | None = None
+        self._buffer: list[dict[str, np.ndarray]] = []
+
+    # ------------------------------------------------------------------ policy
+    @property
+    def exploration(self) -> float:
+        return float(np.mean(self.sigmas))
+
+    def features(self, observations: np.ndarray) -> np.ndarray:
+        """``[E, F + 1]`` the regressors ``[1, φ(s)]`` of observations ``[E, o]``."""
+        obs = np.asarray(observations, dtype=np.float64)
+        if obs.ndim != 2 or obs.shape[1] != self.center.size:
+            raise ValueError(f"observations: expected shape [E, {self.center.size}], got {obs.shape}")
+        if not np.all(np.isfinite(obs)):
+            raise ValueError("observations: contains NaN or infinite values")
+        ones = np.ones((obs.shape[0], 1))
+        if not self.config.contextual:
+            return ones
+        phi = (obs[:, self._used] - self.center[self._used]) / self.scale[self._used]
+        return np.concatenate([ones, phi], axis=1)
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        """``[E, n]`` the policy's action for each context (no exploration)."""
+        return squash(self.features(observations) @ self.gains.T)
+
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
+        if observations is None:
+            raise ValueError("observations: a contextual learner needs the K contexts of the rollouts")
+        x = self.features(observations)
+        if x.shape[0] != self.rollouts:
+            raise ValueError(f"observations: expected {self.rollouts} contexts, got {x.shape[0]}")
+        noise = self.noise.sample(self.sigmas, self.rollouts, self.rng)
+        u = x @ self.gains.T + noise
+        self._pending = {"u": u, "noise": noise, "x": x}
+        return squash(u)
+
+    # ------------------------------------------------------------------ update
+    def _update(self, batch: EpisodeBatch) -> None:
+        if self._pending is None:
+            raise RuntimeError("tell: call ask() first")
+        if not np.allclose(squash(self._pending["u"]), batch.actions, rtol=0, atol=1e-6):
+            raise ValueError("batch.actions: not the actions returned by the last ask()")
+        costs = batch.costs + self.config.control_cost * self.noise.control_cost(batch.actions)
+        traces = np.asarray(batch.cost_traces, dtype=np.float64)
+        if self.config.random_returns:
+            costs = self.rng.standard_normal(batch.size)
+            traces = self.rng.standard_normal(traces.shape) / np.sqrt(max(traces.shape[1], 1))
+        self._buffer.append({**self._pending, "costs": costs, "traces": traces})
+        self._buffer = self._buffer[-self.config.reuse:]
+        self._pending = None
+        data = {key: np.concatenate([b[key] for b in self._buffer]) for key in ("u", "noise", "x", "costs")}
+        episode = self._episode_weights(data["costs"], data["x"])
+        new = self._fit(data["u"], data["x"], episode[None])[0]
+        if self.config.weighting == "pi2":
+            new = self._pi2_fit(data, new)
+        self.gains = np.where(self._explored[:, None], new, self.gains)
+        self._adapt(episode, data["noise"])
+        self._mean = squash(self.gains[:, 0])
+
+    def _episode_weights(self, costs: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """``[N]`` one weight per sample (REPS, or PI^BB over a ridge baseline; PI²'s episode level too)."""
+        if self.config.weighting == "reps":
+            return _reps_weights(-costs, x[:, 1:], self.config.epsilon)
+        advantage = costs - _ridge_hat(x, self.config.gain_prior) @ costs
+        return cost_weights(advantage, self.config.h)
+
+    def _fit(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray) -> np.ndarray:
+        """``[S, n, F + 1]`` the MAP fits of ``u [N, n]`` on ``x [N, F + 1]`` for ``S`` weightings ``[S, N]``."""
+        prior = self.config.gain_prior * np.eye(x.shape[1])
+        prior[0, 0] = 1e-9
+        gram = np.einsum("sk,kf,kg->sfg", weights, x, x) + prior                 # [S, F+1, F+1]
+        moment = np.einsum("sk,kn,kf->snf", weights, u, x) + self.gains @ prior  # [S, n, F+1]
+        return np.linalg.solve(gram, np.swapaxes(moment, 1, 2)).swapaxes(1, 2)
+
+    def _pi2_fit(self, data: dict[str, np.ndarray], episode_fit: np.ndarray) -> np.ndarray:
+        """Per-step weighted fits averaged over time with ``(T - t) · activation``; ``[n, F + 1]``."""
+        assert self.time_weights is not None
+        traces = np.concatenate([b["traces"] for b in self._buffer])                     # [N, T]
+        if traces.shape[1] != self.time_weights.shape[0]:
+            raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
+        terminal = data["costs"] - traces.sum(axis=1)
+        to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]        # [N, T]
+        advantage = to_go - _ridge_hat(data["x"], self.config.gain_prior) @ to_go
+        per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
+        norm = self.time_weights.sum(axis=0)                                              # [n]
+        averaged = np.einsum("tn,tnf->nf", self.time_weights, per_step) / np.where(norm > 0, norm, 1.0)[:, None]
+        return np.where((norm > 0)[:, None], averaged, episode_fit)
+
+    def _adapt(self, weights: np.ndarray, noise: np.ndarray) -> None:
+        rate = self.config.adapt_rate
+        if rate == 0:
+            return
+        variance = weights @ self.noise.whitened_energy(noise)                           # [B]
+        updated = np.sqrt((1 - rate) * self.sigmas**2 + rate * variance)
+        self.sigmas = np.clip(updated, self.config.min_sigma, self.config.max_sigma)
+
+    # ------------------------------------------------------------------ state
+    def _extra_state(self) -> dict[str, Any]:
+        if self._pending is not None:
+            raise RuntimeError("state_dict: an ask() is waiting for its tell()")
+        buffer = {key: np.concatenate([b[key] for b in self._buffer]) if self._buffer else np.zeros(0)
+                  for key in _BUFFER_KEYS}
+        buffer["sizes"] = np.array([b["costs"].size for b in self._buffer], dtype=np.int64)
+        return {"gains": self.gains.copy(), "sigmas": self.sigmas.copy(), "buffer": buffer,
+                "context_center": self.center.copy(), "context_scale": self.scale.copy()}
+
+    def _load_extra_state(self, state: dict[str, Any]) -> None:
+        gains = np.asarray(state["gains"], dtype=np.float64)
+        if gains.shape != self.gains.shape:
+            raise ValueError(f"state: gains have shape {gains.shape}, expected {self.gains.shape}")
+        if not (np.allclose(state["context_center"], self.center) and np.allclose(state["context_scale"], self.scale)):
+            raise ValueError("state: written with another context standardisation")
+        self.gains = gains.copy()
+        self.sigmas = np.asarray(state["sigmas"], dtype=np.float64).copy()
+        buffer = state["buffer"]
+        ends = np.cumsum(np.asarray(buffer["sizes"], dtype=np.int64))
+        self._buffer = [{key: np.asarray(buffer[key], dtype=np.float64)[end - size:end] for key in _BUFFER_KEYS}
+                        for size, end in zip(np.asarray(buffer["sizes"]), ends, strict=True)]
+        self._pending = None
+
+
+def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.ndarray:
+    """``[E, n]`` the policy actions of a :class:`ContextualSearch` state (``state_dict()``) for
+    observations ``[E, o]``, without rebuilding the learner."""
+    gains = np.asarray(state["gains"], dtype=np.float64)
+    center = np.asarray(state["context_center"], dtype=np.float64)
+    scale = np.asarray(state["context_scale"], dtype=np.float64)
+    obs = np.asarray(observations, dtype=np.float64)
+    if obs.ndim != 2 or obs.shape[1] != center.size:
+        raise ValueError(f"observations: expected shape [E, {center.size}], got {obs.shape}")
+    used = scale > 0
+    x = np.ones((obs.shape[0], 1))
+    if gains.shape[1] > 1:
+        x = np.concatenate([x, (obs[:, used] - center[used]) / scale[used]], axis=1)
+    return squash(x @ gains.T)

@@ -1,0 +1,178 @@
+"""The evaluation protocol: disjoint context sets, success, path smoothness, IQM with bootstrap intervals.
+
+Contexts are reset seeds. Training draws its seeds from ``[0, 2**30)``; the validation set (for any
+"best" selection and the held-out learning curves) and the test set (the final numbers) are fixed
+seeds above that, disjoint from each other and from training:
+
+    validation_seeds(n) = 2**30 + 500_000 + [0, n)        final_test_seeds(n) = 2**30 + [0, n)
+
+Success of an episode: ``info["is_success"]`` where the env gives it; otherwise (ArmarWipe-v0) the same
+definition, coverage >= 0.95 and force in band >= 0.9 of the wiping time and a valid (simulated) plan.
+
+Smoothness: the integrated squared jerk ``∫ |d³y/dt³|² dt`` of the commanded path (the env's
+``rollout_path`` at its control rate, third finite differences) relative to the imitation's in the same
+context.
+
+Aggregates: the interquartile mean (``scipy.stats.trim_mean(x, 0.25)``) with a 95 % percentile
+bootstrap interval (``scipy.stats.bootstrap``). ``rliable`` computes the same thing but its current
+release does not import with the packages pip resolves for it (rliable 1.2.0 -> arch 7.2.0 with
+pandas 3.1.1: ``TypeError: deprecate_kwarg()``) and it adds pandas, statsmodels, arch and seaborn
+(~160 MB) for two scipy calls.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from .learners.base import EpisodeBatch
+
+__all__ = [
+    "COVERAGE_TARGET",
+    "FORCE_TARGET",
+    "TRAIN_SEED_LIMIT",
+    "Interval",
+    "PolicyScores",
+    "context_observations",
+    "evaluate_actions",
+    "final_test_seeds",
+    "interval",
+    "iqm",
+    "path_jerk",
+    "success",
+    "validation_seeds",
+]
+
+COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
+TRAIN_SEED_LIMIT = 2**30
+_VALIDATION_OFFSET = 500_000
+
+
+def _count(n: int, name: str) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1 or n > _VALIDATION_OFFSET:
+        raise ValueError(f"{name}: expected an int in [1, {_VALIDATION_OFFSET}], got {n!r}")
+    return int(n)
+
+
+def final_test_seeds(n: int) -> np.ndarray:
+    """``[n]`` the reset seeds of the test contexts (never used in training or selection)."""
+    return TRAIN_SEED_LIMIT + np.arange(_count(n, "n"), dtype=np.int64)
+
+
+def validation_seeds(n: int) -> np.ndarray:
+    """``[n]`` the reset seeds of the validation contexts (selection and learning curves)."""
+    return TRAIN_SEED_LIMIT + _VALIDATION_OFFSET + np.arange(_count(n, "n"), dtype=np.int64)
+
+
+def context_observations(env: Any, seeds: np.ndarray, options: dict[str, Any] | None = None) -> np.ndarray:
+    """``[E, o]`` the observations (contexts) of reset seeds ``[E]``."""
+    return np.stack([np.asarray(env.reset(seed=int(s), options=None if options is None else dict(options))[0],
+                                dtype=np.float64) for s in seeds])
+
+
+def success(batch: EpisodeBatch) -> np.ndarray:
+    """``[K]`` success of each episode: ``batch.success`` (the env's ``is_success``) if known, else
+    coverage >= 0.95, force in band >= 0.9 and valid (NaN coverage counts as failure)."""
+    given = getattr(batch, "success", None)
+    if given is not None and np.all(np.isfinite(np.asarray(given, dtype=np.float64))):
+        return np.asarray(given, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        return ((np.nan_to_num(batch.coverage, nan=-1.0) >= COVERAGE_TARGET)
+                & (np.nan_to_num(batch.force_in_band, nan=-1.0) >= FORCE_TARGET) & batch.valid.astype(bool))
+
+
+def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] | None = None) -> float:
+    """Integrated squared jerk (m²/s⁵) of the path commanded by ``action [n]`` in the context of ``seed``."""
+    env.reset(seed=int(seed), options=None if options is None else dict(options))
+    base = env.unwrapped
+    path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
+    dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
+    jerk = np.diff(path, n=3, axis=0) / dt**3
+    return float(np.sum(jerk**2) * dt)
+
+
+@dataclass(frozen=True)
+class PolicyScores:
+    """Per-context results of one policy on a context set (all ``[E]``)."""
+
+    seeds: np.ndarray
+    returns: np.ndarray
+    coverage: np.ndarray
+    force_in_band: np.ndarray
+    valid: np.ndarray
+    success: np.ndarray
+    jerk_ratio: np.ndarray
+
+    def means(self) -> dict[str, float]:
+        """Mean of every metric over the contexts (the numbers one seed contributes to a table)."""
+        return {name: float(np.mean(getattr(self, name).astype(np.float64)))
+                for name in ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio")}
+
+    def to_dict(self) -> dict[str, list]:
+        """JSON-friendly lists."""
+        return {name: np.asarray(getattr(self, name)).tolist() for name in self.__dataclass_fields__}
+
+
+def evaluate_actions(evaluator: Any, actions: np.ndarray, seeds: np.ndarray, reference_jerk: np.ndarray | None = None
+                     ) -> PolicyScores:
+    """Run ``actions [E, n]`` in the contexts ``seeds [E]`` through ``evaluator.run`` (the one place that
+    dispatches episodes) and measure their paths' jerk relative to ``reference_jerk [E]`` (the
+    imitation's; None: relative to the imitation computed here)."""
+    actions = np.asarray(actions, dtype=np.float64)
+    seeds = np.asarray(seeds, dtype=np.int64)
+    batch = evaluator.run(actions, seeds)
+    env, options = evaluator.env, evaluator.spec.options()
+    jerk = np.array([path_jerk(env, a, s, options) for a, s in zip(actions, seeds, strict=True)])
+    if reference_jerk is None:
+        reference_jerk = np.array([path_jerk(env, np.zeros(actions.shape[1]), s, options) for s in seeds])
+    return PolicyScores(seeds=seeds, returns=batch.returns, coverage=batch.coverage, force_in_band=batch.force_in_band,
+                        valid=batch.valid.astype(bool), success=success(batch),
+                        jerk_ratio=jerk / np.maximum(reference_jerk, 1e-300))
+
+
+def iqm(values: np.ndarray) -> float:
+    """Interquartile mean of ``values [N]`` (the mean of the middle 50 %)."""
+    return float(stats.trim_mean(np.asarray(values, dtype=np.float64), 0.25))
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A point estimate with its 95 % bootstrap interval."""
+
+    estimate: float
+    low: float
+    high: float
+    n: int
+
+    def to_dict(self) -> dict[str, float | int]:
+        return {"estimate": self.estimate, "low": self.low, "high": self.high, "n": self.n}
+
+    def __str__(self) -> str:
+        return f"{self.estimate:.3f} [{self.low:.3f}, {self.high:.3f}]"
+
+
+def interval(values: np.ndarray, statistic: str = "iqm", seed: int = 0, resamples: int = 2000) -> Interval:
+    """``statistic`` (``iqm`` or ``mean``) of ``values [N]`` (e.g. one number per seed) with a 95 %
+    percentile-bootstrap interval; a constant sample (or N = 1) gives a zero-width interval."""
+    values = np.asarray(values, dtype=np.float64).ravel()
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise ValueError(f"values: expected finite numbers, got {values.size} values with NaN or inf")
+    if statistic not in ("iqm", "mean"):
+        raise ValueError(f"statistic: expected 'iqm' or 'mean', got {statistic!r}")
+    function = iqm if statistic == "iqm" else (lambda x: float(np.mean(x)))
+    estimate = function(values)
+    if values.size == 1 or np.ptp(values) == 0:
+        return Interval(estimate, estimate, estimate, int(values.size))
+
+    def vectorised(sample: np.ndarray, axis: int = -1) -> np.ndarray:
+        if statistic == "iqm":
+            return stats.trim_mean(sample, 0.25, axis=axis)
+        return np.mean(sample, axis=axis)
+
+    result = stats.bootstrap((values,), vectorised, n_resamples=resamples, confidence_level=0.95,
+                             method="percentile", vectorized=True, rng=np.random.default_rng(seed))
+    return Interval(estimate, float(result.confidence_interval.low), float(result.confidence_interval.high),
+                    int(values.size))

@@ -1,0 +1,185 @@
+"""Contextual learners, smooth exploration, smooth bounds and the protocol's statistics (MuJoCo-free)."""
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np
+import pytest
+from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
+from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
+from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
+from rdmp_gym.agents.tracking import TRACKING_ID
+from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
+
+N = 12
+
+
+def _space(contexts=2):
+    return SearchSpace({"periodic": slice(0, N - 2), "amplitude": slice(N - 2, N)}, 2, np.zeros(contexts),
+                       np.ones(contexts))
+
+
+def _batch(actions, returns):
+    k = len(returns)
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
+                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+
+
+def _toy(agent, target, updates=60, seed=0, **options):
+    """Learn ``max -|a - target(s)|²`` over contexts ``s ~ U[-1, 1]²``; policy score on 50 held-out contexts."""
+    rng = np.random.default_rng(100 + seed)
+    learner = make_learner(agent, np.zeros(N), 10, np.random.default_rng(seed), options, space=_space())
+    held_out = rng.uniform(-1, 1, (50, 2))
+
+    def score():
+        return -np.mean(np.sum((learner.policy_actions(held_out) - target(held_out)) ** 2, axis=1))
+
+    history, asked = [score()], []
+    for _ in range(updates):
+        contexts = rng.uniform(-1, 1, (10, 2))
+        actions = learner.ask(contexts)
+        asked.append(actions)
+        learner.tell(_batch(actions, -np.sum((actions - target(contexts)) ** 2, axis=1)))
+        history.append(score())
+    return np.array(history), np.concatenate(asked), learner
+
+
+GAINS = np.random.default_rng(5).uniform(-0.5, 0.5, (N, 2))
+
+
+def _contextual_target(contexts):
+    return 0.2 + contexts @ GAINS.T
+
+
+def test_smooth_exploration_has_far_smaller_second_differences_than_isotropic():
+    blocks = block_layout({"periodic": slice(0, 120), "transient:0": slice(120, 240), "amplitude": slice(240, 243)}, 3)
+    assert len(blocks) == 7 and blocks[0] == (slice(0, 40), True) and blocks[3] == (slice(120, 160), False)
+    rng = np.random.default_rng(0)
+    smooth = SmoothNoise(243, blocks, 5.0).sample(np.full(7, 0.3), 400, rng)
+    white = SmoothNoise(243, blocks, 0.0).sample(np.full(7, 0.3), 400, rng)
+    np.testing.assert_allclose(np.std(smooth[:, :240]), 0.3, rtol=0.1)        # same size per weight ...
+    np.testing.assert_allclose(np.std(white[:, :240]), 0.3, rtol=0.1)
+    rough = [np.mean(np.diff(x[:, 120:160], 2, axis=1) ** 2) for x in (smooth, white)]
+    assert rough[0] < 0.02 * rough[1]                                          # ... far smoother
+    cost = SmoothNoise(243, blocks, 5.0)
+    assert np.mean(cost.control_cost(smooth)) < 0.02 * np.mean(cost.control_cost(white))
+
+
+def test_bounded_samples_stay_in_the_box_and_the_update_finds_an_optimum_near_a_face():
+    assert np.all(np.abs(squash(np.linspace(-50, 50, 1001))) <= 1.0)
+    u = np.linspace(-2.5, 2.5, 1001)
+    a = squash(u)
+    assert np.all(np.abs(a) < 1.0) and np.all(np.diff(a) > 0)               # monotone into the open box
+    np.testing.assert_allclose(squash(np.array([-0.3, 0.5, 0.8])), [-0.3, 0.5, 0.8])   # identity inside
+    np.testing.assert_allclose(unsquash(a), u, atol=1e-9)
+    history, asked, learner = _toy("creps", lambda s: np.full((len(s), N), 0.7), updates=50, contextual=False,
+                                   length=0.0, sigma=0.6)
+    assert np.all(np.abs(asked) <= 1.0)
+    assert np.max(np.abs(learner.mean - 0.7)) < 0.05                          # no pull toward 0 or toward the face
+    assert history[-1] > -0.01
+
+
+def test_contextual_reps_solves_a_contextual_quadratic_far_better_than_a_shared_theta():
+    contextual, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01)
+    shared, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01, contextual=False)
+    best_shared = -np.sum(GAINS**2) / 3                                        # the best single θ's expected loss
+    assert contextual[-1] > 0.3 * best_shared                                  # < 30 % of the best shared loss
+    assert shared[-1] < 0.7 * best_shared
+    baseline, _, _ = _toy("cpibb", _contextual_target, length=0.0, gain_prior=0.01)
+    assert baseline[-1] > 0.3 * best_shared
+
+
+def test_random_return_control_does_not_improve():
+    control = np.array([_toy("random", _contextual_target, updates=30, seed=s)[0] for s in range(3)])
+    learned = np.array([_toy("creps", _contextual_target, updates=30, seed=s)[0] for s in range(3)])
+    assert np.all(control[:, -1] <= control[:, 0] + 0.02)
+    assert np.all(learned[:, -1] > learned[:, 0] + 0.3)
+
+
+def test_state_round_trip_continues_identically():
+    _, _, learner = _toy("cpibb", _contextual_target, updates=3)
+    state = learner.state_dict()
+    twin = make_learner("cpibb", np.zeros(N), 10, np.random.default_rng(99), None, space=_space())
+    twin.load_state_dict(state)
+    contexts = np.random.default_rng(7).uniform(-1, 1, (10, 2))
+    np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
+    for value in state.values():   # plain numbers, arrays, dicts of arrays (no objects)
+        assert isinstance(value, (str, int, float, np.ndarray, dict))
+
+
+def test_contextual_learner_rejects_bad_input():
+    learner = make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), space=_space())
+    with pytest.raises(ValueError, match="observations"):
+        learner.ask()
+    with pytest.raises(ValueError, match="observations"):
+        learner.ask(np.zeros((10, 3)))
+    with pytest.raises(ValueError, match="groups"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"groups": "transient"}, space=_space())
+    with pytest.raises(ValueError, match="space"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="weighting"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"weighting": "ppo"}, space=_space())
+
+
+def test_amplitude_baseline_moves_only_the_amplitude():
+    _, asked, learner = _toy("amplitude", _contextual_target, updates=5)
+    assert np.all(asked[:, : N - 2] == 0.0) and np.any(asked[:, N - 2:] != 0.0)
+    assert learner.gains.shape == (N, 1)
+
+
+def test_bootstrap_intervals_cover_the_true_value():
+    rng = np.random.default_rng(0)
+    samples = rng.standard_normal((100, 20)) + 3.0
+    covered = [(found := interval(x, "mean", seed=i, resamples=1000)).low <= 3.0 <= found.high
+               for i, x in enumerate(samples)]
+    assert 0.85 <= np.mean(covered) <= 1.0
+    covered_iqm = [(found := interval(x, "iqm", seed=i, resamples=1000)).low <= 3.0 <= found.high
+                   for i, x in enumerate(samples)]
+    assert 0.85 <= np.mean(covered_iqm) <= 1.0
+    assert iqm(np.array([0.0, 1.0, 2.0, 3.0, 100.0, -100.0, 1.5, 2.5])) == pytest.approx(1.75)
+    with pytest.raises(ValueError, match="values"):
+        interval(np.array([1.0, np.nan]))
+
+
+def test_protocol_context_sets_are_disjoint_and_success_needs_all_three():
+    train, val, test = TRAIN_SEED_LIMIT, validation_seeds(50), final_test_seeds(50)
+    assert test.min() >= train and val.min() >= train and not set(val) & set(test)
+    k = 4
+    batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([0.96, 0.94, 0.99, 0.99]),
+                         np.array([0.95, 0.95, 0.85, 0.95]), np.array([True, True, True, False]), np.zeros(k, int))
+    assert success(batch).tolist() == [True, False, False, False]
+
+
+@pytest.mark.parametrize("agent", ["creps", "cpi2"])
+def test_contextual_training_run_on_the_tracking_task(tmp_path, agent):
+    config = TrainConfig(agent=agent, updates=4, rollouts=8, seed=1, env_id=TRACKING_ID, eval_episodes=6, eval_every=2,
+                         env_kwargs={"n_periodic": 10, "n_transient": 10, "duration": 4.0, "context_range": 0.03},
+                         options={"sigma": 0.05}, shared_context=False)
+    run = train(config, tmp_path / agent)
+    records = run.read_log()
+    assert [r["episodes"] for r in records] == [0, 8, 16, 24, 32]
+    evaluated = [r for r in records if r.get("eval_return_mean") is not None]
+    assert [r["update"] for r in evaluated] == [0, 2, 4]
+    assert evaluated[-1]["eval_return_mean"] > evaluated[0]["eval_return_mean"]
+    from rdmp_gym.agents.assessment import evaluate_run
+
+    result = evaluate_run(run.path, 3)
+    assert result["policy"] == "last" and len(result["trained"]["jerk_ratio"]) == 3
+    assert result["imitation"]["jerk_ratio_mean"] == pytest.approx(1.0)
+
+
+def test_sac_trains_on_the_one_step_task(tmp_path):
+    import torch
+
+    torch.set_num_threads(1)
+    config = TrainConfig(agent="sac", updates=2, rollouts=4, seed=0, env_id=TRACKING_ID, eval_episodes=2,
+                         env_kwargs={"n_periodic": 10, "n_transient": 10, "duration": 4.0, "context_range": 0.03},
+                         options={"sigma": 0.05, "batch_size": 4})
+    records = train(config, tmp_path / "sac").read_log()
+    assert [r["episodes"] for r in records] == [0, 4, 8]
+    assert records[0]["exploration"] == pytest.approx(0.05, rel=1e-3)
+    assert all(np.isfinite(r["eval_return_mean"]) and np.isfinite(r["return_mean"]) for r in records[1:])
+    from rdmp_gym.agents.assessment import evaluate_run
+
+    assert np.isfinite(evaluate_run(tmp_path / "sac", 2)["trained"]["return_mean"])
