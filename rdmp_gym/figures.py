@@ -214,8 +214,8 @@ def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
               title=f"table tilted by ({tilt[0]}, {tilt[1]}) rad")
     trace.legend(fontsize=8)
     width = 0.27
-    for offset, (name, values) in zip((-width, 0.0, width), errors.items(), strict=True):
-        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name)
+    for offset, (name, values), run in zip((-width, 0.0, width), errors.items(), runs, strict=True):
+        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name, color=run[3])
     bars.set(xlabel="period", ylabel="mean |F - 18 N| [N]", title="force error period by period")
     bars.legend(fontsize=8)
     fig.tight_layout()

@@ -173,3 +173,37 @@ def test_bad_input_is_named(fitted):
         segment_ending(wiping_demonstration(1, rng=0))
     with pytest.raises(ValueError, match="n_stop"):
         fit_ending(ending_demonstration(1, rng=0), n_stop=1)
+
+
+def test_stop_with_and_without_the_smooth_start(fitted):
+    dmp = fitted[1]
+    t = np.arange(0.0, 10.0, 1e-3)
+    smooth, smooth_velocity = dmp.rollout(t, stop_at=5.0, return_velocity=True)
+    paper, paper_velocity = dmp.rollout(t, stop_at=5.0, start_blend=False, return_velocity=True)
+    y0 = dmp.transients[0].start + np.array([0.03, -0.02, 0.01])                  # a start off the demonstrated one
+    moved = dmp.rollout(t, y0=y0, stop_at=5.0)
+    np.testing.assert_allclose(moved[0], y0, atol=1e-12)
+    for y, yd in ((smooth, smooth_velocity), (paper, paper_velocity)):
+        assert np.linalg.norm(y[-1] - dmp.ending.goal) < 1e-3 and np.linalg.norm(yd[-1]) < 1e-3
+    late = t > 4.0                            # both starts have reached the cycle well before the exit
+    np.testing.assert_allclose(paper[late], smooth[late], atol=1e-6)
+    np.testing.assert_allclose(moved[late], smooth[late], atol=1e-6)
+
+
+@pytest.mark.parametrize("field, change", [
+    ("fading.nu1", lambda stop: stop["fading"].update(nu1="0.9")),
+    ("fading.nu1", lambda stop: stop["fading"].update(nu1=0.1)),                  # below nu2
+    ("weights", lambda stop: stop.update(weights=stop["weights"][:2])),
+    ("widths", lambda stop: stop["widths"].__setitem__(0, -1.0)),
+    ("goal", lambda stop: stop["goal"].__setitem__(1, float("nan"))),
+    ("blend_start", lambda stop: stop.update(blend_start=stop["length"])),
+    ("stop", lambda stop: stop.update(extra=1)),
+    ("length", lambda stop: stop.pop("length")),
+])
+def test_the_stop_field_is_validated(fitted, field, change):
+    from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
+
+    data = dmp_to_dict(fitted[1])
+    change(data["stop"])
+    with pytest.raises(ValueError, match=f"dmp.{field}" if field == "stop" else f"dmp.stop.{field}"):
+        dmp_from_dict(data)
