@@ -160,7 +160,9 @@ class Evaluator:
                             cost_traces=np.stack([r["cost_trace"] for r in results]),
                             coverage=np.array([r["coverage"] for r in results]),
                             force_in_band=np.array([r["force_in_band"] for r in results]),
-                            valid=np.array([r["valid"] for r in results]), seeds=seeds)
+                            valid=np.array([r["valid"] for r in results]), seeds=seeds,
+                            success=None if any(r["success"] is None for r in results)
+                            else np.array([r["success"] for r in results]))
 
     def close(self) -> None:
         """Stop the workers and close the environment."""

@@ -76,9 +76,8 @@ def context_observations(env: Any, seeds: np.ndarray, options: dict[str, Any] | 
 def success(batch: EpisodeBatch) -> np.ndarray:
     """``[K]`` success of each episode: ``batch.success`` (the env's ``is_success``) if known, else
     coverage >= 0.95, force in band >= 0.9 and valid (NaN coverage counts as failure)."""
-    given = getattr(batch, "success", None)
-    if given is not None and np.all(np.isfinite(np.asarray(given, dtype=np.float64))):
-        return np.asarray(given, dtype=bool)
+    if batch.success is not None:
+        return np.asarray(batch.success, dtype=bool)
     with np.errstate(invalid="ignore"):
         return ((np.nan_to_num(batch.coverage, nan=-1.0) >= COVERAGE_TARGET)
                 & (np.nan_to_num(batch.force_in_band, nan=-1.0) >= FORCE_TARGET) & batch.valid.astype(bool))

@@ -78,7 +78,8 @@ class ResetOptions(gym.Wrapper):
 def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
     """The numbers the agents use from one episodic ``step``: return, cost trace ``[T]`` and task metrics.
 
-    ``coverage`` and ``force_in_band_fraction`` are NaN for tasks that have no dirt or contact.
+    ``coverage`` and ``force_in_band_fraction`` are NaN for tasks that have no dirt or contact;
+    ``success`` is ``info["is_success"]``, None where the env does not give it.
     """
     if "cost_trace" not in info:
         raise ValueError("info: the env returned no 'cost_trace' (per-control-step cost), which the agents need")
@@ -86,4 +87,5 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
             "cost_trace": np.asarray(info["cost_trace"], dtype=np.float64),
             "coverage": float(info.get("coverage", np.nan)),
             "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
-            "valid": bool(info.get("valid", True))}
+            "valid": bool(info.get("valid", True)),
+            "success": None if "is_success" not in info else bool(info["is_success"])}

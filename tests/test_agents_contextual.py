@@ -9,8 +9,8 @@ import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
 from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
-from rdmp_gym.agents.tracking import TRACKING_ID
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
+from rdmp_gym.envs.tracking import TRACKING_ID
 
 N = 12
 
@@ -149,6 +149,10 @@ def test_protocol_context_sets_are_disjoint_and_success_needs_all_three():
     batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([0.96, 0.94, 0.99, 0.99]),
                          np.array([0.95, 0.95, 0.85, 0.95]), np.array([True, True, True, False]), np.zeros(k, int))
     assert success(batch).tolist() == [True, False, False, False]
+    given = EpisodeBatch(*(getattr(batch, name) for name in ("actions", "returns", "cost_traces", "coverage",
+                                                             "force_in_band", "valid", "seeds")),
+                         success=np.array([False, True, True, False]))
+    assert success(given).tolist() == [False, True, True, False]     # the env's is_success wins
 
 
 @pytest.mark.parametrize("agent", ["creps", "cpi2"])

@@ -29,6 +29,7 @@ class EpisodeBatch:
         force_in_band: ``[K]`` fraction of the wiping time with the contact force in band (or NaN).
         valid: ``[K]`` whether each episode was simulated (an invalid plan gets a penalty instead).
         seeds: ``[K]`` the reset seeds.
+        success: ``[K]`` the env's ``info["is_success"]``, or None where the env does not give it.
     """
 
     actions: np.ndarray
@@ -38,6 +39,7 @@ class EpisodeBatch:
     force_in_band: np.ndarray
     valid: np.ndarray
     seeds: np.ndarray
+    success: np.ndarray | None = None
 
     @property
     def size(self) -> int:
