@@ -240,21 +240,42 @@ def issue_items(env, contexts: int) -> dict:
     items["6_touchdown"] = {"imitation_table_6cm_higher": summary(*episode(env, higher)),
                             "imitation_level": level, "slam_3cm_into_table": summary(*path_episode(env, NOMINAL, slam))}
     beaten, pairs = 0, []
+    slices = env.unwrapped.action_map.slices
     for seed in range(contexts):
         r0, _ = episode(env, {"obstacle": 0}, seed=seed)
         action = np.random.default_rng(seed).uniform(-1, 1, env.action_space.shape).astype(np.float32)
         r, info = episode(env, {"obstacle": 0}, action, seed=seed)
+        twin = action.copy()                 # the same action without its weight entries: same coverage, smooth
+        twin[slices["periodic"]] = 0.0
+        twin[slices["transient:0"]] = 0.0
+        r_twin, info_twin = episode(env, {"obstacle": 0}, twin, seed=seed)
         beaten += r > r0
-        pairs.append({"seed": seed, "imitation": r0, "random": r, "jerk_ratio": info["jerk_ratio"]})
+        pairs.append({"seed": seed, "imitation": r0, "random": r, "jerk_ratio": info["jerk_ratio"],
+                      "peak_joint_accel": info["peak_joint_accel"], "coverage": info["coverage"],
+                      "smooth_twin": r_twin, "smooth_twin_jerk_ratio": info_twin["jerk_ratio"],
+                      "smooth_twin_coverage": info_twin["coverage"]})
     alternating = np.where(np.arange(env.action_space.shape[0]) % 2 == 0, 1.0, -1.0).astype(np.float32)
     items["7_smoothness"] = {"random_beats_imitation": f"{beaten} of {contexts}", "random": pairs,
                              "imitation_seed0": summary(*episode(env, {"obstacle": 0})),
                              "alternating_pm1_seed0": summary(*episode(env, {"obstacle": 0}, alternating))}
     cup = {**NOMINAL, "obstacle": 1}
+    lift = zero(env)
+    lift[-1] = 1.0                           # the approach dimension: +6 cm over the corridor
+    sampled = []
+    for seed in range(contexts):
+        env.reset(seed=seed)
+        if not env.unwrapped.context.obstacle:
+            continue
+        r0, i0 = episode(env, None, seed=seed)
+        r1, i1 = episode(env, None, lift, seed=seed)
+        sampled.append({"seed": seed, "imitation": r0, "imitation_touch_steps": i0["obstacle_touch_steps"],
+                        "lifted": r1, "lifted_touch_steps": i1["obstacle_touch_steps"],
+                        "lifted_obstacle_shift": i1["obstacle_shift"], "lifted_jerk_ratio": i1["jerk_ratio"]})
     items["8_approach"] = {"imitation_without_cup": summary(*episode(env, NOMINAL)),
                            "imitation_with_cup": summary(*episode(env, cup)),
-                           "lifted_approach_with_cup": summary(*path_episode(
-                               env, cup, lambda e: probes.lifted_approach(e, 0.06)))}
+                           "approach_action_with_cup": summary(*episode(env, cup, lift)),
+                           "approach_action_lowered_with_cup": summary(*episode(env, cup, -lift)),
+                           "sampled_cup_contexts": sampled}
     return items
 
 
@@ -319,6 +340,18 @@ def main() -> None:
                           f"valid {v['valid']} {v['invalid_reason']}")
             elif not isinstance(value, list):
                 print(f"    {name}: {value}")
+    pairs = result["issue_8_after"]["7_smoothness"]["random"]
+    if pairs:
+        print(f"  random actions: jerk ratio {min(p['jerk_ratio'] for p in pairs):.1f}-"
+              f"{max(p['jerk_ratio'] for p in pairs):.1f}, below the imitation by >= "
+              f"{min(p['imitation'] - p['random'] for p in pairs):.3f}, below their smooth twin (same coverage "
+              f"within {max(abs(p['coverage'] - p['smooth_twin_coverage']) for p in pairs):.3f}) by >= "
+              f"{min(p['smooth_twin'] - p['random'] for p in pairs):.3f}")
+    sampled = result["issue_8_after"]["8_approach"]["sampled_cup_contexts"]
+    if sampled:
+        cleared = sum(s["lifted_touch_steps"] == 0 and s["lifted_obstacle_shift"] < 0.005 for s in sampled)
+        print(f"  approach +1 in {len(sampled)} sampled cup contexts: cup untouched in {cleared}, reward "
+              f"{np.mean([s['imitation'] for s in sampled]):.3f} -> {np.mean([s['lifted'] for s in sampled]):.3f}")
     print(f"wrote {args.out} and {args.plot}")
 
 

@@ -245,8 +245,7 @@ _PARTS: dict[str, Callable[[str, str], bool]] = {
     "mj_step (physics)": lambda file, name: name == "<built-in method mujoco._functions.mj_step>",
     "DMP rollout": lambda file, name: name == "rollout_batch",
     "path IK (PathIK.solve)": lambda file, name: name == "solve" and file.endswith("ik.py"),
-    "force adaptation (update)": lambda file, name: name == "update" and file.endswith("controller.py"),
-    "dirt bookkeeping (cells_under_sponge)": lambda file, name: name == "cells_under_sponge",
+    "dirt bookkeeping (wear after the loop)": lambda file, name: name == "_removal" and file.endswith("wiping.py"),
     "reward": lambda file, name: name == "wipe_reward",
     "simulation loop, own Python": lambda file, name: name == "simulate_wipe",
 }

@@ -93,19 +93,17 @@ class PathIK:
         self.zone_upper = kinematics.upper - limit_zone
         self.limit_gain = limit_gain
 
-    def _step(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
-              rot_weight: np.ndarray, nullspace: bool, blocked: np.ndarray | None = None
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """One DLS update of ``q`` [B, n].
-
-        ``blocked`` [B, n] marks joints held at a limit (they get almost no mobility). Returns
-        (q_new, pos_err [B], rot_err [B], jw [B, n, 5], A [B, 5, 5], blocked_new [B, n]).
-        """
+    def _linearise(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
+                   rot_weight: np.ndarray, blocked: np.ndarray | None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Task error and weighted Jacobians at ``q`` [B, n]: (error [B, 5], jac [B, 5, n], jw = W^-1 J^T
+        [B, n, 5], A = J W^-1 J^T + lambda^2 I [B, 5, 5], pos_err [B], rot_err [B])."""
         state = self.kin.forward(q)
         jac_pos, jac_rot = state.jacobian()
         up = state.rot[:, :, 0]
         e_pos = targets - state.pos
-        r = np.cross(up, normal)
+        r = np.stack([up[:, 1] * normal[2] - up[:, 2] * normal[1], up[:, 2] * normal[0] - up[:, 0] * normal[2],
+                      up[:, 0] * normal[1] - up[:, 1] * normal[0]], axis=1)             # np.cross(up, normal)
         error = np.concatenate([e_pos, (r @ basis.T) * rot_weight[:, None]], axis=1)      # [B, 5]
         jac_r = np.einsum("kj,bjn->bkn", basis, jac_rot) * rot_weight[:, None, None]
         jac = np.concatenate([jac_pos, jac_r], axis=1)                                   # [B, 5, n]
@@ -115,24 +113,32 @@ class PathIK:
         jw = np.swapaxes(jac, 1, 2) * inv_weight[:, :, None]                    # W^-1 J^T [B, n, 5]
         a = jac @ jw
         a[:, range(5), range(5)] += self.damping2
-        rhs = error
-        if nullspace:
-            v = self.nullspace_gain * (self.posture - q)                           # [B, n]
-            v += self.limit_gain * (np.maximum(0.0, self.zone_lower - q) - np.maximum(0.0, q - self.zone_upper))
-            if blocked is not None:
-                v = np.where(blocked, 0.0, v)
-            rhs = error - np.einsum("bkn,bn->bk", jac, v)
+        cos_angle = np.clip(up @ normal, -1.0, 1.0)
+        return error, jac, jw, a, np.linalg.norm(e_pos, axis=1), np.arccos(cos_angle)
+
+    def _step(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
+              rot_weight: np.ndarray, blocked: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """One DLS update of ``q`` [B, n] with the null-space posture and limit task.
+
+        ``blocked`` [B, n] marks joints held at a limit (they get almost no mobility). Returns
+        (q_new, pos_err [B], rot_err [B], blocked_new [B, n]); the errors are those at ``q``.
+        """
+        error, jac, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, blocked)
+        v = self.nullspace_gain * (self.posture - q)                               # [B, n]
+        v += self.limit_gain * (np.maximum(0.0, self.zone_lower - q) - np.maximum(0.0, q - self.zone_upper))
+        if blocked is not None:
+            v = np.where(blocked, 0.0, v)
+        rhs = error - np.einsum("bkn,bn->bk", jac, v)
         step = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, rhs[..., None])[..., 0])
-        if nullspace:
-            step = step + v
+        step = step + v
         step = np.clip(step, -0.5, 0.5)
         q_free = q + step
         q_new = np.clip(q_free, self.lower, self.upper)
         blocked_new = (q_free < self.lower) | (q_free > self.upper)
         if blocked is not None:
             blocked_new |= blocked & (q_new != q_free)
-        cos_angle = np.clip(up @ normal, -1.0, 1.0)
-        return q_new, np.linalg.norm(e_pos, axis=1), np.arccos(cos_angle), jw, a, blocked_new
+        return q_new, pos_err, rot_err, blocked_new
 
     def solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None = None,
               q_init: np.ndarray | None = None,
@@ -167,8 +173,7 @@ class PathIK:
         blocked = None
         for iteration in range(coarse_iterations):
             q_old = q
-            q, pos_err, rot_err, _, _, blocked = self._step(q, targets[knots], normal, basis,
-                                                            rot_weight[knots], True, blocked)
+            q, pos_err, rot_err, blocked = self._step(q, targets[knots], normal, basis, rot_weight[knots], blocked)
             if iteration + 1 >= min_iterations and (
                     (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):
@@ -180,13 +185,11 @@ class PathIK:
             q = CubicSpline(knots, q, axis=0)(index) if len(knots) > 2 else np.stack(
                 [np.interp(index, knots, q[:, j]) for j in range(self.kin.n)], axis=1)
             q = np.clip(q, self.lower, self.upper)
-            blocked = np.stack([np.interp(index, knots, blocked[:, j]) for j in range(self.kin.n)],
-                               axis=1) > 0.5
         # The fine pass treats every joint as free (limits still enforced by projection): a "blocked" flag
         # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
-            q, *_ = self._step(q, targets, normal, basis, rot_weight, True, None)
-        _, pos_err, rot_err, jw, a, _ = self._step(q, targets, normal, basis, rot_weight, False, None)
+            q, *_ = self._step(q, targets, normal, basis, rot_weight, None)
+        _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])

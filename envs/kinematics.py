@@ -150,7 +150,12 @@ class ChainKinematics:
                     anchors[:, index] = anchor
                 s = np.sin(angle)[:, None, None]
                 c = np.cos(angle)[:, None, None]
-                rot = rot + s * rmul(rot, k) + (1.0 - c) * rmul(rot, k2)
+                turn = rmul(rot, k)                     # rot + s (rot K) + (1 - c) (rot K^2), in place
+                turn *= s
+                bend = rmul(rot, k2)
+                bend *= 1.0 - c
+                rot = rot + turn
+                rot += bend
                 pos = anchor - rvec(rot, jnt_pos) if has_offset else anchor
         site_pos = pos + rvec(rot, self._site_pos)
         site_rot = rmul(rot, self._site_rot)

@@ -3,7 +3,7 @@
 Each function returns a path ``[T, 3]`` in the table frame for :meth:`ArmarWipeEnv.run_path`, built in
 the env's current context. They keep the imitation's approach (so the touchdown is the same) and then
 do something cheap instead of wiping: hold still, press and lift on a grid, reach into the robot.
-:func:`lifted_approach` is the honest counterpart: the imitation with its approach raised over a cup.
+(The honest counterpart for the cup, a raised approach, is an action: the env's ``approach`` dimension.)
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 
 from .wipe_env import ArmarWipeEnv
 
-__all__ = ["hold_still", "into_the_torso", "lifted_approach", "press_lift_grid"]
+__all__ = ["hold_still", "into_the_torso", "press_lift_grid"]
 
 
 def _smooth(x: np.ndarray) -> np.ndarray:
@@ -67,17 +67,3 @@ def into_the_torso(env: ArmarWipeEnv, point: tuple[float, float, float] = (-0.30
     path = _imitation(env)
     start = int(np.argmax(env.periodic))
     return _blend(path, np.tile(np.asarray(point, dtype=np.float64), (len(path), 1)), start, round(1.0 / env.dt))
-
-
-def lifted_approach(env: ArmarWipeEnv, clearance: float = 0.05) -> np.ndarray:
-    """The imitation with its approach raised: the height gets ``+ clearance`` while the sponge is more
-    than 5 cm (in the table plane) from where it touches down, faded in and out smoothly."""
-    path = _imitation(env)
-    start = int(np.argmax(env.periodic))
-    touchdown = path[start, :2]
-    distance = np.linalg.norm(path[:, :2] - touchdown, axis=1)
-    raise_ = clearance * _smooth((distance - 0.05) / 0.05)
-    raise_[start:] = 0.0
-    raised = path.copy()
-    raised[:, 2] = path[:, 2] + raise_ * _smooth(np.arange(len(path)) / round(0.3 / env.dt))
-    return raised

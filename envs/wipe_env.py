@@ -2,7 +2,8 @@
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
-1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a``;
+1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a`` (plus, for
+   the last dimension, ``approach``, a fixed direction that lifts the approach: :mod:`rdmp_gym.envs.approach`);
 2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
    the sponge path ``P [T, 3]`` in the table frame (x, y on the table, z above it);
 3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat on the
@@ -39,6 +40,7 @@ from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
 
 from .action import ActionMap
+from .approach import approach_direction, lift_profile
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
@@ -95,10 +97,12 @@ class ArmarWipeEnv(gym.Env):
             the table, z above its surface (overrides ``style``; checked against the workspace before fitting).
         dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
             imitation without fitting (overrides ``style``; excludes ``demonstration``).
-        n_periodic, n_transient, fit_method: DMP fit settings.
+        n_periodic, n_transient, fit_method: DMP fit settings (default the core's ``"trajectory"`` fit: the
+            smoothest imitation, half the jerk of ``"ridge"``; see the README).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
-            amplitude).
-        scales: per-group action scales (see :mod:`rdmp_gym.envs.action`).
+            amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
+            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``).
+        scales: per-group action scales (see :mod:`rdmp_gym.envs.action`; ``approach``: lift in m at +1).
         n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
         control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
         timestep: physics step (s; default the model's 2 ms).
@@ -138,8 +142,8 @@ class ArmarWipeEnv(gym.Env):
         dmp: str | Path | RhythmicDMP | None = None,
         n_periodic: int = 40,
         n_transient: int = 40,
-        fit_method: str = "ridge",
-        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude"),
+        fit_method: str = "trajectory",
+        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude", "approach"),
         scales: Mapping[str, float] | None = None,
         n_periods: float = 4.0,
         duration: float | None = None,
@@ -197,8 +201,10 @@ class ArmarWipeEnv(gym.Env):
             if isinstance(style, bool) or style not in (1, 2, 3, 4):
                 raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
             self.dmp = _fit_style(int(style), int(n_periodic), int(n_transient), str(fit_method))
-        self.action_map = ActionMap(self.dmp, groups, scales)
-        self.groups = self.action_map.groups
+        groups = (groups,) if isinstance(groups, str) else tuple(groups)
+        #: the DMP parameter groups in the action (the ``approach`` dimension, if any, comes after them)
+        self.groups = tuple(group for group in groups if group != "approach")
+        self._approach = "approach" in groups
         # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
         # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
         self._anchor_z = float(self.dmp.anchor[2])
@@ -229,6 +235,11 @@ class ArmarWipeEnv(gym.Env):
         self.periodic = self.times >= transient
         if not self.periodic.any():
             raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
+
+        directions = {}
+        if self._approach:
+            directions["approach"] = approach_direction(self.dmp, self.groups, self.times, height=1.0)
+        self.action_map = ActionMap(self.dmp, self.groups, scales, directions)
 
         band = tuple(float(f) for f in force_band)
         if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
@@ -292,20 +303,26 @@ class ArmarWipeEnv(gym.Env):
         self._cells_world = np.zeros((0, 3))
         self._dirt = np.zeros(0)
         self._imitation_jerk: float | None = None
+        self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
-        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[P]`` (clipped to
-        [-1, 1] as in :meth:`step`; NaN or a wrong shape raise ValueError)."""
+        """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[n_action]`` (clipped to
+        [-1, 1] as in :meth:`step`; NaN or a wrong shape raise ValueError). ``n_action = P + 1`` with the
+        ``approach`` dimension (last), else P."""
         return self.action_map.to_params(self._check_action(action))
 
     def params_to_action(self, theta: np.ndarray) -> np.ndarray:
-        """The action ``[P]`` (float32, unclipped) that maps to ``theta [P]``."""
+        """An action ``[n_action]`` (float32, unclipped) that maps to ``theta [P]`` (0 in the approach dimension)."""
         return self.action_map.to_action(theta)
 
     def action_time_weights(self) -> np.ndarray:
         """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
-        return self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+        weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+        if self._approach:                   # the approach dimension acts where it lifts the path
+            lift = lift_profile(self.times, self.dmp.transients[0].length)
+            weights = np.c_[weights, lift / lift.max()]
+        return weights
 
     def _check_action(self, action: Any) -> np.ndarray:
         try:
@@ -401,6 +418,28 @@ class ArmarWipeEnv(gym.Env):
         return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
                                       y0=self.context.sponge_start, anchor=anchor, start_blend=True)[0]
 
+    def imitation_path(self) -> np.ndarray:
+        """The imitation's path ``[T_ctrl, 3]`` in this episode's context (``rollout_path(theta0)`` to round-off).
+
+        With the parameters fixed, the rollout is affine in the start and the anchor (a linear transformation
+        system, a start offset blended out linearly), so the env rolls out the imitation once for a reference
+        context and once per unit shift of the 5 context numbers it depends on (start x, y, z; anchor x, y),
+        and each context's path is that affine combination: no DMP rollout per episode.
+        """
+        if self.context is None:
+            raise RuntimeError("call reset() before imitation_path()")
+        if self._imitation_paths is None:
+            shifts = np.zeros((6, 5))
+            shifts[1:] = _IMITATION_SHIFT * np.eye(5)
+            anchors = np.c_[shifts[:, 3:], np.full(6, self._anchor_z)]
+            theta = np.broadcast_to(self.action_map.theta0, (6, self.action_map.theta0.size))
+            paths = self.dmp.rollout_batch(theta, self.times, groups=self.groups, y0=shifts[:, :3], anchor=anchors,
+                                           start_blend=True)
+            self._imitation_paths = (paths[0], (paths[1:] - paths[0]) / _IMITATION_SHIFT)
+        base, unit = self._imitation_paths
+        shift = np.r_[self.context.sponge_start, self.context.patch_centre]
+        return base + np.tensordot(shift, unit, axes=1)
+
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,
         bypassing the DMP (for tests and hand-made motions). Returns (reward, info)."""
@@ -420,8 +459,7 @@ class ArmarWipeEnv(gym.Env):
         """Jerk of the commanded path relative to the imitation's in this context, and joint accelerations."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
         if self._imitation_jerk is None:
-            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.rollout_path(self.action_map.theta0),
-                                                                        self.dt)))
+            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.imitation_path(), self.dt)))
         ratio = float(np.sum(jerk_sq)) / max(self._imitation_jerk, 1e-12)
         return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
 
@@ -547,6 +585,10 @@ class ArmarWipeEnv(gym.Env):
             self._viewer.sync()
         if self.record_frames and (k + 1) % self.frame_stride == 0:
             self.frames.append(self._frame(dirt_left()))
+
+
+#: Shift (m) of each context number for the affine basis of :meth:`ArmarWipeEnv.imitation_path`.
+_IMITATION_SHIFT = 0.1
 
 
 def deprecated_v0(**kwargs: Any) -> ArmarWipeEnv:

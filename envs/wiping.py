@@ -35,6 +35,8 @@ __all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "cells_under_sponge", "con
 
 #: Time after the first sponge contact (s) in which the peak normal force is the impact.
 IMPACT_WINDOW = 0.2
+#: Sponge poses per matrix product in :func:`cells_under_sponge`.
+_POSES_PER_PRODUCT = 64
 
 
 @dataclass(frozen=True)
@@ -140,11 +142,19 @@ def cells_under_sponge(cells: np.ndarray, pos: np.ndarray, rot: np.ndarray, half
         half: the sponge box half sizes [3]; the face is the box side at -x.
         tolerance: how far (m) beyond the face plane a cell may lie and still count.
     """
-    rot = rot.reshape(len(pos), 3, 3)
-    # local[k, n, :] = R_k^T (c_n - p_k), as row vectors: c_n R_k - p_k R_k (one batched matmul)
-    local = np.matmul(cells[None], rot) - np.matmul(pos[:, None, :], rot)
+    count = len(pos)
+    rot = rot.reshape(count, 3, 3)
+    # local[n, k, :] = R_k^T (c_n - p_k), as row vectors: c_n R_k - p_k R_k. The cell terms of 64 poses are
+    # one [N, 3] x [3, 192] product (the same sums as 64 products [N, 3] x [3, 3]; small enough that BLAS
+    # stays on one thread)
+    columns = rot.transpose(1, 0, 2).reshape(3, 3 * count)
+    cell_terms = np.concatenate([cells @ columns[:, start:start + 3 * _POSES_PER_PRODUCT]
+                                 for start in range(0, 3 * count, 3 * _POSES_PER_PRODUCT)],
+                                axis=1).reshape(len(cells), count, 3)
+    pos_terms = pos[:, 0, None] * rot[:, 0] + pos[:, 1, None] * rot[:, 1] + pos[:, 2, None] * rot[:, 2]
+    local = cell_terms - pos_terms
     return ((np.abs(local[..., 1]) <= half[1]) & (np.abs(local[..., 2]) <= half[2])
-            & (local[..., 0] >= -half[0] - tolerance))
+            & (local[..., 0] >= -half[0] - tolerance)).T
 
 
 def contact_summary(scene: WipeScene, normal: np.ndarray) -> tuple[float, bool]:
@@ -219,55 +229,68 @@ def simulate_wipe(
     if np.array_equal(ids, np.arange(ids[0], ids[0] + len(ids))):
         ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
     adaptation.reset()
-    update = adaptation.update
     normal = plan.normal
     table_normal = np.asarray(dirt.normal, dtype=np.float64)
-    ft_rot = d.site_xmat[scene.ft_site]
+    ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
     sensordata = d.sensordata
     force_adr = scene.force_adr
     bias_n = float(scene.wrist_force_world() @ normal)
-    contact_rows = slice(scene.sponge_contact_adr, scene.sponge_contact_adr + 4)
+    a = scene.sponge_contact_adr
     robot_adr = scene.robot_contact_adr
     torso_adr, platform_adr = scene.self_contact_adr
-    obstacle_adr = scene.obstacle_contact_adr
-    obstacle_qpos = slice(scene.obstacle_qpos, scene.obstacle_qpos + 3)
-    qpos_adr: slice | np.ndarray = scene.qpos_adr
-    if np.array_equal(qpos_adr, np.arange(qpos_adr[0], qpos_adr[0] + len(qpos_adr))):
-        qpos_adr = slice(int(qpos_adr[0]), int(qpos_adr[0]) + len(scene.qpos_adr))
-    geom_xpos, geom_xmat = d.geom_xpos[scene.sponge_geom], d.geom_xmat[scene.sponge_geom]
-    site_xpos = d.site_xpos[scene.sponge_site]
     half = scene.sponge_half
     tn0, tn1, tn2 = (float(x) for x in table_normal)
     fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
 
-    contact = np.zeros((count, 4))        # found, net force (world)
-    robot_found = np.zeros(count)
-    self_found = np.zeros(count, dtype=bool)
-    obstacle_found = np.zeros(count, dtype=bool)
-    obstacle_pos = np.zeros((count, 3))
+    # One row per control step, copied with a single call: the sensors, qpos, the sponge site's position
+    # and the sponge box's pose (the box pose is the one of the step's last kinematics pass).
+    sensors = m.nsensordata
+    rows = _RecordLayout(sensors, m.nq)
+    record = np.zeros((count, rows.width))
+    sources = (sensordata, d.qpos, d.site_xpos[scene.sponge_site], d.geom_xpos[scene.sponge_geom],
+               d.geom_xmat[scene.sponge_geom])
+    concatenate = np.concatenate
+    contact = record[:, a:a + 4]          # found, net force (world)
+    box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
     wrist_force = np.zeros(count)
     depth_trace = np.zeros(count)
-    joint_pos = np.zeros((count, len(scene.qpos_adr)))
-    sponge_pos = np.zeros((count, 3))
-    box_pos = np.zeros((count, 3))
-    box_rot = np.zeros((count, 9))
     peak = np.zeros(count)                # per-step peak force while stepping one physics step at a time
     fine = np.zeros(count * frame_skip) if fine_force else None
+    obstacle_qpos = slice(scene.obstacle_qpos, scene.obstacle_qpos + 3)
     obstacle_start = d.qpos[obstacle_qpos].copy()
-    q_all, ndq = plan.q, plan.normal_dq
+    ctrl = d.ctrl[ctrl_index]             # a view when the arm actuators are consecutive
+    if not np.shares_memory(ctrl, d.ctrl):
+        ctrl = None
+    q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
+    add_scaled, dot = mujoco.mju_addScl, np.dot     # q - depth ndq, elementwise as numpy rounds it (no FMA)
+    # the admittance law of ForceAdaptation.update, inlined (same operations in the same order)
+    law = adaptation.settings
+    adapt = law.enabled
+    engage = adaptation.engagement(path_height).tolist()
+    alpha, dt, preload = adaptation.alpha, adaptation.dt, adaptation.preload
+    gain, target, max_rate = law.gain, law.target_force, law.max_rate
+    min_offset, max_offset = law.min_offset, law.max_offset
+    filtered, offset = adaptation.force, adaptation.offset
     step = mujoco.mj_step
     measured = 0.0
     steps = count
-    penetration = 0.0
+    table_penetration = 0.0
     first_contact = -1
     # MuJoCo resets the data (time back to 0) when accelerations blow up: time that fails to advance
     # signals divergence, as do NaN and excessive wrist forces.
     last_time = d.time
-    a = contact_rows.start
 
     for k in range(count):
-        depth = update(measured, path_height[k])
-        d.ctrl[ctrl_index] = q_all[k] - depth * ndq[k]
+        filtered += alpha * (measured - filtered)
+        if adapt:
+            rate = gain * (target - filtered) * engage[k]
+            rate = min(max_rate, max(-max_rate, rate))
+            offset = min(max_offset, max(min_offset, offset + rate * dt))
+        depth = preload + offset
+        if ctrl is None:
+            d.ctrl[ctrl_index] = q_rows[k] - depth * ndq_rows[k]
+        else:
+            add_scaled(ctrl, q_rows[k], ndq_rows[k], -depth)
         if fine is not None or (first_contact >= 0 and k < first_contact + fine_window):
             top = 0.0
             for i in range(frame_skip):
@@ -281,24 +304,12 @@ def simulate_wipe(
             step(m, d, frame_skip)
         if first_contact < 0 and sensordata[a] > 0:
             first_contact = k
-        measured = bias_n - float(normal @ (ft_rot.reshape(3, 3) @ sensordata[force_adr]))
+        measured = bias_n - float(dot(normal, dot(ft_rot, sensordata[force_adr])))   # = normal @ (R @ f)
         wrist_force[k] = measured
         depth_trace[k] = depth
-        contact[k] = sensordata[contact_rows]
-        robot_found[k] = sensordata[robot_adr]
-        if sensordata[torso_adr] > 0 or sensordata[platform_adr] > 0:
-            self_found[k] = True
-            for adr in (torso_adr, platform_adr):
-                if sensordata[adr] > 0:
-                    penetration = max(penetration, -float(sensordata[adr + 1]))
-        if robot_found[k] - contact[k, 0] > 0.5:
-            penetration = max(penetration, _arm_table_penetration(scene))
-        obstacle_found[k] = sensordata[obstacle_adr] > 0
-        obstacle_pos[k] = d.qpos[obstacle_qpos]
-        joint_pos[k] = d.qpos[qpos_adr]
-        sponge_pos[k] = site_xpos
-        box_pos[k] = geom_xpos
-        box_rot[k] = geom_xmat
+        concatenate(sources, out=record[k])
+        if sensordata[robot_adr] - sensordata[a] > 0.5:
+            table_penetration = max(table_penetration, _arm_table_penetration(scene))
         now = d.time
         if now <= last_time or measured != measured or abs(measured) > max_force:
             steps = k + 1
@@ -306,7 +317,18 @@ def simulate_wipe(
         last_time = now
         if callback is not None:
             callback(k, lambda k=k: _dirt_left(dirt, contact, box_pos, box_rot, half, k))
+    adaptation.force, adaptation.offset = filtered, offset
 
+    robot_found = record[:, robot_adr]
+    self_distance = np.where(record[:, [torso_adr, platform_adr]] > 0,
+                             -record[:, [torso_adr + 1, platform_adr + 1]], -np.inf)
+    self_found = np.isfinite(self_distance).any(axis=1)
+    penetration = max(0.0, table_penetration, float(np.fmax.reduce(self_distance.ravel())))
+    obstacle_found = record[:, scene.obstacle_contact_adr] > 0
+    qpos = record[:, rows.qpos]
+    obstacle_pos = qpos[:, obstacle_qpos]
+    joint_pos = qpos[:, scene.qpos_adr]
+    sponge_pos = record[:, rows.site_pos].copy()
     contact_force = np.abs(contact[:, 1:] @ table_normal)
     over = np.flatnonzero(contact_force[:steps] > max_force)
     unstable = steps < count or bool(over.size) or not np.isfinite(contact_force[:steps]).all()
@@ -335,6 +357,34 @@ def simulate_wipe(
     return WipeTrace(contact_force, wrist_force, depth_trace, removed, left, arm_contact, self_found & live,
                      obstacle_found & live, shift, at_limit, sponge_pos, penetration, impact_force, impact_step,
                      fine, steps, unstable)
+
+
+@dataclass(frozen=True)
+class _RecordLayout:
+    """Columns of the per-step record: sensordata, qpos, sponge site position, sponge box pose."""
+
+    sensors: int
+    nq: int
+
+    @property
+    def width(self) -> int:
+        return self.sensors + self.nq + 15
+
+    @property
+    def qpos(self) -> slice:
+        return slice(self.sensors, self.sensors + self.nq)
+
+    @property
+    def site_pos(self) -> slice:
+        return slice(self.sensors + self.nq, self.sensors + self.nq + 3)
+
+    @property
+    def box_pos(self) -> slice:
+        return slice(self.sensors + self.nq + 3, self.sensors + self.nq + 6)
+
+    @property
+    def box_rot(self) -> slice:
+        return slice(self.sensors + self.nq + 6, self.sensors + self.nq + 15)
 
 
 def _slide(box_pos: np.ndarray, normal: np.ndarray) -> np.ndarray:

@@ -10,7 +10,10 @@ transient function j is ``-vbar_j (F_2 - 2 q_j . (F_3, F_4) + |q_j|^2 F_5) + F_7
 distance as ``BasisSet.activations``), so ``Psi = exp(C^T F)`` with a fixed ``C [8, D]``. A gate that
 ``BasisSet`` floors to exactly 0 gets the log ``-1500``, whose exponential is exactly 0 too. The weights
 get one extra column of ones, so one product per rollout gives the numerator and the denominator of (5).
-Rollouts are processed a few at a time so that the ``[T, D]`` blocks stay in the core's cache.
+Rollouts are processed a few at a time so that the ``[T, D]`` blocks stay in the core's cache, and each
+family's exponentials are evaluated only over the span of samples where its gate is not exactly 0 (along a
+path r is monotonic: the periodic family is off during most of a long transient, the transient family is
+off on the cycle); outside the span its activations are exactly 0, as in ``BasisSet.activations``.
 
 The numbers equal those of ``BasisSet.forcing`` on each path to round-off (``tests/test_batched.py``).
 """
@@ -85,11 +88,17 @@ def batched_forcing(basis: BasisSet, phi: np.ndarray, r: np.ndarray, weights: np
     features = _features(basis.fading, phi, r).reshape(8, batch * samples)
     extended = np.concatenate([weights, np.ones((batch, 1, size))], axis=1)         # [B, d + 1, D]
     sums = np.empty((batch, dims + 1, samples))             # numerators [:, :d], denominator [:, d]
+    families = ((slice(0, basis.n_periodic), 6), (slice(basis.n_periodic, size), 7))    # (rows, gate feature)
     step = max(1, _CHUNK_SAMPLES // max(samples, 1))
     for start in range(0, batch, step):
         count = min(step, batch - start)
-        activation = matrix @ features[:, start * samples:(start + count) * samples]   # [D, count T] logs
-        np.exp(activation, out=activation)
+        block = features[:, start * samples:(start + count) * samples]
+        activation = np.zeros((size, count * samples))
+        for rows, gate in families:     # only over the samples where the family's gate is not exactly 0
+            live = np.flatnonzero(block[gate] > _LOG_ZERO)
+            if live.size:
+                span = slice(int(live[0]), int(live[-1]) + 1)
+                np.exp(matrix[rows] @ block[:, span], out=activation[rows, span])
         np.matmul(extended[start:start + count], activation.reshape(size, count, samples).transpose(1, 0, 2),
                   out=sums[start:start + count])
     sums = sums.transpose(0, 2, 1)

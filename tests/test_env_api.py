@@ -29,7 +29,8 @@ def test_registered_and_spaces(env):
     assert isinstance(u, ArmarWipeEnv)
     assert env.action_space.dtype == np.float32
     assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
-    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")),)
+    # the DMP's parameters plus the one-dimensional approach lift (last)
+    assert env.action_space.shape == (u.dmp.layout.size(("periodic", "transient", "initial", "amplitude")) + 1,)
     space = env.observation_space
     assert space.dtype == np.float32 and space.shape == (13,)
     assert np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
@@ -89,7 +90,12 @@ def test_action_param_mapping(env):
     env.reset(seed=0)
     assert u.action_to_params(zero(env)) == pytest.approx(u.dmp.get_params(u.groups))
     a = np.random.default_rng(2).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    a[-1] = 0.0                 # the approach dimension: params_to_action expresses every theta without it
     assert u.params_to_action(u.action_to_params(a)) == pytest.approx(a, abs=1e-5)
+    b = np.random.default_rng(3).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    theta = u.action_to_params(b)
+    # with the approach moved, the same theta needs no approach (may lie beyond the box: the map's own inverse)
+    assert u.action_map.to_params(u.params_to_action(theta)) == pytest.approx(theta, rel=1e-5, abs=1e-6)
     weights = u.action_time_weights()
     assert weights.shape == (u.n_steps, env.action_space.shape[0])
     assert weights.min() >= 0.0 and weights.max() <= 1.0
@@ -98,6 +104,7 @@ def test_action_param_mapping(env):
     early, late = slice(0, 20), slice(-20, None)
     assert weights[early, part["transient:0"]].sum() > weights[early, part["periodic"]].sum()
     assert weights[late, part["periodic"]].sum() > weights[late, part["transient:0"]].sum()
+    assert weights[0, -1] == 0.0 and weights[:, -1].max() == 1.0 and weights[late, -1].sum() == 0.0   # approach
 
 
 def test_bad_actions_raise(env):
@@ -198,10 +205,30 @@ def test_reset_options(env):
     ({"context_ranges": {"patch_centre": (-0.1, 0.0)}}, "context_ranges"),     # patches over the table edge
     ({"obstacle": "yes"}, "obstacle"),
     ({"wear_rate": 0.0}, "wear_rate"),
+    ({"groups": ("periodic", "approach")}, "groups"),                          # the approach moves transient weights
+    ({"scales": {"approach": 0.0}}, "scales"),
 ])
 def test_bad_constructor_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
         ArmarWipeEnv(**FAST, **kwargs)
+
+
+def test_the_approach_dimension_lifts_the_approach_smoothly(env):
+    """The approach dimension at +1 lifts the DMP's own path by the smooth bump (6 cm), leaves the start and
+    the wiping untouched and needs no more joint acceleration than ARMAR-III allows (10 rad/s²)."""
+    from rdmp_gym.envs.approach import lift_profile
+
+    u = env.unwrapped
+    env.reset(seed=0)
+    a = zero(env)
+    a[-1] = 1.0
+    lift = u.rollout_path(u.action_to_params(a)) - u.rollout_path(u.action_map.theta0)
+    target = 0.06 * lift_profile(u.times, u.dmp.transients[0].length)
+    assert np.abs(lift[:, 2] - target).max() < 1e-3 and lift[:, 2].max() > 0.058
+    assert np.abs(lift[:, :2]).max() < 1e-9                              # only the height moves
+    assert np.abs(lift[0]).max() < 1e-9 and np.abs(lift[u.periodic]).max() < 1e-3
+    _, _, _, _, info = env.step(a)
+    assert info["valid"] and info["peak_joint_accel"] < 10.0 and info["jerk_ratio"] < 3.0
 
 
 def test_variants_frame_skip_xml_groups_demonstration():

@@ -1,7 +1,8 @@
 """Cheap strategies that tried to game ArmarWipe-v0 (issue 8) each score clearly below the imitation in v1.
 
 Each test runs the imitation (action 0) and the cheap strategy in the same context. "Clearly below"
-means at least 0.3 below (the imitation scores 1.0-1.2 on these contexts).
+means at least 0.3 below (the imitation scores 0.9-1.2 on these contexts), a third of the coverage term's range.
+The figures in the docstrings are measured with the smooth core (issue 7) and the env's defaults.
 """
 
 import gymnasium as gym
@@ -84,32 +85,63 @@ def test_reaching_into_the_robot_is_stopped_and_charged(env):
     assert info["valid"] is False and info["invalid_reason"] == "penetration" and reward <= -1.0
 
 
+def smooth_twin(env, action):
+    """``action`` without its weight entries: the same initial condition, amplitude and approach, so the
+    same pattern size and coverage, but none of the random weights' wiggles."""
+    twin = action.copy()
+    for name in ("periodic", "transient:0"):
+        twin[env.unwrapped.action_map.slices[name]] = 0.0
+    return twin
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_random_jagged_actions_lose(env, seed):
-    """Item 7: uniformly random actions (v0: beat the imitation on 11 of 20 contexts)."""
+    """Item 7: uniformly random actions (v0: beat the imitation on 11 of 20 contexts).
+
+    Under the smooth core a random action's path is 7-25x as jerky as the imitation's (20 contexts; its
+    smooth twin 0.6-2.1x), hence ``jerk_ratio > 5`` and a smoothness charge of at least ``0.25 ln 5 = 0.4``.
+    Over 20 contexts it scores >= 0.58 below the imitation and >= 0.49 below its twin (the slow test).
+    Its random amplitude can cover more than the imitation (0.80 vs 0.72 at seed 0), so it must also lose
+    to its smooth twin with the same coverage (within 0.03): a jagged policy scores below a smooth one.
+    """
     options = {"obstacle": 0}
     reward0, _ = imitation(env, options, seed)
     action = np.random.default_rng(seed).uniform(-1, 1, env.action_space.shape).astype(np.float32)
     env.reset(seed=seed, options=options)
     _, reward, _, _, info = env.step(action)
-    assert info["jerk_ratio"] > 10.0
-    assert info["reward_terms"]["smoothness"] < -0.2
+    env.reset(seed=seed, options=options)
+    _, smooth, _, _, twin = env.step(smooth_twin(env, action))
+    assert info["jerk_ratio"] > 5.0 and twin["jerk_ratio"] < 0.5 * info["jerk_ratio"]
+    assert info["reward_terms"]["smoothness"] < -0.4
+    assert abs(info["coverage"] - twin["coverage"]) < 0.03
     assert reward < reward0 - MARGIN
+    assert reward < smooth - MARGIN
 
 
 def test_alternating_weights_lose(env):
-    """Item 7: alternating +-1 weights (v0: 0.964 vs 0.974)."""
-    reward0, _ = imitation(env, {"obstacle": 0})
+    """Item 7: alternating +-1 actions (v0: 0.964 vs 0.974).
+
+    The smooth core's wide, overlapping basis averages neighbouring weights, so alternating weights no
+    longer make a violent path (peak joint acceleration 8.8 rad/s², was 83; jerk ratio 15, was 256): it
+    is a rough, shrunken wipe with a lowered approach (coverage 0.66 vs 0.72), charged for its jerk
+    (``jerk_ratio > 5``), and its joints accelerate more than twice as hard as the imitation's (3.0 rad/s²).
+    """
+    reward0, info0 = imitation(env, {"obstacle": 0})
     action = np.where(np.arange(env.action_space.shape[0]) % 2 == 0, 1.0, -1.0).astype(np.float32)
     env.reset(seed=0, options={"obstacle": 0})
     _, reward, _, _, info = env.step(action)
-    assert info["jerk_ratio"] > 50.0 and info["peak_joint_accel"] > 20.0
-    assert info["reward_terms"]["smoothness"] < 0 and info["reward_terms"]["joint_accel"] < 0
+    assert info["jerk_ratio"] > 5.0 and info["reward_terms"]["smoothness"] < -0.4
+    assert info["peak_joint_accel"] > 2.0 * info0["peak_joint_accel"]
     assert reward < reward0 - MARGIN
 
 
 def test_knocking_the_cup_loses_and_the_approach_matters(env):
-    """Item 8: the imitation's approach knocks the cup in the corridor; raising the approach over it wins."""
+    """Item 8: the imitation's approach knocks the cup in the corridor; raising the approach over it wins.
+
+    The raised approach is an action: the ``approach`` dimension at +1 (a smooth 6 cm lift of the DMP's
+    own transient, see ``envs/approach.py``) clears the cup with success, where the imitation fails.
+    It pays for its extra jerk (2.0x the imitation's: -0.17) and wins by 0.76 (1.00 vs 0.24).
+    """
     options = {**NOMINAL, "obstacle": 1}
     obs, _ = env.reset(seed=0, options=options)
     assert obs[10] == 1.0 and np.linalg.norm(obs[11:13]) > 0                # the cup is in the observation
@@ -120,10 +152,13 @@ def test_knocking_the_cup_loses_and_the_approach_matters(env):
     assert knocked < clear - MARGIN
     touch = np.flatnonzero(info["cost_terms"]["obstacle"])
     assert touch.size and touch[0] < int(np.argmax(env.unwrapped.periodic))   # charged in the approach, not at the end
+    lift = np.zeros(env.action_space.shape, dtype=np.float32)
+    lift[-1] = 1.0                                                          # the approach dimension
     env.reset(seed=0, options=options)
-    lifted, info = env.unwrapped.run_path(probes.lifted_approach(env.unwrapped, 0.06))
-    assert info["obstacle_touch_steps"] == 0 and info["obstacle_shift"] < 0.005
-    assert lifted > knocked + MARGIN
+    _, lifted, _, _, info = env.step(lift)
+    assert info["obstacle_touch_steps"] == 0 and info["obstacle_shift"] < 0.005 and info["is_success"] is True
+    assert info["reward_terms"]["smoothness"] < 0                           # the lift is not free ...
+    assert lifted > knocked + 2 * MARGIN                                    # ... but pays off clearly
 
 
 def test_a_hard_touchdown_is_charged_when_it_happens(env):
@@ -146,14 +181,18 @@ def test_a_hard_touchdown_is_charged_when_it_happens(env):
 
 @pytest.mark.slow
 def test_random_actions_lose_on_twenty_contexts():
-    """Item 7 in full (v0: random actions beat the imitation on 11 of 20 contexts; v1: on none)."""
+    """Item 7 in full (v0: random actions beat the imitation on 11 of 20 contexts; v1: on none), and each
+    loses to its smooth twin with the same coverage."""
     environment = gym.make(ENV_ID, n_periods=4.0)
     for seed in range(20):
         reward0, _ = imitation(environment, {"obstacle": 0}, seed)
         action = np.random.default_rng(seed).uniform(-1, 1, environment.action_space.shape).astype(np.float32)
         environment.reset(seed=seed, options={"obstacle": 0})
-        _, reward, _, _, _ = environment.step(action)
+        _, reward, _, _, info = environment.step(action)
+        environment.reset(seed=seed, options={"obstacle": 0})
+        _, smooth, _, _, twin = environment.step(smooth_twin(environment, action))
         assert reward < reward0 - MARGIN, seed
+        assert abs(info["coverage"] - twin["coverage"]) < 0.03 and reward < smooth - MARGIN, seed
 
 
 @pytest.mark.slow

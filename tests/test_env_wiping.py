@@ -8,7 +8,7 @@ from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
-from rdmp_gym.envs.wiping import DirtField, contact_summary, simulate_wipe
+from rdmp_gym.envs.wiping import DirtField, cells_under_sponge, contact_summary, simulate_wipe
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
@@ -225,3 +225,62 @@ def test_diverging_simulation_ends_with_a_flag_and_penalty():
     env.reset(seed=0)
     _, reward, *_ , info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
     assert info["unstable"] is False and reward > 0.5
+
+
+def test_the_inlined_force_law_is_force_adaptation_update(adaptive):
+    """simulate_wipe inlines ForceAdaptation.update (issue 12): replaying update() on the recorded wrist
+    forces gives the recorded depths bit for bit, on a table 3 cm low where the law has work to do."""
+    u = adaptive.unwrapped
+    _, info = run(adaptive, {**NOMINAL, "table_height": -0.03})
+    path = u.rollout_path(u.action_map.theta0)
+    solution = u._solve(path)
+    scene = u.scene
+    plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
+                           scene.control_frame()[1][:, 2])
+    scene.set_arm_state(solution.q[0])
+    adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
+    trace = simulate_wipe(scene, plan, path[:, 2], adaptation, DirtField(u._cells_world, plan.normal), u.frame_skip)
+    assert np.array_equal(trace.contact_force, info["force_trace"])
+    replay = ForceAdaptation(u.adaptation_settings, u.dt)
+    measured = np.r_[0.0, trace.wrist_force[:-1]]
+    depth = np.array([replay.update(float(f), float(h)) for f, h in zip(measured, path[:, 2], strict=True)])
+    assert np.ptp(depth) > 1e-3                                   # the law adapted the depth
+    assert np.array_equal(depth[:trace.steps], trace.depth[:trace.steps])
+    assert (adaptation.force, adaptation.offset) == (replay.force, replay.offset)
+
+
+def test_cells_under_sponge_match_one_pose_at_a_time():
+    rng = np.random.default_rng(0)
+    cells = rng.uniform(-0.1, 0.1, (150, 3))
+    pos = rng.uniform(-0.05, 0.05, (200, 3))
+    rot = np.linalg.qr(rng.normal(size=(200, 3, 3)))[0].reshape(200, 9)
+    half = np.array([0.02, 0.04, 0.03])
+    under = cells_under_sponge(cells, pos, rot, half, 0.003)
+    for k in range(200):
+        local = (cells - pos[k]) @ rot[k].reshape(3, 3)
+        expected = (np.abs(local[:, 1]) <= half[1]) & (np.abs(local[:, 2]) <= half[2]) & (local[:, 0] >= -0.023)
+        edge = np.minimum(np.abs(np.abs(local[:, 1:]) - half[1:]).min(axis=1), np.abs(local[:, 0] + 0.023)) < 1e-12
+        assert np.array_equal(under[k][~edge], expected[~edge])
+    assert under.shape == (200, 150) and 0 < under.sum() < under.size
+
+
+def test_the_imitation_path_is_the_rollout_of_theta0(adaptive):
+    """The imitation's jerk comes from an affine basis of rollouts (issue 12), equal to a rollout to round-off."""
+    u = adaptive.unwrapped
+    for seed in range(3):
+        adaptive.reset(seed=seed)
+        direct = u.rollout_path(u.action_map.theta0)
+        assert np.abs(u.imitation_path() - direct).max() < 1e-12
+        assert np.sum(Smoothness.jerk_squared(u.imitation_path(), u.dt)) == pytest.approx(
+            np.sum(Smoothness.jerk_squared(direct, u.dt)), rel=1e-10)
+
+
+def test_servo_targets_are_rounded_as_numpy_rounds_them():
+    """simulate_wipe writes ``q - depth * normal_dq`` with ``mujoco.mju_addScl`` (no fused multiply-add)."""
+    import mujoco
+    rng = np.random.default_rng(0)
+    out = np.zeros(10)
+    for _ in range(2000):
+        q, direction, depth = rng.normal(size=10), rng.normal(size=10), 0.05 * rng.normal()
+        mujoco.mju_addScl(out, q, direction, -depth)
+        assert np.array_equal(out, q - depth * direction)

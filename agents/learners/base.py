@@ -72,8 +72,9 @@ def check_state_like(value: Any, template: Any, path: str) -> None:
     """Raise ``ValueError`` naming ``path`` unless ``value`` has the structure of ``template``.
 
     Dicts need the same keys; arrays the same shape except along the first axis (which may grow, e.g. a
-    history) and the same kind (float arrays finite); numbers, strings, bools, lists and Generators their
-    own kind. List lengths and first-axis lengths are left to the owner's checks.
+    history; an empty template array fixes no shape) and the same kind (float arrays finite); numbers,
+    strings, bools, lists and Generators their own kind. List lengths and first-axis lengths are left to
+    the owner's checks.
     """
     def fail(expected: str) -> None:
         raise ValueError(f"{path}: expected {expected}, got {type(value).__name__}")
@@ -91,7 +92,8 @@ def check_state_like(value: Any, template: Any, path: str) -> None:
     elif isinstance(template, np.ndarray):
         if not isinstance(value, np.ndarray):
             fail("an array")
-        if value.ndim != template.ndim or value.shape[1:] != template.shape[1:] \
+        shape_known = template.size > 0              # an empty template (e.g. a buffer not filled yet) fixes no shape
+        if (shape_known and (value.ndim != template.ndim or value.shape[1:] != template.shape[1:])) \
                 or (value.dtype.kind == "b") != (template.dtype.kind == "b") or value.dtype.kind not in "biuf":
             raise ValueError(f"{path}: expected an array of shape [*, {', '.join(map(str, template.shape[1:]))}] "
                              f"like {template.shape} ({template.dtype}), got shape {value.shape} ({value.dtype})")
