@@ -101,17 +101,23 @@ class ForceProfileLearning(ForceAdaptation):
         """The learned depth at the current phase (m)."""
         return float(self._basis(self.step) @ self.weights)
 
+    def learn(self, filtered_force: float, engage: float) -> float:
+        """One control step of the profile: learn from the filtered force (N) at engagement ``engage`` in
+        [0, 1] and return the learned depth (m) to add to the admittance's (called by :meth:`update`, and by
+        episode loops that inline the admittance law)."""
+        s = self.settings
+        if s.enabled and engage > 0.0 and self.step >= self.delay_steps:
+            error = (s.target_force - filtered_force) / s.stiffness
+            self.weights += self.rate * engage * error * self._basis(self.step - self.delay_steps)
+        depth = float(self._basis(self.step) @ self.weights)
+        self.step += 1
+        return depth
+
     def update(self, force: float, path_height: float) -> float:
         """Feed one force measurement (N, + = pressing) and return the depth to command (m)."""
         feedback = super().update(force, path_height)
-        s = self.settings
-        engage = min(1.0, max(0.0, 1.0 - path_height / s.engage_height))
-        if s.enabled and engage > 0.0 and self.step >= self.delay_steps:
-            error = (s.target_force - self.force) / s.stiffness
-            self.weights += self.rate * engage * error * self._basis(self.step - self.delay_steps)
-        depth = feedback + float(self._basis(self.step) @ self.weights)
-        self.step += 1
-        return depth
+        engage = min(1.0, max(0.0, 1.0 - path_height / self.settings.engage_height))
+        return feedback + self.learn(self.force, engage)
 
 
 def period_force_errors(force: np.ndarray, dt: float, start: float, period: float, target: float,
