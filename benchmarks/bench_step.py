@@ -1,13 +1,13 @@
 """Sample efficiency: step-based SAC (``ArmarWipeStep-v1``, residual coupling on the DMP) against episodic PI²
-(``ArmarWipe-v0``, DMP parameters) on the same fixed contexts, by the number of episodes (one episode =
-one DMP rollout = ``n_steps`` control steps for SAC).
+(``ArmarWipe-v1``, DMP parameters) on the same fixed contexts (with the cup where the context has one), by the
+number of episodes (one episode = one DMP rollout = ``n_steps`` control steps for SAC).
 
 For every seed the context of ``ArmarWipe`` reset with that seed is fixed for training and evaluation.
 PI² evaluates its mean after every update; SAC is evaluated (deterministic policy) every ``--every``
 episodes. Prints a table; writes ``step.json`` (``runs/benchmarks/``, or ``benchmarks/results/`` with
 ``--save``).
 
-    python benchmarks/bench_step.py --seeds 2 --episodes 30
+    python benchmarks/bench_step.py --seeds 2 --episodes 20 --save
 """
 
 from __future__ import annotations

@@ -1,24 +1,36 @@
 """``rdmp_gym/ArmarWipeStep-v1``: the wiping task one control step at a time (residual RL on a DMP).
 
-The step-based sibling of the episodic env, as fancy_gym offers one beside each movement-primitive env.
-The same scene, context, DMP, controller and reward weights (an :class:`ArmarWipeEnv` inside provides
-them); per ``step``:
+The step-based sibling of ``ArmarWipe-v1``, as fancy_gym offers one beside each movement-primitive env:
+the same scene (tilted table, Preston dirt, the cup), context, DMP, controller and reward terms; an
+:class:`ArmarWipeEnv` inside provides them. Per ``step`` (control step ``k``):
 
-1. the DMP advances one control step online (``RhythmicDMP.start`` -> :class:`rdmp_gym.DMPStepper`,
-   anchored at the dirt patch, started at the sponge start), driven by the **coupling term**
+1. the DMP runs online (``RhythmicDMP.start(start_blend=True)`` -> :class:`rdmp_gym.DMPStepper`, anchored at
+   the dirt patch, started at the sponge start), driven by the **coupling term**
    ``c = max_shift * alpha_z * beta_z * a`` for the action ``a in [-1, 1]^3``: a constant ``a`` moves the
-   DMP's equilibrium by ``max_shift * a`` metres, and the second-order system keeps the path smooth;
-2. one differential-IK step (warm-started at the last solution) turns the sponge target into joint
-   targets; the wrist-force admittance law adapts the pressing depth; MuJoCo runs ``frame_skip`` steps;
-3. the reward is the episodic reward split over the steps: ``coverage`` for the cells this step wipes
-   first, ``force`` closeness in the periodic phase, and the ``excess_force``, ``contact_loss``,
-   ``joint_limit``, ``arm_collision`` penalties, with the episodic env's weights and normalisations, so
-   that the return of an episode approximates the episodic reward of the same motion.
+   DMP's equilibrium by ``max_shift * a`` metres and the second-order system keeps the path smooth. The
+   sponge target of step ``k`` is the DMP's ``y_k``; ``a_k`` sets ``y_{k+1}``;
+2. differential IK in the v1 control frame (nominal table origin, actual tilt) turns the
+   targets into joint targets, with the episodic plan's velocity feed-forward (central difference, using
+   the solution for ``y_{k+1}``) and the wrist-force admittance law on the pressing depth; MuJoCo runs
+   ``frame_skip`` steps (one at a time for 0.2 s after the first contact, to catch the impact);
+3. the measurements of the step are appended to a :class:`WipeTrace` of the episode so far, and the
+   reward is the growth of the episodic reward: ``r_k = R(trace_0..k) - R(trace_0..k-1)`` with
+   ``R = sum(wipe_reward(...))``, the v1 reward function itself. The return of an episode is therefore
+   exactly the episodic reward of the motion that was executed (every term: coverage by Preston wear,
+   force, excess force, contact loss, impact, smoothness against the imitation, joint acceleration,
+   arm and self-collision, the cup, joint limits, unstable). ``info["reward_terms"]`` splits ``r_k``.
 
-Observation (float32): ``cos phi, sin phi, r`` of the canonical system, the sponge position (nominal
-table frame, m) and velocity (m/s), the wrist force along the table normal (N / target force), and the
-context (``ArmarWipe`` observation). The episode ends (``truncated``) after the episodic env's duration;
-a diverged simulation ends it (``terminated``) with the ``unstable`` penalty. ``a = 0`` runs the imitation.
+Where the episodic env rejects a whole path before simulating it (workspace, IK, joint speed), a step
+env cannot: the bounded action keeps the path within ``max_shift`` of the imitation's equilibrium and the
+target is clipped to the workspace. A penetration of the robot's body or the table beyond the episodic
+limit ends the episode (``terminated``) with the episodic ``invalid`` reward as its return; a diverged
+simulation ends it with the ``unstable`` charge. The last step's info has the episodic statistics,
+``is_success`` (same thresholds) and the cost traces (``cost_trace``, ``cost_terms``).
+
+Observation (float32, 26): ``cos phi, sin phi, r`` of the canonical system, the sponge position (nominal
+table frame, m), its face normal (table frame), its velocity (m/s), the wrist force along the control
+normal (N / target force) and the context (``ArmarWipe-v1``'s 13-d observation, with the cup).
+``a = 0`` runs the imitation.
 """
 
 from __future__ import annotations
@@ -33,14 +45,14 @@ from rdmp_gym import DMPStepper
 
 from .context import SIZE as CONTEXT_SIZE
 from .controller import ForceAdaptation
-from .scene import dirt_grid
-from .wipe_env import WORKSPACE_HIGH, WORKSPACE_LOW, ArmarWipeEnv
-from .wiping import cells_under_sponge
+from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
+from .wipe_env import WORKSPACE_HIGH, WORKSPACE_LOW, ArmarWipeEnv, episode_success
+from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
 __all__ = ["ArmarWipeStepEnv"]
 
-_MAX_FORCE = 2000.0       # N: a larger wrist force counts as a diverged simulation (as in the episodic env)
-_OBS_SIZE = 3 + 3 + 3 + 1 + CONTEXT_SIZE
+_MAX_FORCE = 2000.0       # N: a larger wrist or contact force is a diverged simulation (as in simulate_wipe)
+_OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 
 
 class ArmarWipeStepEnv(gym.Env):
@@ -48,24 +60,28 @@ class ArmarWipeStepEnv(gym.Env):
 
     Args:
         max_shift: equilibrium shift (m) of the DMP for a full action, per axis.
-        ik_iterations: damped-least-squares iterations of the IK per control step (warm-started).
-        **kwargs: keywords of :class:`ArmarWipeEnv` (style, demonstration, dmp, n_periods, duration,
-            control_rate, target_force, force_band, reward_weights, adaptation, context_ranges, render_mode, ...).
+        ik_iterations: damped-least-squares iterations of the IK per control step, a fixed count from the IK's
+            posture (as the episodic path IK solves its knots; a warm start drifts in the null space, and
+            stopping at a tolerance after a varying count makes the joint targets jump between steps).
+        **kwargs: keywords of :class:`ArmarWipeEnv` (style, demonstration, dmp, n_periods, duration, control_rate,
+            target_force, force_band, reward_weights, adaptation, context_ranges, obstacle, render_mode, ...).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
 
-    def __init__(self, max_shift: float = 0.02, ik_iterations: int = 3, **kwargs: Any) -> None:
+    def __init__(self, max_shift: float = 0.02, ik_iterations: int = 30, **kwargs: Any) -> None:
         super().__init__()
-        if not (np.isfinite(max_shift) and max_shift >= 0.0):
+        if isinstance(max_shift, bool) or not isinstance(max_shift, (int, float, np.number)) or not (
+                np.isfinite(max_shift) and max_shift >= 0.0):
             raise ValueError(f"max_shift: expected a number >= 0 (m), got {max_shift!r}")
-        if isinstance(ik_iterations, bool) or int(ik_iterations) != ik_iterations or ik_iterations < 1:
+        if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")
         self.task = ArmarWipeEnv(**kwargs)
         self.render_mode = self.task.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.task.control_rate))}
         self.dmp = self.task.dmp
-        self.coupling_scale = float(max_shift) * self.dmp.alpha_z * self.dmp.alpha_z / 4.0
+        self.max_shift = float(max_shift)
+        self.coupling_scale = self.max_shift * self.dmp.alpha_z * self.dmp.alpha_z / 4.0   # alpha_z beta_z
         self.ik_iterations = int(ik_iterations)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         bound = np.full(_OBS_SIZE, 100.0, dtype=np.float32)
@@ -77,120 +93,224 @@ class ArmarWipeStepEnv(gym.Env):
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        """Draw a context (``options`` as in ``ArmarWipe``), put the robot at rest at the sponge start."""
+        """Draw a context (``options`` as in ``ArmarWipe-v1``) and put the robot at rest at the sponge start."""
         super().reset(seed=seed)
         context_obs, info = self.task.reset(seed=seed, options=options)
         task, scene, context = self.task, self.task.scene, self.task.context
+        assert context is not None
+        count = task.n_steps
         self._context_obs = context_obs
         anchor = np.array([*context.patch_centre, self.dmp.anchor[2]])
         self._stepper = self.dmp.start(task.dt, y0=context.sponge_start, anchor=anchor, start_blend=True)
         start = self.dmp.transients[0]
         self._phase, self._radius = self.dmp.canonical.state(task.times, start.phi0, start.r0)
-        origin, rot = scene.table_frame(actual=True)
-        cells = dirt_grid(context.patch_centre, context.patch_size, task.cell_size)
-        self._cells = np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
-        self._table_normal = rot[:, 2]
-        self._wiped = np.zeros(len(cells), dtype=bool)
-        self._q = scene.arm_qpos()
-        self._lead = scene.servo_lead()
+        self._normal = scene.control_frame()[1][:, 2]
+        self._table_normal = scene.table_frame(actual=True)[1][:, 2]
+        self._dirt = DirtField(task._cells_world, self._table_normal, wear_rate=task.wear_rate,
+                               contact_threshold=task.reward_settings.contact_threshold)
+        self._wear = np.zeros(len(task._cells_world))
+        # the episode so far: commanded path and joints, and the per-step records of a WipeTrace
+        self._path = np.zeros((count, 3))
+        self._q = np.zeros((count, scene.qpos_adr.size))
+        self._ndq = np.zeros((count, scene.qpos_adr.size))
+        self._path[0] = self._clip(context.sponge_start)
+        self._ik_start = task.ik.posture
+        self._q[0], self._ndq[0] = self._solve(self._path[0], self._ik_start)
+        scene.set_arm_state(self._q[0])
+        self._rec = {name: np.zeros(count) for name in ("contact_force", "wrist_force", "depth", "removed", "peak",
+                                                       "obstacle_shift")}
+        for name in ("arm_contact", "self_contact", "obstacle_contact", "at_limit"):
+            self._rec[name] = np.zeros(count, dtype=bool)
+        self._box_pos = np.zeros((count, 3))
+        self._sponge_pos = np.zeros((count, 3))
+        self._penetration, self._first_contact = 0.0, -1
+        self._fine_window = max(1, round(IMPACT_WINDOW / task.dt))
+        self._obstacle_start = scene.data.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3].copy()
         self._adaptation = ForceAdaptation(task.adaptation_settings, task.dt)
-        self._bias = float(scene.wrist_force_world() @ scene.nominal_normal)
+        self._bias = float(scene.wrist_force_world() @ self._normal)
+        self._lead = scene.servo_lead()
         self._measured = 0.0
         self._k = 0
-        self._previous = context.sponge_start.copy()
-        self._n_periodic = max(1, int(np.count_nonzero(task.periodic)))
-        return self._observation(context.sponge_start, np.zeros(3)), info
+        self._terms = dict.fromkeys(TERMS, 0.0)
+        self._done = False
+        position = self._sponge_position()
+        self._previous = position
+        return self._observation(position, np.zeros(3)), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
-        """Advance one control step with the coupling action ``a [3]`` (clipped to [-1, 1])."""
+        """Advance one control step with the coupling action ``a [3]`` (clipped to [-1, 1]; a wrong shape, NaN
+        or infinite values raise ValueError)."""
         if self._stepper is None:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (3,) or not np.all(np.isfinite(a)):
-            raise ValueError(f"action: expected 3 finite values, got shape {a.shape}")
-        task, scene = self.task, self.task.scene
-        target, _ = self._stepper.step(self.coupling_scale * np.clip(a, -1.0, 1.0))
-        target = np.clip(target, WORKSPACE_LOW, WORKSPACE_HIGH)
-        q, normal_dq = self._solve(target)
-        depth = self._adaptation.update(self._measured, float(target[2]))
-        velocity = (q - self._q) / task.dt
-        command = np.clip(q + self._lead * velocity - depth * normal_dq, scene.joint_lower, scene.joint_upper)
-        self._q = q
-        before = scene.data.time
-        scene.data.ctrl[scene.actuator_ids] = command
-        mujoco.mj_step(scene.model, scene.data, task.frame_skip)
-        self._measured = self._bias - float(scene.wrist_force_world() @ scene.nominal_normal)
-        unstable = (scene.data.time <= before or not np.isfinite(self._measured)
-                    or abs(self._measured) > _MAX_FORCE)
-        terms, info = self._reward(unstable)
-        self._k += 1
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() before step()")
+        a = self._check_action(action)
+        task, scene, k = self.task, self.task.scene, self._k
+        count = task.n_steps
+        if k + 1 < count:                                  # the action sets the next target y_{k+1}
+            target, _ = self._stepper.step(self.coupling_scale * a)
+            self._path[k + 1] = self._clip(target)
+            self._q[k + 1], self._ndq[k + 1] = self._solve(self._path[k + 1], self._ik_start)
+        q = self._q
+        if count == 1:
+            velocity = np.zeros(q.shape[1])
+        else:                                              # np.gradient of the episodic JointTargetPlan
+            lo, hi = max(0, k - 1), min(count - 1, k + 1)
+            velocity = (q[hi] - q[lo]) / ((hi - lo) * task.dt)
+        depth = self._adaptation.update(self._measured, float(self._path[k, 2]))
+        scene.data.ctrl[scene.actuator_ids] = q[k] + self._lead * velocity - depth * self._ndq[k]
+        unstable = self._simulate(k, depth)
+        self._k = k + 1
+        penetrated = self._penetration > task.penetration_limit
+        terms, info = self._reward(k, unstable, penetrated)
         position = self._sponge_position()
         observation = self._observation(position, (position - self._previous) / task.dt)
         self._previous = position
-        truncated = not unstable and self._k >= task.n_steps
-        return observation, float(sum(terms.values())), unstable, truncated, info
+        terminated = unstable or penetrated
+        truncated = not terminated and self._k >= count
+        self._done = terminated or truncated
+        return observation, float(sum(terms.values())), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
-        """As the episodic env's ``render`` (the current state)."""
+        """As the episodic env's ``render`` (the current state, with the dirt left so far)."""
         return self.task.render()
 
     def close(self) -> None:
         self.task.close()
 
     # ------------------------------------------------------------------ internals
-    def _solve(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Joint positions [10] and the joint motion per metre along the normal [10] for a sponge target [3]."""
-        scene = self.task.scene
+    def _check_action(self, action: Any) -> np.ndarray:
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"action: expected a numeric array of shape (3,), got {type(action).__name__}") from error
+        if a.shape != (3,):
+            raise ValueError(f"action: expected shape (3,), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("action: contains NaN or infinite values")
+        return np.clip(a, -1.0, 1.0)
+
+    @staticmethod
+    def _clip(target: np.ndarray) -> np.ndarray:
+        return np.clip(target, WORKSPACE_LOW, WORKSPACE_HIGH)
+
+    def _solve(self, target: np.ndarray, q_init: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joint positions [10] and joint motion per metre along the normal [10] for a sponge target [3]
+        (nominal table frame), as the episodic env's IK (control frame, orientation weight) from ``q_init``."""
         weight = np.clip(1.0 - (target[2] - self.task.adaptation_settings.engage_height) / 0.05, 0.2, 1.0)
-        solution = self.task.ik.solve(scene.to_world(target[None], actual=False), scene.nominal_normal,
-                                      rot_weight=np.array([weight]), q_init=self._q, stride=1,
-                                      coarse_iterations=self.ik_iterations, fine_iterations=0,
+        solution = self.task.ik.solve(self.task.scene.to_world(target[None]), self._normal,
+                                      rot_weight=np.array([weight]), q_init=q_init, stride=1,
+                                      coarse_iterations=self.ik_iterations, fine_iterations=1,
                                       min_iterations=self.ik_iterations)
         return solution.q[0], solution.normal_dq[0]
+
+    def _simulate(self, k: int, depth: float) -> bool:
+        """Run the physics of control step ``k`` and record it (as ``simulate_wipe``); True if it diverged."""
+        task, scene = self.task, self.task.scene
+        m, d, rec = scene.model, scene.data, self._rec
+        a = scene.sponge_contact_adr
+        before = d.time
+        if self._first_contact >= 0 and k < self._first_contact + self._fine_window:
+            top = 0.0
+            for _ in range(task.frame_skip):
+                mujoco.mj_step(m, d)
+                top = max(top, abs(float(d.sensordata[a + 1:a + 4] @ self._table_normal)))
+            rec["peak"][k] = top
+        else:
+            mujoco.mj_step(m, d, task.frame_skip)
+        sensors = d.sensordata
+        if self._first_contact < 0 and sensors[a] > 0:
+            self._first_contact = k
+        ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
+        self._measured = self._bias - float(self._normal @ (ft_rot @ sensors[scene.force_adr]))
+        force = abs(float(np.nan_to_num(sensors[a + 1:a + 4]) @ self._table_normal))
+        rec["contact_force"][k] = force
+        rec["wrist_force"][k] = self._measured
+        rec["depth"][k] = depth
+        rec["arm_contact"][k] = sensors[scene.robot_contact_adr] - sensors[a] > 0.5
+        for adr in scene.self_contact_adr:
+            if sensors[adr] > 0:
+                rec["self_contact"][k] = True
+                self._penetration = max(self._penetration, -float(sensors[adr + 1]))
+        if rec["arm_contact"][k]:
+            self._penetration = max(self._penetration, arm_table_penetration(scene))
+        rec["obstacle_contact"][k] = sensors[scene.obstacle_contact_adr] > 0
+        if scene.obstacle_xy is not None:
+            shift = d.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3] - self._obstacle_start
+            rec["obstacle_shift"][k] = float(np.linalg.norm(shift))
+        joints = d.qpos[scene.qpos_adr]
+        rec["at_limit"][k] = bool(np.any((joints < scene.joint_lower + task.limit_margin)
+                                         | (joints > scene.joint_upper - task.limit_margin)))
+        self._sponge_pos[k] = d.site_xpos[scene.sponge_site]
+        box_pos, box_rot = d.geom_xpos[scene.sponge_geom].copy(), d.geom_xmat[scene.sponge_geom].copy()
+        self._box_pos[k] = box_pos
+        unstable = (d.time <= before or self._measured != self._measured or abs(self._measured) > _MAX_FORCE
+                    or force > _MAX_FORCE)
+        if not unstable:                                   # Preston wear of this step (DirtField, as the episode)
+            step = box_pos - self._box_pos[max(0, k - 1)]
+            slide = float(np.linalg.norm(step - (step @ self._table_normal) * self._table_normal))
+            done = np.minimum(self._wear, 1.0).sum()
+            self._wear += self._dirt.wear(np.array([force]), np.array([slide]), box_pos[None], box_rot[None],
+                                          scene.sponge_half)[0]
+            rec["removed"][k] = (np.minimum(self._wear, 1.0).sum() - done) / max(1, self._wear.size)
+        else:
+            rec["contact_force"][k] = 0.0 if not np.isfinite(force) else min(force, _MAX_FORCE)
+        task._dirt = 1.0 - np.minimum(self._wear, 1.0)     # what render() shows
+        return bool(unstable)
+
+    def _trace(self, steps: int, unstable: bool) -> tuple[WipeTrace, Smoothness]:
+        """The episode so far as the episodic env's trace and smoothness (the first ``steps`` control steps)."""
+        rec, task = self._rec, self.task
+        impact_step, impact_force = -1, 0.0
+        if self._first_contact >= 0:
+            peak = np.maximum(rec["peak"], rec["contact_force"])
+            window = slice(self._first_contact, min(steps, self._first_contact + self._fine_window))
+            impact_step = self._first_contact + int(np.argmax(peak[window]))
+            impact_force = float(peak[impact_step])
+        trace = WipeTrace(rec["contact_force"], rec["wrist_force"], rec["depth"], rec["removed"],
+                          1.0 - np.minimum(self._wear, 1.0), rec["arm_contact"], rec["self_contact"],
+                          rec["obstacle_contact"], rec["obstacle_shift"], rec["at_limit"], self._sponge_pos,
+                          self._penetration, impact_force, impact_step, None, steps, unstable)
+        partial = task._smoothness(self._path[:steps], self._q[:steps])
+        pad = task.n_steps - steps
+        smooth = Smoothness(np.pad(partial.jerk_sq, (0, pad)), partial.jerk_ratio,
+                            np.pad(partial.joint_accel, (0, pad)))
+        return trace, smooth
+
+    def _reward(self, k: int, unstable: bool, penetrated: bool) -> tuple[dict[str, float], dict[str, Any]]:
+        """This step's growth of the episodic reward terms, and the info dict."""
+        task = self.task
+        traces: dict[str, np.ndarray] = {}
+        trace, smooth = self._trace(k + 1, unstable)
+        last = unstable or penetrated or k + 1 >= task.n_steps
+        if penetrated:
+            total, cost = invalid_reward(self._penetration / 0.05, task.n_steps, task.reward_weights, traces)
+        else:
+            total, cost = wipe_reward(trace, task.periodic, smooth, task.reward_settings, task.reward_weights, traces)
+        terms = {name: total[name] - self._terms[name] for name in TERMS}
+        self._terms = total
+        contact = self._rec["contact_force"][k]
+        info: dict[str, Any] = {"reward_terms": terms, "coverage": trace.coverage, "contact_force": float(contact),
+                                "wrist_force": self._measured, "unstable": unstable}
+        if last:
+            stats = task._statistics(trace, smooth)
+            valid = not penetrated
+            info.update(stats)
+            info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
+                         "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
+                         "is_success": valid and not unstable and episode_success(stats)})
+        return terms, info
 
     def _sponge_position(self) -> np.ndarray:
         scene = self.task.scene
         origin, rot = scene.table_frame(actual=False)
         return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
 
-    def _reward(self, unstable: bool) -> tuple[dict[str, float], dict[str, Any]]:
-        """This step's share of the episodic reward terms, and the info dict."""
-        task, scene, data = self.task, self.task.scene, self.task.scene.data
-        settings, weights = task.reward_settings, task.reward_weights
-        rows = data.sensordata[scene.sponge_contact_adr:scene.sponge_contact_adr + 4]
-        force = abs(float(rows[1:] @ self._table_normal))
-        low, high = task.force_band
-        new = 0
-        if low <= force <= high:
-            pos = data.geom_xpos[scene.sponge_geom][None]
-            rot = data.geom_xmat[scene.sponge_geom][None]
-            under = cells_under_sponge(self._cells, pos, rot, scene.sponge_half, 0.003)[0] & ~self._wiped
-            new = int(under.sum())
-            self._wiped |= under
-        arm = float(data.sensordata[scene.robot_contact_adr]) - float(rows[0]) > 0.5
-        joints = scene.arm_qpos()
-        at_limit = bool(np.any((joints < scene.joint_lower + task.limit_margin)
-                               | (joints > scene.joint_upper - task.limit_margin)))
-        periodic = bool(task.periodic[min(self._k, task.n_steps - 1)])
-        count, n_per = task.n_steps, self._n_periodic
-        score = np.exp(-0.5 * ((force - settings.target_force) / settings.force_sigma) ** 2)
-        excess = min(1.0, max(0.0, force - settings.max_force) / settings.max_force)
-        terms = {
-            "coverage": weights.coverage * new / max(1, len(self._cells)),
-            "force": float(weights.force * score / n_per) if periodic else 0.0,
-            "excess_force": -weights.excess_force * excess / count,
-            "contact_loss": -weights.contact_loss / n_per if periodic and force < settings.contact_threshold else 0.0,
-            "joint_limit": -weights.joint_limit * at_limit / count,
-            "arm_collision": -weights.arm_collision * arm / count,
-            "unstable": -weights.unstable if unstable else 0.0,
-        }
-        info = {"reward_terms": terms, "coverage": float(np.mean(self._wiped)) if self._wiped.size else 0.0,
-                "contact_force": force, "wrist_force": self._measured, "unstable": unstable}
-        return terms, info
-
     def _observation(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+        scene = self.task.scene
         k = min(self._k, self.task.n_steps - 1)
         phase, radius = float(self._phase[k]), float(self._radius[k])
+        face = -scene.data.geom_xmat[scene.sponge_geom].reshape(3, 3)[:, 0] @ scene.table_frame(actual=False)[1]
         force = self._measured / self.task.reward_settings.target_force
-        parts = [np.cos(phase), np.sin(phase), radius, *position, *velocity, force, *self._context_obs]
+        parts = [np.cos(phase), np.sin(phase), radius, *position, *face, *velocity, force, *self._context_obs]
         return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)

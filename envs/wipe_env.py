@@ -53,7 +53,7 @@ from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, Wip
 from .viewer import HumanViewer
 from .wiping import DirtField, WipeTrace, simulate_wipe
 
-__all__ = ["ArmarWipeEnv", "deprecated_v0"]
+__all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success"]
 
 logger = logging.getLogger(__name__)
 
@@ -64,6 +64,14 @@ WORKSPACE_HIGH = np.array([0.35, 0.40, 0.30])
 SUCCESS_COVERAGE = 0.95
 SUCCESS_FORCE_IN_BAND = 0.9
 SUCCESS_OBSTACLE_SHIFT = 0.005
+
+
+def episode_success(stats: Mapping[str, Any]) -> bool:
+    """Whether an episode's statistics (``ArmarWipeEnv``'s info) meet the ``is_success`` thresholds: coverage,
+    force in band, no arm or self-collision, the cup neither touched nor moved (validity is checked apart)."""
+    return bool(stats["coverage"] >= SUCCESS_COVERAGE and stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
+                and stats["arm_collision_fraction"] == 0.0 and stats["self_collision_fraction"] == 0.0
+                and stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
 
 
 @lru_cache(maxsize=16)
@@ -560,10 +568,7 @@ class ArmarWipeEnv(gym.Env):
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool) -> tuple[float, dict]:
         reward = sum(terms.values())
-        success = (valid and not unstable and info["coverage"] >= SUCCESS_COVERAGE
-                   and info["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
-                   and info["arm_collision_fraction"] == 0.0 and info["self_collision_fraction"] == 0.0
-                   and info["obstacle_touch_steps"] == 0 and info["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
+        success = valid and not unstable and episode_success(info)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
                      "unstable": unstable, "is_success": bool(success), "n_cells": len(self._cells_world)})
         return float(reward), info

@@ -31,7 +31,8 @@ import numpy as np
 from .controller import ForceAdaptation, JointTargetPlan
 from .scene import WipeScene
 
-__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "cells_under_sponge", "contact_summary", "simulate_wipe"]
+__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "arm_table_penetration", "cells_under_sponge",
+           "contact_summary", "simulate_wipe"]
 
 #: Time after the first sponge contact (s) in which the peak normal force is the impact.
 IMPACT_WINDOW = 0.2
@@ -177,7 +178,7 @@ def contact_summary(scene: WipeScene, normal: np.ndarray) -> tuple[float, bool]:
     return total, arm
 
 
-def _arm_table_penetration(scene: WipeScene) -> float:
+def arm_table_penetration(scene: WipeScene) -> float:
     """Deepest penetration (m, >= 0) of a robot geom other than the sponge into the table, now."""
     d = scene.data
     deepest = 0.0
@@ -312,7 +313,7 @@ def simulate_wipe(
         depth_trace[k] = depth
         concatenate(sources, out=record[k])
         if sensordata[robot_adr] - sensordata[a] > 0.5:
-            table_penetration = max(table_penetration, _arm_table_penetration(scene))
+            table_penetration = max(table_penetration, arm_table_penetration(scene))
         now = d.time
         if now <= last_time or measured != measured or abs(measured) > max_force:
             steps = k + 1

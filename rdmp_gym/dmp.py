@@ -99,11 +99,12 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
     """Anchor shift ``[B, T, d]`` whose response is exactly ``e(t) = dy P0(t) + dv P1(t)`` (lengths ``[B]``,
     offsets ``[B, d]``): ``dg = e + de/dt / (beta_z Omega) + d2e/dt2 / (alpha_z beta_z Omega^2)``."""
     beta_z = alpha_z / 4.0
-    gains = np.array([1.0, 1.0 / (beta_z * omega), 1.0 / (alpha_z * beta_z * omega**2)])
     lengths, row_length = np.unique(length, return_inverse=True)          # the profiles once per distinct length
-    profiles = np.stack([gains @ start_blend_profiles(elapsed, float(value)) for value in lengths])
-    profiles = profiles[row_length.ravel()]                                             # [B, 2, T]
-    return profiles[:, 0, :, None] * offset[:, None, :] + profiles[:, 1, :, None] * velocity_offset[:, None, :]
+    with np.errstate(all="ignore"):      # a tempo so small that omega**2 underflows: inf/NaN, refused by _simulate
+        gains = 1.0 / np.array([1.0, beta_z * omega, alpha_z * beta_z * np.float64(omega) ** 2])
+        profiles = np.stack([gains @ start_blend_profiles(elapsed, float(value)) for value in lengths])
+        profiles = profiles[row_length.ravel()]                                         # [B, 2, T]
+        return profiles[:, 0, :, None] * offset[:, None, :] + profiles[:, 1, :, None] * velocity_offset[:, None, :]
 
 
 def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tuple[np.ndarray, np.ndarray]:

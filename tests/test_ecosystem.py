@@ -98,11 +98,11 @@ def test_a_saved_refined_dmp_replays_the_refined_episode_without_refitting(tmp_p
     # the same episode: every reward term agrees except smoothness, whose reference (the env's DMP at
     # a = 0, ArmarWipe-v1) is now the refined DMP itself
     terms, replayed_terms = info["reward_terms"], replay_info["reward_terms"]
-    assert replayed_terms["smoothness"] == 0.0 and terms["smoothness"] < 0.0
+    assert abs(replayed_terms["smoothness"]) < 1e-9 and terms["smoothness"] < 0.0
     for term in terms:
         if term != "smoothness":
             assert replayed_terms[term] == pytest.approx(terms[term], abs=1e-9), term
-    assert replayed == pytest.approx(reward - terms["smoothness"], abs=1e-9)
+    assert replayed == pytest.approx(reward - terms["smoothness"], abs=1e-8)
     with pytest.raises(FileNotFoundError, match="dmp"):
         gym.make(ENV_ID, dmp=str(tmp_path / "missing.json"))
 
