@@ -54,8 +54,10 @@ def test_passes_the_gymnasium_and_sb3_checkers(env):
 def test_given_the_episodic_joint_path_the_return_is_the_episodic_reward_exactly():
     """The per-step simulation, Preston wear, impact and reward growth reproduce ``simulate_wipe`` +
     ``wipe_reward``: only the IK differs between the two envs, so with the path IK's joints injected the
-    return, every term and the force trace agree to rounding."""
-    seed = 5
+    return, every term and the force trace agree to rounding. (A context whose imitation knocks the cup is
+    no test of this: the free cup's contact amplifies round-off, 1e-15 in the path changes such an
+    episode's reward by 0.016.)"""
+    seed = 0
     episodic, reward, info = _episodic(seed)
     task = episodic.unwrapped
     solution = task._solve(task.rollout_path(task.action_map.theta0))
