@@ -44,6 +44,7 @@ from .approach import approach_direction, lift_profile
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .ik import IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
@@ -119,6 +120,9 @@ class ArmarWipeEnv(gym.Env):
         reward_weights: ``{term: weight}`` overrides (see :mod:`rdmp_gym.envs.reward`).
         adaptation: adapt the pressing depth from the wrist force (``False``: feed-forward preload only).
         admittance_gain: depth rate per newton of force error (m/(N s)).
+        force_learning: also learn the pressing depth as a periodic function of the DMP's phase and feed it
+            forward on the next periods (Gams et al. 2010; :mod:`rdmp_gym.envs.force_learning`); ``True`` or a
+            ``ForceProfileSettings``.
         context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.context`).
         obstacle: contexts may put a cup in the approach corridor (``False``: never).
         obstacle_probability: share of drawn contexts with a cup (where one fits).
@@ -160,6 +164,7 @@ class ArmarWipeEnv(gym.Env):
         reward_weights: Mapping[str, float] | None = None,
         adaptation: bool = True,
         admittance_gain: float = 0.02,
+        force_learning: bool | ForceProfileSettings = False,
         context_ranges: Mapping[str, tuple] | None = None,
         obstacle: bool = True,
         obstacle_probability: float = 0.75,
@@ -251,6 +256,11 @@ class ArmarWipeEnv(gym.Env):
         self.force_band = band
         self.adaptation_settings = ForceAdaptationSettings(target_force=target_force, enabled=bool(adaptation),
                                                            gain=float(admittance_gain))
+        if not isinstance(force_learning, (bool, ForceProfileSettings)):
+            raise ValueError("force_learning: expected a bool or a ForceProfileSettings, "
+                             f"got {type(force_learning).__name__}")
+        self.force_learning = (ForceProfileSettings() if force_learning is True
+                               else force_learning or None)
         self.reward_settings = RewardSettings(target_force=target_force,
                                               force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1])
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
@@ -488,7 +498,9 @@ class ArmarWipeEnv(gym.Env):
         normal = self.scene.control_frame()[1][:, 2]
         plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper, normal)
         self.scene.set_arm_state(solution.q[0])
-        adaptation = ForceAdaptation(self.adaptation_settings, self.dt)
+        adaptation = (ForceAdaptation(self.adaptation_settings, self.dt) if self.force_learning is None
+                      else ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period,
+                                                self.dmp.transients[0].phi0, self.force_learning))
         dirt = DirtField(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
                          contact_threshold=self.reward_settings.contact_threshold)
         callback = self._capture if self.record_frames or self._viewer is not None else None

@@ -272,6 +272,7 @@ def simulate_wipe(
     gain, target, max_rate = law.gain, law.target_force, law.max_rate
     min_offset, max_offset = law.min_offset, law.max_offset
     filtered, offset = adaptation.force, adaptation.offset
+    learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (issue 13's force_learning)
     step = mujoco.mj_step
     measured = 0.0
     steps = count
@@ -288,6 +289,8 @@ def simulate_wipe(
             rate = min(max_rate, max(-max_rate, rate))
             offset = min(max_offset, max(min_offset, offset + rate * dt))
         depth = preload + offset
+        if learn is not None:
+            depth += learn(filtered, engage[k])
         if ctrl is None:
             d.ctrl[ctrl_index] = q_rows[k] - depth * ndq_rows[k]
         else:

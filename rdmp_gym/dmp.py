@@ -10,7 +10,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .basis import NORMALISATION_EPSILON, SMOOTH_FLOOR, BasisSet, Fading, periodic_width, transient_basis_along_path
+from .basis import (
+    NORMALISATION_EPSILON,
+    SMOOTH_FLOOR,
+    BasisSet,
+    Fading,
+    normalize,
+    periodic_width,
+    transient_basis_along_path,
+)
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
@@ -24,6 +32,7 @@ from .fitting import (
 )
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
+from .stopping import Ending, StopPlan, plan_stop
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
 
@@ -188,11 +197,12 @@ class RhythmicDMP:
         alpha_z: damping gain of the transformation system (``beta_z = alpha_z / 4``).
         amplitude: ``[d]`` factors that scale the movement about the anchor (forcing term and default
             start); ones by default. A learnable parameter group, like the weights.
+        ending: the encoded end of the movement (:mod:`rdmp_gym.stopping`), or ``None``.
     """
 
     def __init__(self, canonical: CanonicalSystem, basis: BasisSet, weights: np.ndarray,
                  transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0,
-                 amplitude: np.ndarray | None = None) -> None:
+                 amplitude: np.ndarray | None = None, ending: Ending | None = None) -> None:
         self.canonical = canonical
         self.basis = basis
         self.weights = np.ascontiguousarray(as_finite_array(weights, "weights", ndim=2))
@@ -207,7 +217,11 @@ class RhythmicDMP:
             raise ValueError(f"weights: expected shape {(self.anchor.size, basis.n_basis)}, got {self.weights.shape}")
         if len(self.transients) != len(basis.transient_sizes):
             raise ValueError(f"transients: expected {len(basis.transient_sizes)}, got {len(self.transients)}")
-        self.layout = ParameterLayout(self.n_dims, basis.n_periodic, basis.transient_sizes)
+        if ending is not None and (not isinstance(ending, Ending) or ending.goal.size != self.anchor.size):
+            raise ValueError(f"ending: expected an Ending with a goal of {self.anchor.size} values")
+        self.ending = ending
+        self.layout = ParameterLayout(self.n_dims, basis.n_periodic, basis.transient_sizes,
+                                      0 if ending is None else ending.weights.size)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -397,6 +411,22 @@ class RhythmicDMP:
         forcing *= amplitudes[:, None, :]
         return forcing if transform is None else forcing @ transform.T
 
+    def _stop_forcing(self, canonical: CanonicalSystem, times: np.ndarray, weights: np.ndarray, inits: np.ndarray,
+                      amplitudes: np.ndarray, transform: np.ndarray | None, stop: StopPlan,
+                      stop_weights: np.ndarray) -> np.ndarray:
+        """Forcing term ``[B, T, d]`` like :meth:`_forcing`, with the stop family after ``stop.exit_time``
+        (``stop_weights [B, d, S]``); one mixture per distinct initial condition."""
+        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
+        phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])              # [U, T] each
+        tau = (times - stop.exit_time) * canonical.tempo
+        forcing = np.empty((weights.shape[0], times.size, self.n_dims))
+        for index, (phi, r) in enumerate(zip(phis, radii, strict=True)):
+            members = np.flatnonzero(inverse.ravel() == index)
+            forcing[members] = self.ending.forcing(self.basis, phi, r, tau, stop.rotation, weights[members],
+                                                   stop_weights[members])
+        forcing *= amplitudes[:, None, :]
+        return forcing if transform is None else forcing @ transform.T
+
     def _settled(self, canonical: CanonicalSystem, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """``(y, yd)`` ``[B, d]`` that the forcing term leads to at t = 0 (see :func:`settled_state`)."""
@@ -418,24 +448,33 @@ class RhythmicDMP:
 
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                   amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
-                  transform: np.ndarray | None, blend_length: np.ndarray | None = None
+                  transform: np.ndarray | None, blend_length: np.ndarray | None = None,
+                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
         anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. The forcing term is
         multiplied by ``M diag(amplitude)``. With ``blend_length [B]`` (s) the start is blended
         (``start_blend``): the result is the settled motion plus a quintic offset ``e(t)`` that starts at
-        ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length`` on."""
+        ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length`` on. A ``stop`` (with
+        ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
         canonical = replace(self.canonical, tempo=tempo)
-        forcing = self._forcing(canonical, elapsed, weights, inits, amplitudes, transform)
+        if stop is None:
+            forcing = self._forcing(canonical, elapsed, weights, inits, amplitudes, transform)
+        else:
+            forcing = self._stop_forcing(canonical, elapsed, weights, inits, amplitudes, transform, stop,
+                                         stop_weights)
         omega = canonical.omega * tempo
         path = anchors
         if blend_length is not None:
             y_settled, yd_settled = self._settled(canonical, weights, inits, anchors, amplitudes, transform)
             path = anchors[:, None, :] + _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled,
                                                       omega, self.alpha_z)
+        if stop is not None:        # the anchor blends to the goal (after the start blend has ended)
+            blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[None, :, None]
+            path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
         system = _transformation(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
             y, z = system.rollout(system.input(path, forcing), y0, yd0 / omega)
@@ -480,7 +519,8 @@ class RhythmicDMP:
     def rollout(self, t: np.ndarray, transient: int | str = 0, y0: np.ndarray | None = None,
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
                 scale: float | np.ndarray = 1.0, rotation: float | np.ndarray | None = None,
-                tempo: float | None = None, start_blend: bool = True, return_velocity: bool = False
+                tempo: float | None = None, start_blend: bool = True, return_velocity: bool = False,
+                stop_at: float | None = None, exit_phase: float | None = None, goal: np.ndarray | None = None
                 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Reproduce the movement: transient ``transient`` from its own initial condition, then the cycle.
 
@@ -503,6 +543,12 @@ class RhythmicDMP:
                 paper's behaviour, the spring closes any gap within about ``8 / (alpha_z Omega)`` seconds.
                 The periodic part is the same either way.
             return_velocity: also return velocities.
+            stop_at: end the movement: a stop requested at this time (s after ``t[0]``) leaves the cycle at the
+                next demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at the goal (needs a DMP
+                fitted with :func:`rdmp_gym.stopping.fit_ending`); a request during the start transient is served
+                once the transient has reached the cycle.
+            goal: ``[d]`` rest position of the stop (default: the demonstrated one, moved and transformed with
+                the anchor like the periodic part).
         Returns:
             positions ``[T, d]`` (and velocities ``[T, d]``).
         """
@@ -514,22 +560,54 @@ class RhythmicDMP:
         y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes, transform)
         start = self.transients[int(k[0])]
         inits = np.array([[start.phi0, start.r0]])
+        stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
-                               self._blend_lengths(k, tempo, start_blend))
+                               self._blend_lengths(k, tempo, start_blend), stop,
+                               None if stop is None else self.ending.weights[None])
         return (y[0], yd[0]) if return_velocity else y[0]
+
+    def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, start: TransientStart,
+                   tempo: float, anchors: np.ndarray, amplitudes: np.ndarray, transform: np.ndarray | None = None
+                   ) -> StopPlan | None:
+        """The stop requested by ``stop_at`` (``None``: no stop); default goals ``[B, d]`` move with the anchors.
+        A request during the start transient of ``start`` is served once the transient has reached the cycle."""
+        if stop_at is None:
+            if exit_phase is not None or goal is not None:
+                raise ValueError("stop_at: exit_phase and goal need a stop time")
+            return None
+        if self.ending is None:
+            raise ValueError("stop_at: this DMP encodes no end of the movement; fit it with "
+                             "rdmp_gym.stopping.fit_ending")
+        relative = amplitudes * (self.ending.goal - self.anchor)
+        if transform is not None:
+            relative = relative @ transform.T
+        goals = self._vector(goal, anchors + relative, "goal", anchors.shape[0])
+        stop_at = float(as_finite_array(stop_at, "stop_at", ndim=0))
+        if stop_at < 0.0:
+            raise ValueError(f"stop_at: expected a time >= 0, got {stop_at!r}")
+        return plan_stop(self.ending, max(stop_at, start.length / tempo), start.phi0, self.canonical.omega * tempo,
+                         goals, exit_phase)
+
+    def with_ending(self, ending: Ending | None) -> RhythmicDMP:
+        """A copy of this DMP with another end of the movement (``None`` removes it)."""
+        return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
+                           self.amplitude, ending)
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
                       transient: int | str = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
                       anchor: np.ndarray | None = None, tempo: float | None = None,
-                      start_blend: bool = True) -> np.ndarray:
+                      start_blend: bool = True, stop_at: float | None = None,
+                      exit_phase: float | None = None, goal: np.ndarray | None = None) -> np.ndarray:
         """Roll out B parameter vectors at once (the selected ``groups`` of each; the rest as fitted).
 
         Args:
             thetas: ``[B, P]`` parameter vectors, P = ``self.layout.size(groups)``.
             t: ``[T]`` evenly spaced times.
             groups: which parameter groups ``thetas`` holds (see :mod:`rdmp_gym.parameters`).
-            transient, y0, yd0, anchor, tempo, start_blend: as in :meth:`rollout`; y0/yd0/anchor may be ``[B, d]``
-                (under ``transient="nearest"`` each row picks its own transient).
+            transient, y0, yd0, anchor, tempo, start_blend, stop_at, exit_phase, goal: as in :meth:`rollout`;
+                y0/yd0/anchor/goal may be ``[B, d]`` (under ``transient="nearest"`` each row picks its own
+                transient). The stop is requested at the same time for all B; each row exits at the exit phase
+                that follows its transient's fitted phase (their phases differ only where ``initial`` is selected).
         Returns:
             ``[B, T, d]`` positions.
         """
@@ -537,7 +615,7 @@ class RhythmicDMP:
         if thetas.shape[0] == 0:
             raise ValueError("thetas: expected at least one parameter vector (B >= 1), got shape "
                              f"{thetas.shape}")
-        weights, inits, anchors, amplitudes = self._decode(thetas, groups)
+        weights, inits, anchors, amplitudes, stop_weights = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:
             if "anchor" in self.layout.resolve(groups):
@@ -546,8 +624,21 @@ class RhythmicDMP:
         tempo = self._tempo(tempo)
         k = self._transients(transient, y0, batch, amplitudes)
         y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes)
-        return self._simulate(t, weights, inits[np.arange(batch), k], anchors, amplitudes, y0, yd0, tempo, None,
-                              self._blend_lengths(k, tempo, start_blend))[0]
+        inits = inits[np.arange(batch), k]
+        if stop_at is None:
+            self._stop_plan(None, exit_phase, goal, self.transients[0], tempo, anchors, amplitudes)
+            return self._simulate(t, weights, inits, anchors, amplitudes, y0, yd0, tempo, None,
+                                  self._blend_lengths(k, tempo, start_blend))[0]
+        result = np.empty((batch, check_time_grid(t, "t").size, self.n_dims))
+        for index in np.unique(k):      # the exit time follows each transient's own phase
+            rows = np.flatnonzero(k == index)
+            stop = self._stop_plan(stop_at, exit_phase, None if goal is None else self._vector(
+                goal, self.anchor, "goal", batch)[rows], self.transients[index], tempo, anchors[rows],
+                amplitudes[rows])
+            result[rows] = self._simulate(t, weights[rows], inits[rows], anchors[rows], amplitudes[rows], y0[rows],
+                                          yd0[rows], tempo, None, self._blend_lengths(k[rows], tempo, start_blend),
+                                          stop, stop_weights[rows])[0]
+        return result
 
     def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,
               yd0: np.ndarray | None = None, anchor: np.ndarray | None = None,
@@ -592,6 +683,8 @@ class RhythmicDMP:
                 parts.append(np.array([start.phi0, start.r0]))
             elif name == "anchor":
                 parts.append(self.anchor.copy())
+            elif name == "stop":
+                parts.append(self.ending.weights.ravel())
             else:
                 parts.append(self.amplitude.copy())
         return np.concatenate(parts)
@@ -601,9 +694,9 @@ class RhythmicDMP:
         return slice(offset, offset + self.basis.transient_sizes[k])
 
     def _decode(self, thetas: np.ndarray, groups: GroupSelection
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors and
-        amplitudes ``[B, d]``."""
+        amplitudes ``[B, d]``, stop weights ``[B, d, S]`` (``None`` without an ending)."""
         slices = self.layout.slices(groups)
         expected = self.layout.size(groups)
         if thetas.shape[-1] != expected:
@@ -614,6 +707,7 @@ class RhythmicDMP:
         inits = np.repeat(np.array([[[s.phi0, s.r0] for s in self.transients]]), batch, axis=0)
         anchors = np.repeat(self.anchor[None], batch, axis=0)
         amplitudes = np.repeat(self.amplitude[None], batch, axis=0)
+        stop_weights = None if self.ending is None else np.repeat(self.ending.weights[None], batch, axis=0)
         for name, part in slices.items():
             values = thetas[:, part]
             if name == "periodic":
@@ -626,39 +720,53 @@ class RhythmicDMP:
                 inits[:, int(name[8:])] = values
             elif name == "anchor":
                 anchors = values.copy()
+            elif name == "stop":
+                stop_weights = values.reshape(batch, self.n_dims, -1)
             else:
                 amplitudes = values.copy()
-        return weights, inits, anchors, amplitudes
+        return weights, inits, anchors, amplitudes, stop_weights
 
     def with_params(self, theta: np.ndarray, groups: GroupSelection = None) -> RhythmicDMP:
         """A new DMP whose selected groups are replaced by ``theta [P]``."""
         theta = as_finite_array(theta, "theta", ndim=1)
-        weights, inits, anchors, amplitudes = self._decode(theta[None], groups)
+        weights, inits, anchors, amplitudes, stop_weights = self._decode(theta[None], groups)
         transients = [replace(start, phi0=float(phi0), r0=float(r0))
                       for start, (phi0, r0) in zip(self.transients, inits[0], strict=True)]
+        ending = None if self.ending is None else self.ending.with_weights(stop_weights[0])
         return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z,
-                           amplitudes[0])
+                           amplitudes[0], ending)
 
-    def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0
-                           ) -> np.ndarray:
+    def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0,
+                           stop_at: float | None = None) -> np.ndarray:
         """How active each parameter is at each time, ``[T, P]`` in [0, 1] (PI²'s time weighting).
 
         A weight's entry is its basis function's normalised activation along the path of transient
-        ``transient``; the initial condition of that transient, the anchor and the amplitude act throughout (1);
-        another transient's initial condition does not act (0).
+        ``transient`` (with the stop requested at ``stop_at``, if given); the initial condition of that transient,
+        the anchor and the amplitude act throughout (1); another transient's initial condition does not act (0),
+        nor do the stop weights without a stop.
         """
         k = self._check_transient(transient)
         start = self.transients[k]
-        phi, r = self.canonical.state(as_finite_array(t, "t", ndim=1) - np.min(t), start.phi0, start.r0)
-        activation = self.basis.normalized(phi, r)                                   # [T, D]
+        elapsed = as_finite_array(t, "t", ndim=1) - np.min(t)
+        phi, r = self.canonical.state(elapsed, start.phi0, start.r0)
+        stop = self._stop_plan(stop_at, None, None, start, self.canonical.tempo, self.anchor[None],
+                               self.amplitude[None])
+        if stop is None:
+            activation = self.basis.normalized(phi, r)                               # [T, D]
+        else:
+            activation = normalize(self.ending.mixture(self.basis, phi, r, (elapsed - stop.exit_time)
+                                                       * self.canonical.tempo, stop.rotation),
+                                   self.basis.fading.floor)                                      # [T, D + S]
         columns = []
         for name in self.layout.resolve(groups):
             if name == "periodic":
                 block = activation[:, : self.basis.n_periodic]
             elif name.startswith("transient:"):
                 block = activation[:, self._transient_columns(int(name[10:]))]
+            elif name == "stop" and stop is not None:
+                block = activation[:, self.basis.n_basis:]
             else:
-                acts = not name.startswith("initial:") or int(name[8:]) == k
+                acts = name != "stop" and (not name.startswith("initial:") or int(name[8:]) == k)
                 columns.append(np.full((phi.size, self.layout.sizes[name]), float(acts)))
                 continue
             columns.append(np.tile(block, (1, self.n_dims)))
@@ -707,6 +815,7 @@ class DMPStepper:
         self.steps = 0
         self.y, self.z = y0, yd0 / self.omega
         self._block_index, self._block = -1, np.empty((0, dmp.n_dims))
+        self.stop: StopPlan | None = None
 
     @property
     def time(self) -> float:
@@ -724,8 +833,14 @@ class DMPStepper:
             if self.start_offsets is not None:
                 anchor = anchor + _blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
                                                self.start_offsets[1][None], self.omega, self.dmp.alpha_z)[0]
-            self._block = (self.dmp.alpha_z * self.system.beta_z * anchor
-                           + self.dmp.amplitude * self.dmp.basis.forcing(phi, r, self.dmp.weights))
+            if self.stop is None:
+                forcing = self.dmp.basis.forcing(phi, r, self.dmp.weights)
+            else:
+                tau = (times - self.stop.exit_time) * self.canonical.tempo
+                forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, self.dmp.weights,
+                                                  self.dmp.ending.weights)
+                anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - self.anchor)
+            self._block = self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing
             self._block_index = index
         return self._block[offset]
 
@@ -734,8 +849,26 @@ class DMPStepper:
         """Current ``(y [d], yd [d])`` (copies)."""
         return self.y.copy(), self.z * self.omega
 
-    def step(self, coupling: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Advance by ``dt``; returns the new ``(y [d], yd [d])``."""
+    def request_stop(self, exit_phase: float | None = None, goal: np.ndarray | None = None) -> float:
+        """End the movement: leave the cycle at the next demonstrated exit phase (or ``exit_phase``, rad) from
+        now on and come to rest at ``goal [d]`` (default: the demonstrated goal, moved with the anchor).
+        Returns the exit time (s since the start). Needs a DMP fitted with :func:`rdmp_gym.stopping.fit_ending`."""
+        if self.stop is not None:
+            raise ValueError("request_stop: a stop has already been requested")
+        start = self.dmp.transients[self.transient]
+        self.stop = self.dmp._stop_plan(self.time, exit_phase, goal, start, self.canonical.tempo,
+                                        self.anchor[None], self.dmp.amplitude[None])
+        self._block_index = -1      # the open-loop input from now on includes the stop
+        return self.stop.exit_time
+
+    def step(self, coupling: np.ndarray | object | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Advance by ``dt``; returns the new ``(y [d], yd [d])``.
+
+        ``coupling``: ``c [d]`` in the units of the forcing term, or an object with a method
+        ``acceleration(y, yd) -> [d]`` (m/s^2, e.g. :class:`rdmp_gym.coupling.ObstacleAvoidance`), applied as
+        ``c = acceleration / Omega^2`` at the current state."""
+        if hasattr(coupling, "acceleration"):
+            coupling = coupling.acceleration(*self.state) / self.omega**2
         c = np.zeros(self.dmp.n_dims) if coupling is None else as_finite_array(coupling, "coupling", ndim=1)
         if c.size != self.dmp.n_dims:
             raise ValueError(f"coupling: expected {self.dmp.n_dims} values, got {c.size}")

@@ -23,8 +23,10 @@ from .plots import (
     plot_reproductions,
 )
 from .smoothness import finite_derivatives
+from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["write_paper_figures"]
+__all__ = ["BEYOND_PAPER_FIGURES", "write_force_figure", "write_paper_figures", "write_rhythm_figure",
+           "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -99,6 +101,133 @@ def write_paper_figures(out_dir: str | Path, seed: int = 0) -> list[Path]:
     return written
 
 
+def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
+    """``beyond_stop.png``: start, wiping and stop from one DMP (issue 13), with its canonical path."""
+    demo = ending_demonstration(1, rng=seed)
+    dmp = fit_ending(demo)
+    t = np.arange(0.0, demo.t[-1] + 1.0, 1e-3)
+    request = 5.5
+    stopped = dmp.rollout(t, stop_at=request)
+    free = dmp.rollout(t)
+    start = dmp.transients[0]
+    plan = plan_stop(dmp.ending, request, start.phi0, dmp.canonical.omega, dmp.ending.goal[None])
+    fig = plt.figure(figsize=(13, 7))
+    grid = fig.add_gridspec(3, 3)
+    for dim, label in enumerate("xyz"):
+        ax = fig.add_subplot(grid[dim, :2])
+        ax.plot(demo.t, demo.Y[:, dim], ".", color="0.6", ms=2, label="demonstration")
+        ax.plot(t, free[:, dim], "--", color="tab:blue", lw=1, label="DMP, no stop")
+        ax.plot(t, stopped[:, dim], color="tab:red", lw=1.5, label="DMP, stop requested")
+        ax.axvline(request, color="k", lw=0.8, ls=":")
+        ax.axvline(plan.exit_time, color="k", lw=0.8)
+        ax.set_ylabel(f"{label} [m]")
+        if dim == 0:
+            ax.legend(fontsize=8, loc="upper left", ncol=3)
+            ax.set_title("start, wiping and stop from one DMP (dotted: request, solid: exit at the demonstrated phase)")
+    ax.set_xlabel("t [s]")
+    plane = fig.add_subplot(grid[:2, 2])
+    phi, r = dmp.canonical.state(t, start.phi0, start.r0)
+    tau = t - plan.exit_time
+    r_stop = np.where(tau >= 0, r * dmp.ending.radius_factor(tau), r)
+    plane.plot(r_stop * np.cos(phi), r_stop * np.sin(phi), lw=1, color="tab:red")
+    plane.plot(*dmp.ending.centres.T, "k.", ms=4, label="stop centres")
+    plane.plot(*dmp.basis.transient_centres.T, "x", color="0.5", ms=3, label="start centres")
+    plane.set(aspect="equal", xlim=(-2.5, 2.5), ylim=(-2.5, 2.5), title="canonical path: in, around, out")
+    plane.legend(fontsize=7)
+    top = fig.add_subplot(grid[2, 2])
+    top.plot(demo.Y[:, 0], demo.Y[:, 1], ".", color="0.6", ms=2)
+    top.plot(stopped[:, 0], stopped[:, 1], color="tab:red", lw=1)
+    top.plot(*dmp.ending.goal[:2], "k*", ms=8)
+    top.set(aspect="equal", xlabel="x [m]", ylabel="y [m]")
+    fig.tight_layout()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out / "beyond_stop.png")
+
+
+def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
+    """``beyond_rhythm.png``: the DMP's frequency and phase lock onto a partner whose frequency steps by +-30 %."""
+    from .frequency import follow_rhythm
+
+    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=seed))
+    dt, step = 2e-3, 10.0
+    t = np.arange(round(30.0 / dt)) * dt
+    fig, axes = plt.subplots(3, 2, figsize=(13, 8))
+    for column, factor in enumerate((1.3, 0.7)):
+        omega = np.where(t < step, dmp.canonical.omega, factor * dmp.canonical.omega)
+        psi = dmp.transients[0].phi0 + np.concatenate([[0.0], np.cumsum(omega[:-1]) * dt])
+        u = (0.05 * np.cos(psi) + 0.01 * np.cos(2.0 * psi + 0.3)
+             + 1e-3 * np.random.default_rng(seed).standard_normal(t.size))
+        out = follow_rhythm(dmp, u, dt)
+        fixed = dmp.transients[0].phi0 + dmp.canonical.omega * t
+        axes[0, column].plot(t, omega, "k", lw=1, label="partner")
+        axes[0, column].plot(t, out["oscillator"], color="0.7", lw=0.6, label="oscillator Omega_A")
+        axes[0, column].plot(t, out["frequency"], "tab:red", lw=1.5, label="DMP (smoothed)")
+        axes[0, column].set(ylabel="frequency [rad/s]", title=f"partner's frequency steps by {factor - 1:+.0%}")
+        axes[1, column].plot(t, np.angle(np.exp(1j * (out["phase"] - psi))), "tab:red", lw=1, label="adaptive")
+        axes[1, column].plot(t, np.angle(np.exp(1j * (fixed - psi))), "tab:blue", lw=1, ls="--", label="fixed")
+        axes[1, column].set(ylabel="phase - partner [rad]", ylim=(-np.pi, np.pi))
+        late = t > 24.0
+        axes[2, column].plot(t[late], u[late], "k", lw=1, label="partner x")
+        axes[2, column].plot(t[late], out["y"][late, 0], "tab:red", lw=1.5, label="DMP x (adaptive)")
+        axes[2, column].plot(t[late], dmp.rollout(t)[late, 0], "tab:blue", lw=1, ls="--", label="DMP x (fixed)")
+        axes[2, column].set(xlabel="t [s]", ylabel="x [m]")
+        for ax in axes[:, column]:
+            ax.axvline(step, color="k", lw=0.6, ls=":")
+            ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    out_path = Path(out_dir)
+    out_path.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out_path / "beyond_rhythm.png")
+
+
+def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
+    """``beyond_force.png``: force-profile learning on a tilted table in the MuJoCo env (needs the ``envs``
+    extra; returns ``None`` without it)."""
+    try:
+        import gymnasium as gym
+
+        from .envs import ENV_ID
+        from .envs.force_learning import period_force_errors
+    except ImportError:
+        logger.info("beyond_force.png skipped: gymnasium and mujoco are not installed")
+        return None
+    tilt = [-0.138, -0.145]
+    fig, (trace, bars) = plt.subplots(1, 2, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1]})
+    errors = {}
+    runs = (("admittance, gain 0.02 (default)", False, 0.02, "tab:gray"), ("admittance, gain 0.004", False, 0.004,
+            "tab:blue"), ("learned profile, gain 0.004", True, 0.004, "tab:red"))
+    for name, flag, gain, color in runs:
+        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
+        env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
+                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
+        info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
+        inner = env.unwrapped
+        window = max(round(0.1 / inner.dt), 1)
+        smooth = np.convolve(info["force_trace"], np.ones(window) / window, mode="same")
+        trace.plot(inner.times, smooth, color=color, lw=1, label=name)
+        errors[name] = period_force_errors(info["force_trace"], inner.dt, inner.dmp.transients[0].length,
+                                           inner.dmp.period, inner.reward_settings.target_force)
+        env.close()
+    trace.axhline(18.0, color="k", lw=0.8, ls="--")
+    trace.set(xlabel="t [s]", ylabel="contact force, 0.1 s mean [N]", ylim=(0, 40),
+              title=f"table tilted by ({tilt[0]}, {tilt[1]}) rad")
+    trace.legend(fontsize=8)
+    width = 0.27
+    for offset, (name, values), run in zip((-width, 0.0, width), errors.items(), runs, strict=True):
+        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name, color=run[3])
+    bars.set(xlabel="period", ylabel="mean |F - 18 N| [N]", title="force error period by period")
+    bars.legend(fontsize=8)
+    fig.tight_layout()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out / "beyond_force.png")
+
+
+BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure, write_force_figure]
+"""Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
+
+
 def main(argv: list[str] | None = None) -> None:
     """Command-line entry: ``python -m rdmp_gym.figures --out DIR``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -108,6 +237,10 @@ def main(argv: list[str] | None = None) -> None:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     for path in write_paper_figures(args.out, args.seed):
         print(path)
+    for write in BEYOND_PAPER_FIGURES:
+        path = write(args.out, args.seed)
+        if path is not None:
+            print(path)
 
 
 if __name__ == "__main__":

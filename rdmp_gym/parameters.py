@@ -2,8 +2,9 @@
 
 Groups, in this order: ``periodic`` (``[d, N]`` weights), ``transient:k`` (``[d, M_k]`` weights of
 transient k), ``initial:k`` (``(phi0, r0)`` of transient k), ``anchor`` (``[d]``) and ``amplitude``
-(``[d]`` factors that scale the movement about the anchor, 1 = as demonstrated). The short names
-``transient`` and ``initial`` select every transient's group.
+(``[d]`` factors that scale the movement about the anchor, 1 = as demonstrated), and, for a DMP that
+encodes the end of the movement, ``stop`` (``[d, S]`` stop weights, :mod:`rdmp_gym.stopping`). The short
+names ``transient`` and ``initial`` select every transient's group.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from collections.abc import Iterable, Sequence
 
 __all__ = ["GROUPS", "ParameterLayout"]
 
-GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude")
+GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude", "stop")
 
 
 class ParameterLayout:
@@ -22,14 +23,17 @@ class ParameterLayout:
         n_dims: degrees of freedom d.
         n_periodic: periodic basis functions N.
         transient_sizes: transient basis functions per transient ``(M_1, ..., M_K)``.
+        stop_size: number of stop weights ``d * S`` (0: no ``stop`` group).
     """
 
-    def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int]) -> None:
+    def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int], stop_size: int = 0) -> None:
         self.sizes: dict[str, int] = {"periodic": n_dims * n_periodic}
         self.sizes.update({f"transient:{k}": n_dims * m for k, m in enumerate(transient_sizes)})
         self.sizes.update({f"initial:{k}": 2 for k in range(len(transient_sizes))})
         self.sizes["anchor"] = n_dims
         self.sizes["amplitude"] = n_dims
+        if stop_size:
+            self.sizes["stop"] = int(stop_size)
         self.n_transients = len(transient_sizes)
 
     def resolve(self, groups: str | Iterable[str] | None) -> list[str]:

@@ -11,6 +11,8 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
   ``transient_widths [M]``, ``transient_sizes [K]``, ``fading {mu1, mu2, k, delta, floor}``
 * ``weights``: ``[d, D]`` (periodic columns first, then each transient's)
 * ``transients``: K objects ``{phi0, r0, length, entrance_phase, start [d], start_velocity [d]}``
+* ``stop`` (optional, absent for a DMP without an end of the movement): ``{exit_phase, length, blend_start,
+  goal [d], centres [S, 2], widths [S], weights [d, S], fading {nu1, nu2, k, delta}}``
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import numpy as np
 from .basis import NORMALISATION_EPSILON, BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
+from .stopping import Ending, StopFading
 
 __all__ = ["FORMAT", "VERSION", "dmp_from_dict", "dmp_to_dict", "load_dmp", "save_dmp"]
 
@@ -35,7 +38,7 @@ VERSION = 1
 def dmp_to_dict(dmp: RhythmicDMP) -> dict:
     """A JSON-ready dictionary of every number that defines ``dmp``."""
     basis = dmp.basis
-    return {
+    data = {
         "format": FORMAT,
         "version": VERSION,
         "canonical": asdict(dmp.canonical),
@@ -55,6 +58,9 @@ def dmp_to_dict(dmp: RhythmicDMP) -> dict:
                         "start": s.start.tolist(), "start_velocity": s.start_velocity.tolist()}
                        for s in dmp.transients],
     }
+    if dmp.ending is not None:
+        data["stop"] = dmp.ending.to_dict()
+    return data
 
 
 class _Reader:
@@ -130,7 +136,7 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
         raise ValueError(f"dmp.version: unsupported format version {data.get('version')!r}; this library reads "
                          f"{VERSION}")
     top.only(("format", "version", "canonical", "transformation", "anchor", "amplitude", "basis", "weights",
-              "transients"))
+              "transients", "stop"))
     canonical = _Reader(top.field("canonical"), "dmp.canonical")
     canonical.only(tuple(f.name for f in fields(CanonicalSystem)))
     defaults = {f.name: f.default for f in fields(CanonicalSystem) if f.name != "period"}
@@ -187,7 +193,35 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
         transients.append(TransientStart(entry.number("phi0"), entry.number("r0", positive=True),
                                          entry.number("length", positive=True), entry.number("entrance_phase"),
                                          entry.array("start", (d,)), entry.array("start_velocity", (d,))))
-    return RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude)
+    ending = _read_stop(top.field("stop"), d) if "stop" in data else None
+    return RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude, ending)
+
+
+def _read_stop(value: object, d: int) -> Ending:
+    """The optional ``stop`` field (:meth:`Ending.to_dict`), every field checked like the rest of the file."""
+    stop = _Reader(value, "dmp.stop")
+    stop.only(("exit_phase", "length", "blend_start", "goal", "centres", "widths", "weights", "fading"))
+    exit_phase, length = stop.number("exit_phase"), stop.number("length", positive=True)
+    blend_start = stop.number("blend_start")
+    if not 0.0 <= blend_start < length:
+        raise ValueError(f"dmp.stop.blend_start: expected a value in [0, length = {length:g}), got {blend_start:g}")
+    goal = stop.array("goal", (d,))
+    centres = stop.array("centres", (None, 2))
+    n_stop = centres.shape[0]
+    if n_stop < 1:
+        raise ValueError("dmp.stop.centres: expected at least one stop basis function")
+    widths = stop.array("widths", (n_stop,), positive=True)
+    weights = stop.array("weights", (d, n_stop))
+    fading = _Reader(stop.field("fading"), "dmp.stop.fading")
+    fading.only(("nu1", "nu2", "k", "delta"))
+    nu1, nu2 = fading.number("nu1", positive=True), fading.number("nu2", positive=True)
+    if nu1 <= nu2:
+        raise ValueError(f"dmp.stop.fading.nu1: must exceed nu2 = {nu2:g}, got {nu1:g}")
+    delta = fading.number("delta", positive=True)
+    if delta >= 1.0:
+        raise ValueError(f"dmp.stop.fading.delta: expected a value in (0, 1), got {delta:g}")
+    return Ending(exit_phase, length, blend_start, goal, centres, widths, weights,
+                  StopFading(nu1, nu2, fading.integer("k", low=1), delta))
 
 
 def save_dmp(dmp: RhythmicDMP, path: str | Path) -> None:

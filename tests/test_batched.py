@@ -27,7 +27,7 @@ def thetas(dmp):
 
 def test_batched_forcing_equals_the_forcing_of_each_path(dmp, thetas):
     groups, batch = thetas
-    weights, inits, _, _ = dmp._decode(batch, groups)
+    weights, inits, *_ = dmp._decode(batch, groups)
     t = np.arange(1000) * 0.01
     phi, r = dmp.canonical.state(t, inits[:, 0, 0], inits[:, 0, 1])
     forcing = batched_forcing(dmp.basis, phi, r, weights)
