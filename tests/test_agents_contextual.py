@@ -9,7 +9,7 @@ import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
 from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
-from rdmp_gym.agents.tracking import TRACKING_ID
+from rdmp_gym.envs.tracking import TRACKING_ID
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
 
 N = 12
