@@ -22,7 +22,7 @@ class TaskSpec:
     """A picklable recipe for the task's environment (worker processes rebuild it from this).
 
     Attributes:
-        env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v1``, the default, with the cup; or ``rdmp_gym/DMPTracking-v0``).
+        env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v1``, the default, or ``rdmp_gym/DMPTracking-v0``).
         env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...).
         reset_options: ``options`` passed to every ``reset`` (e.g. to fix the context), or None.
         demo: a CSV/NPZ demonstration (table frame, m) that the env fits instead of its built-in

@@ -258,10 +258,10 @@ def test_best_params_are_validated(tmp_path):
     run = train(_config(updates=1), tmp_path / "run")
     np.save(run.best_npy, np.full(50, np.nan))
     with pytest.raises(ValueError, match=r"best_params.npy: expected 50 finite"):
-        evaluate_run(run.path, 1)
+        evaluate_run(run.path, 1, policy="best")
     run.best_npy.write_bytes(b"\x93NUMPY garbage")
     with pytest.raises(ValueError, match=r"best_params.npy: unreadable"):
-        evaluate_run(run.path, 1)
+        evaluate_run(run.path, 1, policy="best")
 
 
 def test_a_ppo_checkpoint_is_sb3s_zip_of_which_only_the_weights_are_read(tmp_path):
