@@ -17,9 +17,11 @@ and ``<name>.png``, and prints the table.
 
     # the full protocol (10 seeds x 9 agents x 1000 episodes; several hours on 2 cores):
     python benchmarks/bench_agents.py
-    # a reduced run (what benchmarks/results/agents.json holds; see its settings):
-    python benchmarks/bench_agents.py --agents creps cpibb cpi2 amplitude random --seeds 3 --budget 300 \\
-        --rollouts 10 --val-contexts 6 --eval-every 5
+    # the reduced run on ArmarWipe-v1 (the default env, cup on) in benchmarks/results/agents.json and agents_cmaes.json:
+    python benchmarks/bench_agents.py --agents creps cpi2 amplitude random --seeds 3 --budget 300 \\
+        --rollouts 10 --val-contexts 6 --eval-every 5 --save
+    python benchmarks/bench_agents.py --agents cmaes --seeds 3 --budget 300 --rollouts 10 --val-contexts 6 \\
+        --eval-every 5 --name agents_cmaes --save
     # every run a Ray task of one CPU (RAY_ADDRESS or --ray-address: a cluster); the same result files:
     python benchmarks/bench_agents.py --backend ray
 """
