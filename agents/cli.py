@@ -40,7 +40,7 @@ __all__ = ["main"]
 
 logger = logging.getLogger(__name__)
 
-WIPE_ID = "rdmp_gym/ArmarWipe-v0"
+WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 _EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
 
 

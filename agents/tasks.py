@@ -13,7 +13,7 @@ from .imitation import load_demonstration
 
 __all__ = ["WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics"]
 
-WIPE_ID = "rdmp_gym/ArmarWipe-v0"
+WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 
@@ -22,7 +22,7 @@ class TaskSpec:
     """A picklable recipe for the task's environment (worker processes rebuild it from this).
 
     Attributes:
-        env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v0`` or ``rdmp_gym/DMPTracking-v0``).
+        env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v1``, the default, or ``rdmp_gym/DMPTracking-v0``).
         env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...).
         reset_options: ``options`` passed to every ``reset`` (e.g. to fix the context), or None.
         demo: a CSV/NPZ demonstration (table frame, m) that the env fits instead of its built-in
@@ -36,7 +36,7 @@ class TaskSpec:
 
     def make(self, render_mode: str | None = None) -> gym.Env:
         """Build the environment (importing the packages that register the ids)."""
-        import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0 and rdmp_gym/DMPTracking-v0)
+        import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1 and rdmp_gym/DMPTracking-v0)
 
         kwargs = dict(self.env_kwargs)
         if render_mode is not None:

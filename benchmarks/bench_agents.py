@@ -17,10 +17,13 @@ and ``<name>.png``, and prints the table.
 
     # the full protocol (10 seeds x 9 agents x 1000 episodes; several hours on 2 cores):
     python benchmarks/bench_agents.py
-    # a reduced run (what benchmarks/results/agents.json holds; see its settings):
-    python benchmarks/bench_agents.py --agents creps cpibb cpi2 amplitude random --seeds 3 --budget 300 \\
-        --rollouts 10 --val-contexts 6 --eval-every 5
-    # on ArmarWipe-v1 (issue 8) the same protocol is a flag: --env-id rdmp_gym/ArmarWipe-v1
+    # the reduced run on ArmarWipe-v1 (the default env, cup on) in benchmarks/results/agents.json and agents_cmaes.json:
+    python benchmarks/bench_agents.py --agents creps cpi2 amplitude random --seeds 3 --budget 300 \\
+        --rollouts 10 --val-contexts 6 --eval-every 5 --save
+    python benchmarks/bench_agents.py --agents cmaes --seeds 3 --budget 300 --rollouts 10 --val-contexts 6 \\
+        --eval-every 5 --name agents_cmaes --save
+    # every run a Ray task of one CPU (RAY_ADDRESS or --ray-address: a cluster); the same result files:
+    python benchmarks/bench_agents.py --backend ray
 """
 
 from __future__ import annotations
@@ -72,7 +75,11 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--test-contexts", type=int, default=20, help="test contexts (final policy)")
     parser.add_argument("--val-contexts", type=int, default=10, help="validation contexts (learning curves)")
     parser.add_argument("--eval-every", type=int, default=5, help="updates between validation evaluations")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=int, default=2, help="processes per run (local backend)")
+    parser.add_argument("--backend", choices=("local", "ray"), default="local",
+                        help="ray: the runs (agent x seed) are Ray tasks of one CPU each, each run on 1 worker; "
+                             "the same result files")
+    parser.add_argument("--ray-address", default=None, help="Ray cluster (default $RAY_ADDRESS, else a local one)")
     parser.add_argument("--env-id", default=WIPE_ID)
     parser.add_argument("--option", action="append", default=[], metavar="AGENT.KEY=VALUE",
                         help="override a learner setting, e.g. creps.epsilon=1.0 (repeatable)")
@@ -122,6 +129,33 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
     return {"agent": config.agent, "seed": config.seed, "seconds": round(time.perf_counter() - began, 1),
             "options": config.options, "episodes_to_target": _episodes_to_target(records), "curve": curve,
             "test": scores.to_dict(), "test_means": scores.means()}
+
+
+def _run_remote(config: TrainConfig, scratch: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
+                reference_jerk: np.ndarray) -> dict:
+    """:func:`_run_job` inside a Ray task: its own one-worker test evaluator."""
+    with Evaluator(spec, 1) as tester:
+        return _run_job(config, scratch, tester, seeds, observations, reference_jerk)
+
+
+def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
+                seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
+    """Every run as a Ray task (one CPU, one worker inside); results in the order of ``configs``."""
+    from rdmp_gym.agents.ray_backend import import_ray, init_ray
+
+    ray = import_ray()
+    owns = init_ray(args.workers, args.ray_address)
+    remote = ray.remote(num_cpus=1)(_run_remote)
+    try:
+        pending = [remote.remote(config, scratch, spec, seeds, observations, reference_jerk) for config in configs]
+        with tqdm(total=len(pending), desc="runs (ray)", unit="run") as bar:
+            for ref in pending:
+                ray.wait([ref], num_returns=1)
+                bar.update(1)
+        return ray.get(pending)
+    finally:
+        if owns:
+            ray.shutdown()
 
 
 def _summary(runs: list[dict], imitation: dict) -> list[dict]:
@@ -215,22 +249,28 @@ def main() -> None:
     scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
     runs = []
     try:
-        with Evaluator(spec, args.workers) as tester:
+        with Evaluator(spec, 1 if args.backend == "ray" else args.workers) as tester:
             observations = context_observations(tester.env, seeds)
             n = tester.n_actions
             reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
             imitation: PolicyScores = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference)
-            jobs = [(agent, seed) for agent in args.agents for seed in range(args.seeds)]
-            for agent, seed in tqdm(jobs, desc="runs", unit="run"):
-                config = TrainConfig(agent=agent, env_id=args.env_id, updates=args.budget // args.rollouts,
-                                     rollouts=args.rollouts, seed=seed, workers=args.workers, env_kwargs=env_kwargs,
-                                     options=options.get(agent, {}), eval_episodes=args.val_contexts,
-                                     eval_every=args.eval_every, shared_context=False)
-                runs.append(_run_job(config, scratch, tester, seeds, observations, reference))
+        workers = 1 if args.backend == "ray" else args.workers
+        configs = [TrainConfig(agent=agent, env_id=args.env_id, updates=args.budget // args.rollouts,
+                               rollouts=args.rollouts, seed=seed, workers=workers, env_kwargs=env_kwargs,
+                               options=options.get(agent, {}), eval_episodes=args.val_contexts,
+                               eval_every=args.eval_every, shared_context=False)
+                   for agent in args.agents for seed in range(args.seeds)]
+        if args.backend == "ray":
+            runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
+        else:
+            with Evaluator(spec, args.workers) as tester:
+                runs = [_run_job(config, scratch, tester, seeds, observations, reference)
+                        for config in tqdm(configs, desc="runs", unit="run")]
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     rows = _summary(runs, imitation.to_dict())
-    settings = {key: value for key, value in vars(args).items() if key not in ("option", "env_option", "replot")}
+    settings = {key: value for key, value in vars(args).items()
+                if key not in ("option", "env_option", "replot", "ray_address")}
     settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
                      "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
     _print(rows, settings)

@@ -23,7 +23,7 @@ from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.tracking import TRACKING_ID
 
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
+import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
 TRACKING = {"n_periodic": 10, "n_transient": 10, "duration": 4.0}
@@ -166,3 +166,23 @@ def test_a_run_stopped_by_a_dead_worker_resumes_to_the_uninterrupted_numbers(tmp
     monkeypatch.setattr(Evaluator, "run", run_batch)
     resumed = train(None, tmp_path / "broken", resume=True)
     assert _without_time(resumed.read_log()) == _without_time(whole.read_log())
+
+
+@pytest.mark.slow
+def test_bench_agents_on_ray_writes_the_result_file_of_the_local_run(tmp_path):
+    pytest.importorskip("ray")
+    script = Path(__file__).resolve().parent.parent / "benchmarks" / "bench_agents.py"
+    documents = {}
+    for backend in ("local", "ray"):
+        subprocess.run([sys.executable, str(script), "--agents", "creps", "--seeds", "2", "--budget", "10",
+                        "--rollouts", "5", "--test-contexts", "2", "--val-contexts", "1", "--eval-every", "1",
+                        "--backend", backend, "--name", f"check_{backend}"], check=True, cwd=tmp_path,
+                       env={**os.environ, "PYTHONPATH": str(script.parent)}, capture_output=True)
+        path = script.parent.parent / "runs" / "benchmarks" / f"check_{backend}.json"
+        documents[backend] = json.loads(path.read_text())
+        path.unlink()
+        path.with_suffix(".png").unlink()
+    runs = {b: [{k: v for k, v in r.items() if k != "seconds"} for r in d["runs"]] for b, d in documents.items()}
+    assert len(runs["local"]) == 2 and runs["ray"] == runs["local"]
+    assert documents["ray"]["summary"] == documents["local"]["summary"]
+    assert runs["local"][0]["curve"] != runs["local"][1]["curve"]          # two seeds, two real runs

@@ -7,6 +7,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np
 import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
+from rdmp_gym.agents.learners.contextual import policy_from_state
 from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
@@ -106,6 +107,30 @@ def test_state_round_trip_continues_identically():
     np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
     for value in state.values():   # plain numbers, arrays, dicts of arrays (no objects)
         assert isinstance(value, (str, int, float, np.ndarray, dict))
+
+
+def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_contexts():
+    """ArmarWipe-v1's layout: [..., obstacle (0/1), obstacle x, y]; x, y are (0, 0) without a cup."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(0)
+    present = (rng.uniform(size=200) < 0.4).astype(float)
+    position = np.where(present[:, None] > 0, rng.normal([-0.04, 0.13], [0.02, 0.01], (200, 2)), 0.0)
+    obs = np.column_stack([rng.normal(0, 0.01, 200), present, position])
+    env = SimpleNamespace(unwrapped=SimpleNamespace(context_fields={"obstacle": (1, 1), "obstacle_position": (2, 2)}),
+                          action_space=SimpleNamespace(shape=(N,)))
+    space = SearchSpace.from_env(env, obs)
+    assert space.context_gate.tolist() == [-1, -1, 1, 1]
+    np.testing.assert_allclose(space.context_center[2:], position[present > 0].mean(axis=0))
+    np.testing.assert_allclose(space.context_scale[2:], position[present > 0].std(axis=0))
+    learner = make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), space=space)
+    phi = learner.features(obs)[:, 1:]
+    assert np.all(phi[present == 0, 2:] == 0.0)                                   # no cup: no position feature
+    np.testing.assert_allclose(phi[present > 0, 2:].std(axis=0), 1.0, rtol=1e-9)  # cup: unit scale
+    learner.gains = rng.normal(size=learner.gains.shape)
+    np.testing.assert_allclose(policy_from_state(learner.state_dict(), obs), learner.policy_actions(obs))
+    plain = SimpleNamespace(unwrapped=SimpleNamespace(), action_space=SimpleNamespace(shape=(N,)))
+    assert SearchSpace.from_env(plain, obs).context_gate is None                  # no layout: no gate
 
 
 def test_contextual_learner_rejects_bad_input():

@@ -16,7 +16,7 @@ from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
+import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 torch.set_num_threads(1)
 

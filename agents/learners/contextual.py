@@ -1,7 +1,9 @@
 """Contextual episodic policy search: a linear-Gaussian upper-level policy over DMP parameters.
 
 Policy: ``u = W x(s) + ε``, ``x(s) = [1, φ(s)]`` with standardised context features ``φ(s) [F]`` (the
-observation minus its centre, over its scale), ``W = [θ̄, K]`` ``[n, F + 1]``; the executed action is
+observation minus its centre, over its scale; a *gated* feature, such as the cup's position, which is
+only defined when its indicator, the cup's presence, is 1, is standardised over the contexts where it
+is defined and is 0 where it is not), ``W = [θ̄, K]`` ``[n, F + 1]``; the executed action is
 ``squash(u)`` in ``(-1, 1)`` (:func:`~rdmp_gym.agents.learners.smooth.squash`, monotone; nothing is clipped).
 ``ε`` is smooth per weight block (:class:`~rdmp_gym.agents.learners.smooth.SmoothNoise`) with one
 standard deviation per block. Each update keeps the last ``reuse`` batches and weights their samples:
@@ -137,6 +139,8 @@ class SearchSpace:
         n_dims: degrees of freedom of the DMP (weight blocks per group).
         context_center, context_scale: ``[o]`` standardisation of the observation (scale 0 = unused feature).
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only), or None.
+        context_gate: ``[o]`` int: for a gated feature the index of its 0/1 indicator (the feature is
+            ``indicator · (o - centre) / scale``), -1 for the others; None = no gated features.
     """
 
     slices: Mapping[str, slice]
@@ -144,6 +148,7 @@ class SearchSpace:
     context_center: np.ndarray
     context_scale: np.ndarray
     time_weights: np.ndarray | None = None
+    context_gate: np.ndarray | None = None
 
     @classmethod
     def from_env(cls, env: Any, observations: np.ndarray) -> SearchSpace:
@@ -156,10 +161,41 @@ class SearchSpace:
         else:
             slices, n_dims = {"all": slice(0, n)}, 1
         observations = np.asarray(observations, dtype=np.float64)
-        scale = observations.std(axis=0)
-        scale[scale < 1e-9 * (1.0 + np.abs(observations.mean(axis=0)))] = 0.0
+        gate = _context_gate(base, observations.shape[1])
+        center, scale = observations.mean(axis=0), observations.std(axis=0)
+        for j in np.flatnonzero(gate >= 0):
+            defined = observations[observations[:, gate[j]] > 0.5, j]
+            center[j], scale[j] = (defined.mean(), defined.std()) if defined.size > 1 else (0.0, 0.0)
+        scale[scale < 1e-9 * (1.0 + np.abs(center))] = 0.0
         weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
-        return cls(slices, n_dims, observations.mean(axis=0), scale, weights)
+        return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None)
+
+
+def _context_gate(base: Any, size: int) -> np.ndarray:
+    """``[o]`` the indicator index of each gated context feature (-1 = not gated): ArmarWipe-v1's cup
+    position (``obstacle_position``) is gated by its presence (``obstacle``), read from the env's
+    ``CONTEXT_FIELDS``; an env without them has none."""
+    gate = np.full(size, -1, dtype=np.int64)
+    fields = getattr(base, "context_fields", None)
+    if fields is None and hasattr(base, "context_spec"):
+        from rdmp_gym.envs.context import CONTEXT_FIELDS as fields
+    if fields and "obstacle" in fields and "obstacle_position" in fields:
+        start, length = fields["obstacle_position"]
+        if start + length <= size:
+            gate[start:start + length] = fields["obstacle"][0]
+    return gate
+
+
+def context_features(observations: np.ndarray, center: np.ndarray, scale: np.ndarray,
+                     gate: np.ndarray | None) -> np.ndarray:
+    """``[E, F]`` the standardised features ``φ(s)`` of observations ``[E, o]`` (the columns with scale > 0;
+    gated columns multiplied by their indicator, see :class:`SearchSpace`)."""
+    used = scale > 0
+    phi = (observations - center) / np.where(used, scale, 1.0)
+    if gate is not None:
+        gated = gate >= 0
+        phi[:, gated] *= observations[:, gate[gated]] > 0.5
+    return phi[:, used]
 
 
 def _ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:
@@ -233,6 +269,9 @@ class ContextualSearch(Learner):
             raise ValueError("space: context_center and context_scale must be 1-D of one length, scale >= 0")
         self._used = scale > 0
         self.scale = scale
+        self.gate = None if space.context_gate is None else np.asarray(space.context_gate, dtype=np.int64)
+        if self.gate is not None and (self.gate.shape != self.center.shape or np.any(self.gate >= self.center.size)):
+            raise ValueError("space: context_gate must have the observation's length with indices < its length")
         n_features = 1 + int(self._used.sum()) if self.config.contextual else 1
         self.gains = np.zeros((self.n_params, n_features))        # W = [θ̄, K]
         self.gains[:, 0] = unsquash(self._mean)
@@ -264,8 +303,7 @@ class ContextualSearch(Learner):
         ones = np.ones((obs.shape[0], 1))
         if not self.config.contextual:
             return ones
-        phi = (obs[:, self._used] - self.center[self._used]) / self.scale[self._used]
-        return np.concatenate([ones, phi], axis=1)
+        return np.concatenate([ones, context_features(obs, self.center, self.scale, self.gate)], axis=1)
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         """``[E, n]`` the policy's action for each context (no exploration)."""
@@ -346,24 +384,35 @@ class ContextualSearch(Learner):
     def _extra_state(self) -> dict[str, Any]:
         if self._pending is not None:
             raise RuntimeError("state_dict: an ask() is waiting for its tell()")
-        buffer = {key: np.concatenate([b[key] for b in self._buffer]) if self._buffer else np.zeros(0)
+        # flat 1-D arrays (rows recovered from "sizes"): an empty buffer then has the same structure as a full one
+        buffer = {key: np.concatenate([b[key].ravel() for b in self._buffer]) if self._buffer else np.zeros(0)
                   for key in _BUFFER_KEYS}
         buffer["sizes"] = np.array([b["costs"].size for b in self._buffer], dtype=np.int64)
         return {"gains": self.gains.copy(), "sigmas": self.sigmas.copy(), "buffer": buffer,
-                "context_center": self.center.copy(), "context_scale": self.scale.copy()}
+                "context_center": self.center.copy(), "context_scale": self.scale.copy(),
+                "context_gate": np.full(self.center.size, -1) if self.gate is None else self.gate.copy()}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
         gains = np.asarray(state["gains"], dtype=np.float64)
         if gains.shape != self.gains.shape:
             raise ValueError(f"state: gains have shape {gains.shape}, expected {self.gains.shape}")
-        if not (np.allclose(state["context_center"], self.center) and np.allclose(state["context_scale"], self.scale)):
+        gate = np.full(self.center.size, -1) if self.gate is None else self.gate
+        if not (np.allclose(state["context_center"], self.center) and np.allclose(state["context_scale"], self.scale)
+                and np.array_equal(state.get("context_gate", np.full(self.center.size, -1)), gate)):
             raise ValueError("state: written with another context standardisation")
         self.gains = gains.copy()
         self.sigmas = np.asarray(state["sigmas"], dtype=np.float64).copy()
         buffer = state["buffer"]
-        ends = np.cumsum(np.asarray(buffer["sizes"], dtype=np.int64))
-        self._buffer = [{key: np.asarray(buffer[key], dtype=np.float64)[end - size:end] for key in _BUFFER_KEYS}
-                        for size, end in zip(np.asarray(buffer["sizes"]), ends, strict=True)]
+        sizes = np.asarray(buffer["sizes"], dtype=np.int64)
+        rows, ends = int(sizes.sum()), np.cumsum(sizes)
+        table = {}
+        for key in _BUFFER_KEYS:
+            flat = np.asarray(buffer[key], dtype=np.float64).ravel()
+            if rows and flat.size % rows:
+                raise ValueError(f"state: buffer.{key} has {flat.size} values, not a multiple of its {rows} rows")
+            table[key] = flat if key == "costs" or not rows else flat.reshape(rows, -1)
+        self._buffer = [{key: table[key][end - size:end] for key in _BUFFER_KEYS}
+                        for size, end in zip(sizes, ends, strict=True)]
         self._pending = None
 
 
@@ -376,8 +425,9 @@ def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.
     obs = np.asarray(observations, dtype=np.float64)
     if obs.ndim != 2 or obs.shape[1] != center.size:
         raise ValueError(f"observations: expected shape [E, {center.size}], got {obs.shape}")
-    used = scale > 0
+    gate = state.get("context_gate")
     x = np.ones((obs.shape[0], 1))
     if gains.shape[1] > 1:
-        x = np.concatenate([x, (obs[:, used] - center[used]) / scale[used]], axis=1)
+        gate = None if gate is None else np.asarray(gate, dtype=np.int64)
+        x = np.concatenate([x, context_features(obs, center, scale, gate)], axis=1)
     return squash(x @ gains.T)
