@@ -2,6 +2,7 @@
 force adaptation, tilted tables, collisions, divergence."""
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 from rdmp_gym.envs import ENV_ID
@@ -130,6 +131,39 @@ def test_any_tilt_in_the_range_is_wiped_like_the_level_table(adaptive, tilt):
     assert tilted["valid"] and not tilted["unstable"]
     assert tilted["coverage"] >= 0.9 * level["coverage"]
     assert tilted["force_in_band_fraction"] >= 0.95 and tilted["force_sd"] <= 2.0
+
+
+def test_the_forearm_keeps_clear_of_the_torso_at_the_tilt_corner(adaptive):
+    """At the reset-option tilt corner (-0.15, -0.15) the plain IK put the forearm 9 mm into the torso (invalid,
+    "penetration"); the IK's clearance task keeps it out and the coverage stays within 10 % of the level table."""
+    _, level = run(adaptive, NOMINAL)
+    _, corner = run(adaptive, {**NOMINAL, "table_tilt": [-0.15, -0.15]})
+    assert corner["valid"] and not corner["unstable"]
+    assert corner["penetration"] == 0.0 and corner["self_collision_fraction"] == 0.0
+    assert corner["coverage"] >= 0.9 * level["coverage"]
+    assert corner["peak_joint_accel"] < RewardSettings().max_joint_accel
+
+
+def test_clearance_matches_mujoco_and_its_gradient(adaptive):
+    """The IK's forearm-torso clearance agrees with MuJoCo's geom distance (to the segment sampling) and its
+    joint gradient with finite differences."""
+    u = adaptive.unwrapped
+    ik, model = u.ik, u.scene.model
+    rng = np.random.default_rng(0)
+    q = ik.posture + rng.uniform(-0.3, 0.3, (5, ik.kin.n))
+    clearance, grad = ik.clearance.evaluate(ik.kin.forward(q))
+    data = mujoco.MjData(model)
+    for b in range(len(q)):
+        data.qpos[ik.kin.qpos_adr] = q[b]
+        mujoco.mj_kinematics(model, data)
+        exact = mujoco.mj_geomDistance(model, data, model.geom("r_forearm").id, model.geom("torso").id, 1.0, None)
+        assert exact - 1e-9 <= clearance[b].min() <= exact + 0.01
+    step = 1e-6
+    for j in range(ik.kin.n):
+        shifted = q.copy()
+        shifted[:, j] += step
+        numeric = (ik.clearance.evaluate(ik.kin.forward(shifted))[0] - clearance) / step
+        np.testing.assert_allclose(grad[:, :, j], numeric, atol=1e-4)
 
 
 def test_tilted_table_is_followed_with_adaptation(adaptive, rigid):
