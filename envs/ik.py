@@ -91,11 +91,12 @@ class BodyClearance:
         self.kin = kinematics
         self.shared = int(kinematics.body_joints[0])
 
-    def evaluate(self, state: ChainState) -> tuple[np.ndarray, np.ndarray]:
-        """Clearance (m) [B, c * samples] and its gradient in the joints [B, c * samples, n] at ``state``."""
+    def evaluate(self, state: ChainState, gradient: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """Clearance (m) [B, c * samples] and (if ``gradient``) its gradient in the joints
+        [B, c * samples, n] at ``state``."""
         box_rot = state.body_rot[:, 0] @ self.box_rot                                   # [B, 3, 3]
         box_pos = state.body_pos[:, 0] + state.body_rot[:, 0] @ self.box_pos            # [B, 3]
-        clearance, gradient = [], []
+        clearance, gradients = [], []
         for c, (points, radius) in enumerate(zip(self.points, self.radii, strict=True)):
             world = state.body_pos[:, c + 1, None] + np.einsum("bij,sj->bsi", state.body_rot[:, c + 1], points)
             local = np.einsum("bji,bsj->bsi", box_rot, world - box_pos[:, None])       # box frame [B, s, 3]
@@ -107,6 +108,9 @@ class BodyClearance:
             is_out = out_norm > 1e-9
             direction = np.where(is_out[..., None], outside / np.maximum(out_norm, 1e-9)[..., None], inside_dir)
             distance = np.where(is_out, out_norm, -np.min(depth, axis=2))
+            clearance.append(distance - radius)
+            if not gradient:
+                continue
             normal = np.einsum("bij,bsj->bsi", box_rot, direction)                      # world [B, s, 3]
             count = int(self.kin.body_joints[c + 1])
             lever = world[:, :, None, :] - state.anchors[:, None, :count]               # [B, s, k, 3]
@@ -115,9 +119,8 @@ class BodyClearance:
             grad[:, :, :self.shared] = 0.0
             full = np.zeros((*grad.shape[:2], self.kin.n))
             full[:, :, :count] = grad
-            clearance.append(distance - radius)
-            gradient.append(full)
-        return np.concatenate(clearance, axis=1), np.concatenate(gradient, axis=1)
+            gradients.append(full)
+        return np.concatenate(clearance, axis=1), np.concatenate(gradients, axis=1) if gradient else None
 
 
 class PathIK:
@@ -237,7 +240,7 @@ class PathIK:
         """Smallest arm-to-body clearance (m) per configuration of ``q`` [B, n], [B] (inf without a body)."""
         if self.clearance is None:
             return np.full(len(q), np.inf)
-        return self.clearance.evaluate(self.kin.forward(q))[0].min(axis=1)
+        return self.clearance.evaluate(self.kin.forward(q), gradient=False)[0].min(axis=1)
 
     def solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None = None,
               q_init: np.ndarray | None = None,
@@ -256,18 +259,19 @@ class PathIK:
             fine_iterations: DLS iterations on the full path (from the interpolated coarse solution).
             min_iterations: DLS iterations on the subsampled path before the stopping test.
         """
-        result = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations, fine_iterations,
-                             min_iterations, avoid=False)
-        if self.clearance is not None and self.min_clearance(result.q).min() < self.clearance_margin:
+        result, clearance = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations,
+                                        fine_iterations, min_iterations, avoid=False)
+        if clearance < self.clearance_margin:
             # the clearance task converges more slowly than the sponge task: iterate the coarse pass longer
-            result = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations,
-                                 fine_iterations, max(min_iterations, coarse_iterations // 2), avoid=True)
+            result, _ = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations,
+                                    fine_iterations, max(min_iterations, coarse_iterations // 2), avoid=True)
         return result
 
     def _solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None,
                q_init: np.ndarray | None, stride: int, coarse_iterations: int, fine_iterations: int,
-               min_iterations: int, avoid: bool) -> IKResult:
-        """:meth:`solve` with (``avoid``) or without the clearance task."""
+               min_iterations: int, avoid: bool) -> tuple[IKResult, float]:
+        """:meth:`solve` with (``avoid``) or without the clearance task; also the path's smallest
+        arm-to-body clearance (m; inf without a body)."""
         targets = np.asarray(targets, dtype=np.float64)
         if targets.ndim != 2 or targets.shape[1] != 3 or len(targets) == 0:
             raise ValueError(f"targets: expected shape [T, 3], got {targets.shape}")
@@ -301,8 +305,10 @@ class PathIK:
         # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
             q, *_ = self._step(q, targets, normal, basis, rot_weight, None, avoid)
-        _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None)
+        state = self.kin.forward(q)
+        _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None, state)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])
-        return IKResult(q=q, normal_dq=normal_dq, pos_error=pos_err, rot_error=rot_err)
+        clearance = np.inf if self.clearance is None else float(self.clearance.evaluate(state, gradient=False)[0].min())
+        return IKResult(q=q, normal_dq=normal_dq, pos_error=pos_err, rot_error=rot_err), clearance
