@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
-from rdmp_gym.envs.ik import IKResult
+from rdmp_gym.envs.ik import IKResult, PathIK
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
 from rdmp_gym.envs.wiping import DirtField, cells_under_sponge, contact_summary, simulate_wipe
 
@@ -142,6 +142,24 @@ def test_the_forearm_keeps_clear_of_the_torso_at_the_tilt_corner(adaptive):
     assert corner["penetration"] == 0.0 and corner["self_collision_fraction"] == 0.0
     assert corner["coverage"] >= 0.9 * level["coverage"]
     assert corner["peak_joint_accel"] < RewardSettings().max_joint_accel
+
+
+def test_the_clearance_task_leaves_clear_paths_alone(adaptive):
+    """A path that keeps 1 cm from the torso is solved exactly as without the clearance task; one that does
+    not is solved again, to a larger clearance, with the sponge task still met."""
+    u = adaptive.unwrapped
+    plain = PathIK(u.ik.kin, u.ik.posture, u.ik.inv_weight)
+    for tilt, clear in (([0.0, 0.0], True), ([-0.15, -0.15], False)):
+        adaptive.reset(seed=0, options={**NOMINAL, "table_tilt": tilt})
+        path = u.imitation_path()
+        world, normal = u.scene.to_world(path), u.scene.control_frame()[1][:, 2]
+        before, after = plain.solve(world, normal), u.ik.solve(world, normal)
+        assert (u.ik.min_clearance(before.q).min() >= u.ik.clearance_margin) == clear
+        if clear:
+            np.testing.assert_array_equal(after.q, before.q)
+        else:
+            assert u.ik.min_clearance(after.q).min() > max(0.0, u.ik.min_clearance(before.q).min()) + 0.003
+            assert after.pos_error.max() < 1e-3 and after.rot_error.max() < 0.01
 
 
 def test_clearance_matches_mujoco_and_its_gradient(adaptive):
