@@ -15,12 +15,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .kinematics import ChainKinematics
+from .kinematics import ChainKinematics, ChainState
 
-__all__ = ["IKResult", "PathIK"]
+__all__ = ["BodyClearance", "IKResult", "PathIK"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,80 @@ def _tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t1, np.cross(normal, t1)
 
 
+class BodyClearance:
+    """Clearance of arm capsules from a box of the robot's body, and its joint gradient.
+
+    Each capsule's segment is sampled at ``samples`` points; a point's clearance is its distance to the
+    box minus the capsule radius (negative inside). The box and the capsules hang on the same chain, so
+    the joints that carry both (the first ``kinematics.body_joints[0]``) do not change the clearance.
+
+    Args:
+        model: the MuJoCo model the chain was read from.
+        kinematics: the chain, built with ``bodies=(box body, capsule body, ...)`` in that order.
+        box: name of the box geom (on the first recorded body).
+        capsules: names of capsule geoms, one per further recorded body, in the same order.
+        samples: points per capsule segment.
+    """
+
+    def __init__(self, model: mujoco.MjModel, kinematics: ChainKinematics, box: str,
+                 capsules: tuple[str, ...], samples: int = 5):
+        if len(kinematics.body_joints) != len(capsules) + 1:
+            raise ValueError("kinematics: expected bodies=(box body, one body per capsule)")
+        box_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, box)
+        if box_id < 0 or model.geom_type[box_id] != mujoco.mjtGeom.mjGEOM_BOX:
+            raise ValueError(f"box: no box geom named {box!r}")
+        self.box_pos = model.geom_pos[box_id].copy()
+        mat = np.zeros(9)
+        mujoco.mju_quat2Mat(mat, model.geom_quat[box_id])
+        self.box_rot = mat.reshape(3, 3).copy()
+        self.box_half = model.geom_size[box_id].copy()
+        fractions = np.linspace(-1.0, 1.0, samples)
+        points, radii = [], []
+        for name in capsules:
+            gid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)
+            if gid < 0 or model.geom_type[gid] != mujoco.mjtGeom.mjGEOM_CAPSULE:
+                raise ValueError(f"capsules: no capsule geom named {name!r}")
+            mujoco.mju_quat2Mat(mat, model.geom_quat[gid])
+            axis = mat.reshape(3, 3)[:, 2] * model.geom_size[gid, 1]
+            points.append(model.geom_pos[gid] + fractions[:, None] * axis)       # body frame, [samples, 3]
+            radii.append(model.geom_size[gid, 0])
+        self.points = np.stack(points)                                           # [c, samples, 3]
+        self.radii = np.array(radii)
+        self.kin = kinematics
+        self.shared = int(kinematics.body_joints[0])
+
+    def evaluate(self, state: ChainState, gradient: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """Clearance (m) [B, c * samples] and (if ``gradient``) its gradient in the joints
+        [B, c * samples, n] at ``state``."""
+        box_rot = state.body_rot[:, 0] @ self.box_rot                                   # [B, 3, 3]
+        box_pos = state.body_pos[:, 0] + state.body_rot[:, 0] @ self.box_pos            # [B, 3]
+        clearance, gradients = [], []
+        for c, (points, radius) in enumerate(zip(self.points, self.radii, strict=True)):
+            world = state.body_pos[:, c + 1, None] + np.einsum("bij,sj->bsi", state.body_rot[:, c + 1], points)
+            local = np.einsum("bji,bsj->bsi", box_rot, world - box_pos[:, None])       # box frame [B, s, 3]
+            outside = local - np.clip(local, -self.box_half, self.box_half)
+            out_norm = np.linalg.norm(outside, axis=2)
+            depth = self.box_half - np.abs(local)                                       # > 0 on every axis inside
+            face = np.argmin(depth, axis=2)
+            inside_dir = np.where(np.arange(3) == face[..., None], np.sign(local), 0.0)
+            is_out = out_norm > 1e-9
+            direction = np.where(is_out[..., None], outside / np.maximum(out_norm, 1e-9)[..., None], inside_dir)
+            distance = np.where(is_out, out_norm, -np.min(depth, axis=2))
+            clearance.append(distance - radius)
+            if not gradient:
+                continue
+            normal = np.einsum("bij,bsj->bsi", box_rot, direction)                      # world [B, s, 3]
+            count = int(self.kin.body_joints[c + 1])
+            lever = world[:, :, None, :] - state.anchors[:, None, :count]               # [B, s, k, 3]
+            # d(distance)/dq_j = n . (a_j x (p - o_j)) = a_j . ((p - o_j) x n)
+            grad = np.einsum("bkx,bskx->bsk", state.axes[:, :count], np.cross(lever, normal[:, :, None, :]))
+            grad[:, :, :self.shared] = 0.0
+            full = np.zeros((*grad.shape[:2], self.kin.n))
+            full[:, :, :count] = grad
+            gradients.append(full)
+        return np.concatenate(clearance, axis=1), np.concatenate(gradients, axis=1) if gradient else None
+
+
 class PathIK:
     """Damped least-squares IK of the sponge site along a path, vectorised over the path.
 
@@ -65,12 +140,18 @@ class PathIK:
         tolerance: after ``min_iterations``, the coarse pass stops when the position errors (m) or the
             joint updates (rad) of all its points are below this (and the angle errors below ``rot_tolerance``).
         rot_tolerance: angle error (rad) below which the coarse pass may stop (1e-3 rad = 0.06 deg).
+        clearance: optional arm-to-body clearance; a path whose solution comes closer than
+            ``clearance_margin`` (m) to the body is solved again with a null-space task that pushes the
+            arm out to the margin (paths that keep clear are solved without it, unchanged).
+        clearance_margin: clearance (m) the arm keeps from the body.
+        clearance_gain: fraction of the clearance deficit corrected per iteration.
     """
 
     def __init__(self, kinematics: ChainKinematics, posture: np.ndarray, joint_weights: np.ndarray,
                  damping: float = 0.01, limit_margin: float = 0.01, nullspace_gain: float = 0.1,
                  limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4,
-                 rot_tolerance: float = 1e-3):
+                 rot_tolerance: float = 1e-3, clearance: BodyClearance | None = None,
+                 clearance_margin: float = 0.01, clearance_gain: float = 1.0):
         n = kinematics.n
         posture = np.asarray(posture, dtype=np.float64)
         joint_weights = np.asarray(joint_weights, dtype=np.float64)
@@ -92,13 +173,16 @@ class PathIK:
         self.zone_lower = kinematics.lower + limit_zone
         self.zone_upper = kinematics.upper - limit_zone
         self.limit_gain = limit_gain
+        self.clearance = clearance
+        self.clearance_margin = clearance_margin
+        self.clearance_gain = clearance_gain
 
     def _linearise(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
-                   rot_weight: np.ndarray, blocked: np.ndarray | None
+                   rot_weight: np.ndarray, blocked: np.ndarray | None, state: ChainState | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Task error and weighted Jacobians at ``q`` [B, n]: (error [B, 5], jac [B, 5, n], jw = W^-1 J^T
         [B, n, 5], A = J W^-1 J^T + lambda^2 I [B, 5, 5], pos_err [B], rot_err [B])."""
-        state = self.kin.forward(q)
+        state = self.kin.forward(q) if state is None else state
         jac_pos, jac_rot = state.jacobian()
         up = state.rot[:, :, 0]
         e_pos = targets - state.pos
@@ -117,16 +201,19 @@ class PathIK:
         return error, jac, jw, a, np.linalg.norm(e_pos, axis=1), np.arccos(cos_angle)
 
     def _step(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
-              rot_weight: np.ndarray, blocked: np.ndarray | None = None
+              rot_weight: np.ndarray, blocked: np.ndarray | None = None, avoid: bool = False
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """One DLS update of ``q`` [B, n] with the null-space posture and limit task.
 
         ``blocked`` [B, n] marks joints held at a limit (they get almost no mobility). Returns
         (q_new, pos_err [B], rot_err [B], blocked_new [B, n]); the errors are those at ``q``.
         """
-        error, jac, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, blocked)
+        state = self.kin.forward(q)
+        error, jac, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, blocked, state)
         v = self.nullspace_gain * (self.posture - q)                               # [B, n]
         v += self.limit_gain * (np.maximum(0.0, self.zone_lower - q) - np.maximum(0.0, q - self.zone_upper))
+        if avoid:
+            v += self._push_out(state)
         if blocked is not None:
             v = np.where(blocked, 0.0, v)
         rhs = error - np.einsum("bkn,bn->bk", jac, v)
@@ -139,6 +226,21 @@ class PathIK:
         if blocked is not None:
             blocked_new |= blocked & (q_new != q_free)
         return q_new, pos_err, rot_err, blocked_new
+
+    def _push_out(self, state: ChainState) -> np.ndarray:
+        """Joint motion [B, n] that raises every sampled clearance below the margin by ``clearance_gain``
+        of its deficit (minimum weighted norm per point, summed over the points)."""
+        clearance, grad = self.clearance.evaluate(state)                           # [B, p], [B, p, n]
+        deficit = np.maximum(0.0, self.clearance_margin - clearance)
+        weighted = grad * self.inv_weight
+        scale = self.clearance_gain * deficit / (np.einsum("bpn,bpn->bp", weighted, grad) + 1e-9)
+        return np.einsum("bp,bpn->bn", scale, weighted)
+
+    def min_clearance(self, q: np.ndarray) -> np.ndarray:
+        """Smallest arm-to-body clearance (m) per configuration of ``q`` [B, n], [B] (inf without a body)."""
+        if self.clearance is None:
+            return np.full(len(q), np.inf)
+        return self.clearance.evaluate(self.kin.forward(q), gradient=False)[0].min(axis=1)
 
     def solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None = None,
               q_init: np.ndarray | None = None,
@@ -157,6 +259,19 @@ class PathIK:
             fine_iterations: DLS iterations on the full path (from the interpolated coarse solution).
             min_iterations: DLS iterations on the subsampled path before the stopping test.
         """
+        result, clearance = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations,
+                                        fine_iterations, min_iterations, avoid=False)
+        if clearance < self.clearance_margin:
+            # the clearance task converges more slowly than the sponge task: iterate the coarse pass longer
+            result, _ = self._solve(targets, normal, rot_weight, q_init, stride, coarse_iterations,
+                                    fine_iterations, max(min_iterations, coarse_iterations // 2), avoid=True)
+        return result
+
+    def _solve(self, targets: np.ndarray, normal: np.ndarray, rot_weight: np.ndarray | None,
+               q_init: np.ndarray | None, stride: int, coarse_iterations: int, fine_iterations: int,
+               min_iterations: int, avoid: bool) -> tuple[IKResult, float]:
+        """:meth:`solve` with (``avoid``) or without the clearance task; also the path's smallest
+        arm-to-body clearance (m; inf without a body)."""
         targets = np.asarray(targets, dtype=np.float64)
         if targets.ndim != 2 or targets.shape[1] != 3 or len(targets) == 0:
             raise ValueError(f"targets: expected shape [T, 3], got {targets.shape}")
@@ -173,7 +288,8 @@ class PathIK:
         blocked = None
         for iteration in range(coarse_iterations):
             q_old = q
-            q, pos_err, rot_err, blocked = self._step(q, targets[knots], normal, basis, rot_weight[knots], blocked)
+            q, pos_err, rot_err, blocked = self._step(q, targets[knots], normal, basis, rot_weight[knots], blocked,
+                                                    avoid)
             if iteration + 1 >= min_iterations and (
                     (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):
@@ -188,9 +304,11 @@ class PathIK:
         # The fine pass treats every joint as free (limits still enforced by projection): a "blocked" flag
         # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
-            q, *_ = self._step(q, targets, normal, basis, rot_weight, None)
-        _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None)
+            q, *_ = self._step(q, targets, normal, basis, rot_weight, None, avoid)
+        state = self.kin.forward(q)
+        _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None, state)
         unit = np.zeros((count, 5, 1))
         unit[:, :3, 0] = normal
         normal_dq = np.einsum("bnk,bk->bn", jw, np.linalg.solve(a, unit)[..., 0])
-        return IKResult(q=q, normal_dq=normal_dq, pos_error=pos_err, rot_error=rot_err)
+        clearance = np.inf if self.clearance is None else float(self.clearance.evaluate(state, gradient=False)[0].min())
+        return IKResult(q=q, normal_dq=normal_dq, pos_error=pos_err, rot_error=rot_err), clearance

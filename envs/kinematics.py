@@ -38,12 +38,16 @@ class ChainState:
         rot: site orientations (columns = site axes in the world frame), [B, 3, 3].
         axes: joint axes in the world frame, [B, n, 3].
         anchors: joint anchors in the world frame, [B, n, 3].
+        body_pos: world positions of the bodies named in ``ChainKinematics(bodies=...)``, [B, k, 3].
+        body_rot: their orientations, [B, k, 3, 3].
     """
 
     pos: np.ndarray
     rot: np.ndarray
     axes: np.ndarray
     anchors: np.ndarray
+    body_pos: np.ndarray | None = None
+    body_rot: np.ndarray | None = None
 
     def jacobian(self) -> tuple[np.ndarray, np.ndarray]:
         """Positional and rotational site Jacobians, each [B, 3, n]."""
@@ -66,20 +70,23 @@ class ChainKinematics:
         site: name of the site whose pose and Jacobian are computed.
         joints: names of the chain's joints in root-to-tip order; ``None`` takes all joints on the chain.
             Joints on the chain that are not listed are held at ``qpos0``.
+        bodies: names of bodies on the chain whose frames ``forward`` also returns (``body_pos``,
+            ``body_rot``); ``body_joints[i]`` is the number of active joints that move body ``i``.
     """
 
-    def __init__(self, model: mujoco.MjModel, site: str, joints: tuple[str, ...] | None = None):
+    def __init__(self, model: mujoco.MjModel, site: str, joints: tuple[str, ...] | None = None,
+                 bodies: tuple[str, ...] = ()):
         site_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
         if site_id < 0:
             raise ValueError(f"site: no site named {site!r} in the model")
         body = int(model.site_bodyid[site_id])
-        bodies = []
+        chain_bodies = []
         while body != 0:
-            bodies.append(body)
+            chain_bodies.append(body)
             body = int(model.body_parentid[body])
-        bodies.reverse()
+        chain_bodies.reverse()
         chain_joints = []
-        for b in bodies:
+        for b in chain_bodies:
             for j in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
                 if model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE:
                     raise ValueError(f"site: joint {model.joint(j).name!r} on the chain is not a hinge")
@@ -99,10 +106,16 @@ class ChainKinematics:
         self.dof_adr = model.jnt_dofadr[self.joint_ids].copy()
         self.lower = model.jnt_range[self.joint_ids, 0].copy()
         self.upper = model.jnt_range[self.joint_ids, 1].copy()
+        body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name) for name in bodies]
+        if any(b not in chain_bodies for b in body_ids):
+            raise ValueError(f"bodies: {bodies} must all be bodies on the chain of site {site!r}")
+        self._record = [chain_bodies.index(b) for b in body_ids]
+        self.body_joints = np.array([sum(1 for j in self.joint_ids if model.jnt_bodyid[j] in chain_bodies[:i + 1])
+                                     for i in self._record], dtype=int)
         # Static description: per body (pos, rot, [(active index or -1, K, K2, jnt_pos, qpos0)]).
         self._bodies = []
         active = {j: i for i, j in enumerate(self.joint_ids)}
-        for b in bodies:
+        for b in chain_bodies:
             jnts = []
             for j in range(model.body_jntadr[b], model.body_jntadr[b] + model.body_jntnum[b]):
                 axis = model.jnt_axis[j] / np.linalg.norm(model.jnt_axis[j])
@@ -136,6 +149,7 @@ class ChainKinematics:
         def rvec(r: np.ndarray, v: np.ndarray) -> np.ndarray:
             return (r.reshape(-1, 3) @ v).reshape(batch, 3)
 
+        frames = []
         for body_pos, body_rot, jnts in self._bodies:
             if body_pos is not None:
                 pos = pos + rvec(rot, body_pos)
@@ -157,6 +171,11 @@ class ChainKinematics:
                 rot = rot + turn
                 rot += bend
                 pos = anchor - rvec(rot, jnt_pos) if has_offset else anchor
+            frames.append((pos, rot))
         site_pos = pos + rvec(rot, self._site_pos)
         site_rot = rmul(rot, self._site_rot)
-        return ChainState(site_pos, site_rot, axes, anchors)
+        if not self._record:
+            return ChainState(site_pos, site_rot, axes, anchors)
+        return ChainState(site_pos, site_rot, axes, anchors,
+                          np.stack([frames[i][0] for i in self._record], axis=1),
+                          np.stack([frames[i][1] for i in self._record], axis=1))

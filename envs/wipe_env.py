@@ -45,7 +45,7 @@ from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from .force_learning import ForceProfileLearning, ForceProfileSettings
-from .ik import IKResult, PathIK
+from .ik import BodyClearance, IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
@@ -281,8 +281,10 @@ class ArmarWipeEnv(gym.Env):
                                         obstacle_probability=float(obstacle_probability),
                                         obstacle_radius=self.scene.obstacle_radius)
 
-        kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS)
-        self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY)
+        kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS,
+                                     bodies=("torso", "r_underarm_link"))
+        clearance = BodyClearance(model, kinematics, "torso", ("r_forearm",))
+        self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY, clearance=clearance)
         self._lead = self.scene.servo_lead()
         self._engage = self.adaptation_settings.engage_height
 

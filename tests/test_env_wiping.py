@@ -2,11 +2,12 @@
 force adaptation, tilted tables, collisions, divergence."""
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
-from rdmp_gym.envs.ik import IKResult
+from rdmp_gym.envs.ik import IKResult, PathIK
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
 from rdmp_gym.envs.wiping import DirtField, cells_under_sponge, contact_summary, simulate_wipe
 
@@ -130,6 +131,57 @@ def test_any_tilt_in_the_range_is_wiped_like_the_level_table(adaptive, tilt):
     assert tilted["valid"] and not tilted["unstable"]
     assert tilted["coverage"] >= 0.9 * level["coverage"]
     assert tilted["force_in_band_fraction"] >= 0.95 and tilted["force_sd"] <= 2.0
+
+
+def test_the_forearm_keeps_clear_of_the_torso_at_the_tilt_corner(adaptive):
+    """At the reset-option tilt corner (-0.15, -0.15) the plain IK put the forearm 9 mm into the torso (invalid,
+    "penetration"); the IK's clearance task keeps it out and the coverage stays within 10 % of the level table."""
+    _, level = run(adaptive, NOMINAL)
+    _, corner = run(adaptive, {**NOMINAL, "table_tilt": [-0.15, -0.15]})
+    assert corner["valid"] and not corner["unstable"]
+    assert corner["penetration"] == 0.0 and corner["self_collision_fraction"] == 0.0
+    assert corner["coverage"] >= 0.9 * level["coverage"]
+    assert corner["peak_joint_accel"] < RewardSettings().max_joint_accel
+
+
+def test_the_clearance_task_leaves_clear_paths_alone(adaptive):
+    """A path that keeps 1 cm from the torso is solved exactly as without the clearance task; one that does
+    not is solved again, to a larger clearance, with the sponge task still met."""
+    u = adaptive.unwrapped
+    plain = PathIK(u.ik.kin, u.ik.posture, u.ik.inv_weight)
+    for tilt, clear in (([0.0, 0.0], True), ([-0.15, -0.15], False)):
+        adaptive.reset(seed=0, options={**NOMINAL, "table_tilt": tilt})
+        path = u.imitation_path()
+        world, normal = u.scene.to_world(path), u.scene.control_frame()[1][:, 2]
+        before, after = plain.solve(world, normal), u.ik.solve(world, normal)
+        assert (u.ik.min_clearance(before.q).min() >= u.ik.clearance_margin) == clear
+        if clear:
+            np.testing.assert_array_equal(after.q, before.q)
+        else:
+            assert u.ik.min_clearance(after.q).min() > max(0.0, u.ik.min_clearance(before.q).min()) + 0.003
+            assert after.pos_error.max() < 1e-3 and after.rot_error.max() < 0.01
+
+
+def test_clearance_matches_mujoco_and_its_gradient(adaptive):
+    """The IK's forearm-torso clearance agrees with MuJoCo's geom distance (to the segment sampling) and its
+    joint gradient with finite differences."""
+    u = adaptive.unwrapped
+    ik, model = u.ik, u.scene.model
+    rng = np.random.default_rng(0)
+    q = ik.posture + rng.uniform(-0.3, 0.3, (5, ik.kin.n))
+    clearance, grad = ik.clearance.evaluate(ik.kin.forward(q))
+    data = mujoco.MjData(model)
+    for b in range(len(q)):
+        data.qpos[ik.kin.qpos_adr] = q[b]
+        mujoco.mj_kinematics(model, data)
+        exact = mujoco.mj_geomDistance(model, data, model.geom("r_forearm").id, model.geom("torso").id, 1.0, None)
+        assert exact - 1e-9 <= clearance[b].min() <= exact + 0.01
+    step = 1e-6
+    for j in range(ik.kin.n):
+        shifted = q.copy()
+        shifted[:, j] += step
+        numeric = (ik.clearance.evaluate(ik.kin.forward(shifted))[0] - clearance) / step
+        np.testing.assert_allclose(grad[:, :, j], numeric, atol=1e-4)
 
 
 def test_tilted_table_is_followed_with_adaptation(adaptive, rigid):
