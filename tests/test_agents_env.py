@@ -20,7 +20,8 @@ import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 torch.set_num_threads(1)
 
-FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
+# no cup: these tests check the learning machinery on the wiping itself (the cup is bench_agents.py's)
+FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50, "obstacle": False}
 
 
 @pytest.fixture(scope="module")
