@@ -51,7 +51,7 @@ import rdmp_gym
 
 assert "+cpu" in torch.__version__ or not torch.cuda.is_available(), torch.__version__
 assert "site-packages" in rdmp_gym.__file__, rdmp_gym.__file__
-env = gym.make("rdmp_gym/ArmarWipe-v0", n_periodic=10, n_transient=10)
+env = gym.make("rdmp_gym/ArmarWipe-v1", n_periodic=10, n_transient=10)
 env.reset(seed=0)
 xml = env.unwrapped.scene.xml_file
 assert "site-packages" in str(xml) and xml.is_file(), xml

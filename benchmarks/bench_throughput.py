@@ -3,7 +3,7 @@
 Three measurements, each repeated ``--repeats`` times with the variants interleaved (so that a change
 of load on a shared machine hits every variant alike):
 
-1. **Episodes per second** of one batch (``--episodes`` default episodes of ``rdmp_gym/ArmarWipe-v0``,
+1. **Episodes per second** of one batch (``--episodes`` default episodes of ``rdmp_gym/ArmarWipe-v1``,
    random actions of std 0.1, fixed seeds) on one process, on the local pool (``--workers`` processes)
    and on Ray (``--workers`` actors; a new local instance, or ``--ray-address``). Besides the wall
    time, the CPU time of every process involved (this one and the workers, from ``/proc``) is

@@ -38,6 +38,6 @@ __all__ = [
 ]
 
 try:  # the environment layer is optional: it needs gymnasium and mujoco
-    from . import envs as _envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v0)
+    from . import envs as _envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 except ImportError:  # pragma: no cover - exercised only without the extras
     pass

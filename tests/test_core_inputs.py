@@ -145,4 +145,4 @@ def test_a_control_rate_above_the_physics_rate_is_refused():
     import rdmp_gym.envs  # noqa: F401
 
     with pytest.raises(ValueError, match=r"control_rate: expected at most the physics rate 500 Hz"):
-        gym.make("rdmp_gym/ArmarWipe-v0", disable_env_checker=True, control_rate=1e6, n_periodic=10, n_transient=10)
+        gym.make("rdmp_gym/ArmarWipe-v1", disable_env_checker=True, control_rate=1e6, n_periodic=10, n_transient=10)

@@ -213,7 +213,7 @@ def env():
     gym = pytest.importorskip("gymnasium")
     import rdmp_gym.envs  # noqa: F401
 
-    environment = gym.make("rdmp_gym/ArmarWipe-v0", disable_env_checker=True, n_periodic=10, n_transient=10,
+    environment = gym.make("rdmp_gym/ArmarWipe-v1", disable_env_checker=True, n_periodic=10, n_transient=10,
                            n_periods=1, control_rate=50)
     yield environment
     environment.close()
