@@ -295,12 +295,15 @@ def _print_comparison(result: dict[str, Any]) -> None:
         summary = result[name]
         print(f"{name:>10} {_interval_text(summary, 'success'):>22} {_interval_text(summary, 'coverage'):>22} "
               f"{_interval_text(summary, 'jerk_ratio'):>22}")
-    gain = np.array(result["trained"]["coverage"], dtype=float) - np.array(result["imitation"]["coverage"], dtype=float)
-    paired = np.array(result["trained"]["success"], dtype=float) - np.array(result["imitation"]["success"], dtype=float)
     from .protocol import interval
 
-    print(f"paired gain over the imitation on the same {len(gain)} test contexts (mean, 95 % CI): coverage "
-          f"{interval(gain, 'mean')}, success {interval(paired, 'mean')}")
+    def paired_gain(metric: str) -> str:        # "-" where the task has no such metric (e.g. no dirt: coverage)
+        gain = (np.array(result["trained"][metric], dtype=float)
+                - np.array(result["imitation"][metric], dtype=float))
+        return str(interval(gain, "mean")) if np.all(np.isfinite(gain)) else "-"
+
+    print(f"paired gain over the imitation on the same {len(result['trained']['success'])} test contexts (mean, "
+          f"95 % CI): coverage {paired_gain('coverage')}, success {paired_gain('success')}")
 
 
 def _command_main(args: argparse.Namespace) -> None:

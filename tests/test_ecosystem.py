@@ -258,3 +258,15 @@ def test_make_run_can_be_run_twice(tmp_path):
     assert second.returncode == 0, second.stderr[-2000:]
     assert (out / "summary.json").stat().st_mtime_ns > summary
     assert len((out / "train" / "log.jsonl").read_text().splitlines()) == 2    # nothing trained twice
+
+
+def test_the_comparison_table_leaves_out_gains_a_task_does_not_measure(capsys):
+    """A task without dirt (the tracking env) has no coverage: its paired gain is "-", not an error."""
+    from rdmp_gym.agents.cli import _print_comparison
+
+    def scores(success: list[bool]) -> dict:
+        return {"intervals": {}, "success": success, "coverage": [None] * len(success)}
+
+    _print_comparison({"imitation": scores([False, True]), "trained": scores([True, True])})
+    printed = capsys.readouterr().out
+    assert "coverage -," in printed and "success 0.500 [" in printed
