@@ -105,7 +105,43 @@ def load_weights(model: PPO | SAC, state: Mapping[str, Any], name: str) -> None:
     model.num_timesteps, model._n_updates = state["num_timesteps"], state["n_updates"]
 
 
-class PPOAgent:
+class _SB3Agent:
+    """What PPO and SAC agents share: deterministic policy actions, weights-only checkpoints, the divergence check.
+
+    Subclasses set ``model``, ``env``, ``name`` (``"ppo"``, ``"sac"``) and ``divergence_hint``.
+    """
+
+    model: PPO | SAC
+    env: VecEnv
+    name: str = ""
+    divergence_hint: str = ""
+
+    def _check_finite(self, cause: Exception | None = None) -> None:
+        """Raise ``FloatingPointError`` if any policy weight is NaN or inf."""
+        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
+            raise FloatingPointError(f"{self.name}: the policy diverged (NaN or inf weights); "
+                                     f"{self.divergence_hint}") from cause
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        """``[E, n]`` deterministic actions for the contexts ``observations [E, o]``, in ``[-1, 1]``."""
+        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
+        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
+
+    def state_dict(self) -> dict[str, Any]:
+        buffer = io.BytesIO()
+        self.model.save(buffer)
+        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
+                "n_updates": int(self.model._n_updates)}
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        """Restore the networks and optimisers from SB3's zip (weights only, nothing unpickled)."""
+        load_weights(self.model, state, self.name.upper())
+
+    def close(self) -> None:
+        self.env.close()
+
+
+class PPOAgent(_SB3Agent):
     """PPO with one iteration (``rollouts`` episodes, then the gradient epochs) per update.
 
     Args:
@@ -117,6 +153,9 @@ class PPOAgent:
         seed: seeds torch, the policy and the envs.
         options: fields of :class:`PPOConfig`.
     """
+
+    name = "ppo"
+    divergence_hint = "lower learning_rate or target_kl (--option learning_rate=...)"
 
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
                  options: Mapping[str, Any] | None = None, log_dir: str | Path | None = None) -> None:
@@ -153,30 +192,8 @@ class PPOAgent:
         self._check_finite()
         return self._collector.pop_batch()
 
-    def _check_finite(self, cause: Exception | None = None) -> None:
-        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
-            raise FloatingPointError("ppo: the policy diverged (NaN or inf weights); lower learning_rate "
-                                     "or target_kl (--option learning_rate=...)") from cause
 
-    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
-        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
-        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
-
-    def state_dict(self) -> dict[str, Any]:
-        buffer = io.BytesIO()
-        self.model.save(buffer)
-        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
-                "n_updates": int(self.model._n_updates)}
-
-    def load_state_dict(self, state: Mapping[str, Any]) -> None:
-        """Restore the policy and optimiser weights from SB3's zip (weights only, nothing unpickled)."""
-        load_weights(self.model, state, "PPO")
-
-    def close(self) -> None:
-        self.env.close()
-
-
-class SACAgent:
+class SACAgent(_SB3Agent):
     """SAC with ``rollouts`` environment steps (episodes) and their gradient steps per update.
 
     Args:
@@ -186,6 +203,9 @@ class SACAgent:
         seed: seeds torch, the policy and the env.
         options: fields of :class:`SACConfig`.
     """
+
+    name = "sac"
+    divergence_hint = "lower learning_rate (--option learning_rate=...)"
 
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, seed: int,
                  options: Mapping[str, Any] | None = None) -> None:
@@ -219,24 +239,6 @@ class SACAgent:
 
     def train_update(self) -> EpisodeBatch:
         self.model.learn(self.rollouts, callback=self._collector, reset_num_timesteps=False)
-        if not all(torch.isfinite(parameter).all() for parameter in self.model.policy.parameters()):
-            raise FloatingPointError("sac: the policy diverged (NaN or inf weights); lower learning_rate "
-                                     "(--option learning_rate=...)")
+        self._check_finite()
         return self._collector.pop_batch()
 
-    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
-        actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
-        return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
-
-    def state_dict(self) -> dict[str, Any]:
-        buffer = io.BytesIO()
-        self.model.save(buffer)
-        return {"model": buffer.getvalue(), "num_timesteps": int(self.model.num_timesteps),
-                "n_updates": int(self.model._n_updates)}
-
-    def load_state_dict(self, state: Mapping[str, Any]) -> None:
-        """Restore the networks and optimisers from SB3's zip (weights only; the replay buffer starts empty)."""
-        load_weights(self.model, state, "SAC")
-
-    def close(self) -> None:
-        self.env.close()
