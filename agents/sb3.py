@@ -226,6 +226,7 @@ class SACAgent(_SB3Agent):
             actor.mu.bias.copy_(torch.as_tensor(start, dtype=torch.float32))
             actor.log_std.weight.mul_(0.01)
             actor.log_std.bias.fill_(math.log(self.config.sigma))
+        self.model.set_logger(_logger(False, None))
         self._collector = _EpisodeCollector("actions")
 
     @property

@@ -212,3 +212,19 @@ def test_sac_trains_on_the_one_step_task(tmp_path):
     from rdmp_gym.agents.assessment import evaluate_run
 
     assert np.isfinite(evaluate_run(tmp_path / "sac", 2)["trained"]["return_mean"])
+
+
+def test_sac_leaves_no_sb3_folder_in_the_temporary_directory(tmp_path, monkeypatch):
+    """SB3's default logger makes an ``SB3-<date>`` folder at every ``learn()``; the agents set their own."""
+    from rdmp_gym.agents.sb3 import SACAgent
+    from rdmp_gym.agents.tasks import TaskSpec
+    from rdmp_gym.envs.tracking import TRACKING_ID as TRACKING
+
+    monkeypatch.setenv("SB3_LOGDIR", str(tmp_path / "sb3"))     # where SB3's default logger would write
+    spec = TaskSpec(TRACKING, {"n_periodic": 8, "n_transient": 8, "duration": 2.0})
+    agent = SACAgent(spec, np.zeros(spec.make().action_space.shape[0]), rollouts=2, seed=0)
+    try:
+        agent.train_update()
+    finally:
+        agent.close()
+    assert not (tmp_path / "sb3").exists()
