@@ -11,16 +11,6 @@ from rdmp_gym.demonstrations import Demonstration
 
 
 @pytest.fixture(scope="module")
-def demo():
-    return wiping_demonstration(1, rng=0)
-
-
-@pytest.fixture(scope="module")
-def dmp(demo):
-    return RhythmicDMP.fit(demo, n_periodic=10, n_transient=8)
-
-
-@pytest.fixture(scope="module")
 def periodic(demo):
     return PeriodicDMP.fit(demo, n_periodic=10)
 

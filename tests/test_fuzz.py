@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rdmp_gym import PeriodicDMP, RhythmicDMP, wiping_demonstration
+from rdmp_gym import PeriodicDMP, RhythmicDMP
 from rdmp_gym.demonstrations import Demonstration
 from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
 
@@ -65,16 +65,6 @@ def clear_or_finite(call):
         return None
     assert _finite(result), f"non-finite result {result!r}"
     return result
-
-
-@pytest.fixture(scope="module")
-def demo():
-    return wiping_demonstration(1, rng=0)
-
-
-@pytest.fixture(scope="module")
-def dmp(demo):
-    return RhythmicDMP.fit(demo, n_periodic=10, n_transient=8)
 
 
 # ---------------------------------------------------------------------------------------- demonstrations
