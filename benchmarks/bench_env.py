@@ -123,15 +123,8 @@ def timing(env, repeats: int) -> dict:
 
 def force_at_500hz(env, plot: Path | None) -> dict:
     """Level-table pad force at every physics step (v1) against the stored v0 trace; optional plot."""
-    u = env.unwrapped
-    u.fine_force = True
-    try:
-        _, info = episode(env, NOMINAL)
-    finally:
-        u.fine_force = False
-    dt = u.scene.model.opt.timestep
-    start = (int(np.argmax(u.periodic)) + round(0.5 / u.dt)) * u.frame_skip      # 0.5 s into the wiping phase
-    after = info["fine_force_trace"][start:]
+    dt = env.unwrapped.scene.model.opt.timestep
+    after, _ = probes.wiping_force_at_500hz(env, NOMINAL)                       # from 0.5 s into the wiping phase
     v0 = np.load(RESULTS / "env_force_v0.npz")
     before_all = v0["force"]
     before = before_all[round((float(v0["transient"]) + 0.5) / float(v0["timestep"])):]

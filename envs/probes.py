@@ -1,6 +1,6 @@
 """Hand-made sponge paths that try to game the wiping reward (for tests and ``benchmarks/bench_env.py``).
 
-Each function returns a path ``[T, 3]`` in the table frame for :meth:`ArmarWipeEnv.run_path`, built in
+Each path function returns a path ``[T, 3]`` in the table frame for :meth:`ArmarWipeEnv.run_path`, built in
 the env's current context. They keep the imitation's approach (so the touchdown is the same) and then
 do something cheap instead of wiping: hold still, press and lift on a grid, reach into the robot.
 (The honest counterpart for the cup, a raised approach, is an action: the env's ``approach`` dimension.)
@@ -12,7 +12,7 @@ import numpy as np
 
 from .wipe_env import ArmarWipeEnv
 
-__all__ = ["hold_still", "into_the_torso", "press_lift_grid"]
+__all__ = ["hold_still", "into_the_torso", "press_lift_grid", "wiping_force_at_500hz"]
 
 
 def _smooth(x: np.ndarray) -> np.ndarray:
@@ -67,3 +67,18 @@ def into_the_torso(env: ArmarWipeEnv, point: tuple[float, float, float] = (-0.30
     path = _imitation(env)
     start = int(np.argmax(env.periodic))
     return _blend(path, np.tile(np.asarray(point, dtype=np.float64), (len(path), 1)), start, round(1.0 / env.dt))
+
+
+def wiping_force_at_500hz(env, options: dict | None, seed: int = 0) -> tuple[np.ndarray, dict]:
+    """Run the imitation (action 0) in ``env`` (a ``gym.make`` of the wiping env) with the sponge-table force
+    recorded at every physics step. Returns the force ``[S]`` (N) from 0.5 s into the wiping phase on, and the
+    episode's ``info`` (its ``fine_force_trace`` holds the whole episode)."""
+    task = env.unwrapped
+    task.fine_force = True
+    try:
+        env.reset(seed=seed, options=options)
+        info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
+    finally:
+        task.fine_force = False
+    start = (int(np.argmax(task.periodic)) + round(0.5 / task.dt)) * task.frame_skip
+    return info["fine_force_trace"][start:], info

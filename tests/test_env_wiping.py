@@ -5,7 +5,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-from rdmp_gym.envs import ENV_ID
+from rdmp_gym.envs import ENV_ID, probes
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult, PathIK
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
@@ -87,15 +87,10 @@ def test_pad_contact_at_500_hz_is_steady(adaptive):
     """Issue 8 item 4: on a level table the 500 Hz sponge-table force stays within 2 N (SD) of its mean near
     the 18 N target during wiping, the contact is an area (several points), and it never drops to 0 N."""
     u = adaptive.unwrapped
-    u.fine_force = True
-    try:
-        _, info = run(adaptive, NOMINAL)
-    finally:
-        u.fine_force = False
+    wiping, info = probes.wiping_force_at_500hz(adaptive, NOMINAL)             # from 0.5 s into the wiping phase
     fine = info["fine_force_trace"]
     assert fine.shape == (u.n_steps * u.frame_skip,)
     skip = u.frame_skip
-    wiping = fine[(int(np.argmax(u.periodic)) + round(0.5 / u.dt)) * skip:]   # from 0.5 s into the wiping phase
     assert abs(wiping.mean() - 18.0) < 1.0
     assert wiping.std() <= 2.0                                   # measured 0.7-0.8 N (v0: 5.0 N)
     assert wiping.min() > 5.0                                    # no single-step drops (v0: 20 per second to 0 N)
