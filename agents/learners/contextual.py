@@ -58,6 +58,11 @@ class ContextualConfig:
         h: PI^BB's / PI²'s eliteness.
         contextual: learn the gains ``K`` (False: one θ for every context).
         groups: comma-separated action groups to search (``""`` = all; e.g. ``"amplitude"``).
+        gain_groups: comma-separated searched groups whose actions depend on the context (rows of ``K``);
+            the others get one value for every context (``θ̄`` only). ``""`` = every searched group. Few
+            context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
+        features: comma-separated context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
+            ``"patch_size,obstacle"``); ``""`` = every field. The rest is left out of the policy and baselines.
         control_cost: weight of ``½ aᵀRa`` in the cost.
         reuse: batches (this one and earlier ones) whose samples enter each update.
         gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
@@ -73,6 +78,8 @@ class ContextualConfig:
     h: float = 10.0
     contextual: bool = True
     groups: str = ""
+    gain_groups: str = ""
+    features: str = ""
     control_cost: float = 0.05
     reuse: int = 4
     gain_prior: float = 0.3
@@ -141,6 +148,7 @@ class SearchSpace:
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only), or None.
         context_gate: ``[o]`` int: for a gated feature the index of its 0/1 indicator (the feature is
             ``indicator · (o - centre) / scale``), -1 for the others; None = no gated features.
+        context_names: ``[o]`` the context field of each observation entry (e.g. ``patch_size``), or None.
     """
 
     slices: Mapping[str, slice]
@@ -149,6 +157,7 @@ class SearchSpace:
     context_scale: np.ndarray
     time_weights: np.ndarray | None = None
     context_gate: np.ndarray | None = None
+    context_names: tuple[str, ...] | None = None
 
     @classmethod
     def from_env(cls, env: Any, observations: np.ndarray) -> SearchSpace:
@@ -158,6 +167,9 @@ class SearchSpace:
         n = int(env.action_space.shape[0])
         if hasattr(base, "dmp") and hasattr(base, "groups"):
             slices, n_dims = dict(base.dmp.param_slices(base.groups)), int(base.dmp.n_dims)
+            first = sum(part.stop - part.start for part in slices.values())
+            for offset, name in enumerate(getattr(getattr(base, "action_map", None), "direction_names", ())):
+                slices[name] = slice(first + offset, first + offset + 1)     # e.g. ArmarWipe-v1's ``approach``
         else:
             slices, n_dims = {"all": slice(0, n)}, 1
         observations = np.asarray(observations, dtype=np.float64)
@@ -168,7 +180,36 @@ class SearchSpace:
             center[j], scale[j] = (defined.mean(), defined.std()) if defined.size > 1 else (0.0, 0.0)
         scale[scale < 1e-9 * (1.0 + np.abs(center))] = 0.0
         weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
-        return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None)
+        return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None,
+                   _context_names(base, observations.shape[1]))
+
+
+def _select(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, slice]:
+    """The groups of ``slices`` named in the comma-separated ``spec`` (``transient`` names every ``transient:k``)."""
+    wanted = [g.strip() for g in spec.split(",") if g.strip()]
+    chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
+    if not chosen:
+        raise ValueError(f"{argument}: {spec!r} selects none of the action's groups {sorted(slices)}")
+    return chosen
+
+
+def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
+    fields = getattr(base, "context_fields", None)
+    if fields is None and hasattr(base, "context_spec"):
+        from rdmp_gym.envs.context import CONTEXT_FIELDS as fields
+    return fields
+
+
+def _context_names(base: Any, size: int) -> tuple[str, ...] | None:
+    """``[o]`` the field name of each observation entry (None if the env names no fields)."""
+    fields = _context_fields(base)
+    if not fields:
+        return None
+    names = [""] * size
+    for name, (start, length) in fields.items():
+        for index in range(start, min(start + length, size)):
+            names[index] = name
+    return tuple(names)
 
 
 def _context_gate(base: Any, size: int) -> np.ndarray:
@@ -176,9 +217,7 @@ def _context_gate(base: Any, size: int) -> np.ndarray:
     position (``obstacle_position``) is gated by its presence (``obstacle``), read from the env's
     ``CONTEXT_FIELDS``; an env without them has none."""
     gate = np.full(size, -1, dtype=np.int64)
-    fields = getattr(base, "context_fields", None)
-    if fields is None and hasattr(base, "context_spec"):
-        from rdmp_gym.envs.context import CONTEXT_FIELDS as fields
+    fields = _context_fields(base)
     if fields and "obstacle" in fields and "obstacle_position" in fields:
         start, length = fields["obstacle_position"]
         if start + length <= size:
@@ -256,17 +295,25 @@ class ContextualSearch(Learner):
         self.name = name
         slices = dict(space.slices)
         if self.config.groups:
-            wanted = [g.strip() for g in self.config.groups.split(",") if g.strip()]
-            chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
-            if not chosen:
-                raise ValueError(f"groups: {self.config.groups!r} selects none of the action's groups {sorted(slices)}")
-            slices = chosen
+            slices = _select(slices, self.config.groups, "groups")
         self.noise = SmoothNoise(self.n_params, block_layout(slices, space.n_dims), self.config.length)
         self._explored = self.noise.mask()
+        self._context_dependent = self._explored.copy()
+        if self.config.gain_groups:
+            self._context_dependent = np.zeros(self.n_params, dtype=bool)
+            for index in _select(slices, self.config.gain_groups, "gain_groups").values():
+                self._context_dependent[index] = True
         self.center = np.asarray(space.context_center, dtype=np.float64)
         scale = np.asarray(space.context_scale, dtype=np.float64)
         if self.center.ndim != 1 or scale.shape != self.center.shape or np.any(scale < 0):
             raise ValueError("space: context_center and context_scale must be 1-D of one length, scale >= 0")
+        if self.config.features:
+            wanted = {name.strip() for name in self.config.features.split(",") if name.strip()}
+            names = space.context_names
+            if names is None or not wanted <= set(names):
+                raise ValueError(f"features: {self.config.features!r} names fields the env's context does not have "
+                                 f"({sorted(set(names or ()) - {''})})")
+            scale = np.where(np.isin(np.array(names), list(wanted)), scale, 0.0)
         self._used = scale > 0
         self.scale = scale
         self.gate = None if space.context_gate is None else np.asarray(space.context_gate, dtype=np.int64)
@@ -351,11 +398,21 @@ class ContextualSearch(Learner):
         return cost_weights(advantage, self.config.h)
 
     def _fit(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray) -> np.ndarray:
-        """``[S, n, F + 1]`` the MAP fits of ``u [N, n]`` on ``x [N, F + 1]`` for ``S`` weightings ``[S, N]``."""
+        """``[S, n, F + 1]`` the MAP fits of ``u [N, n]`` on ``x [N, F + 1]`` for ``S`` weightings ``[S, N]``
+        (the context-independent dimensions: on the constant alone, their gains stay 0)."""
+        fit = self._regress(u, x, weights, self.gains)
+        if np.all(self._context_dependent) or x.shape[1] == 1:
+            return fit
+        shared = self._regress(u, x[:, :1], weights, self.gains[:, :1])                 # [S, n, 1]
+        fit[:, ~self._context_dependent] = 0.0
+        fit[:, ~self._context_dependent, :1] = shared[:, ~self._context_dependent]
+        return fit
+
+    def _regress(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray, previous: np.ndarray) -> np.ndarray:
         prior = self.config.gain_prior * np.eye(x.shape[1])
         prior[0, 0] = 1e-9
         gram = np.einsum("sk,kf,kg->sfg", weights, x, x) + prior                 # [S, F+1, F+1]
-        moment = np.einsum("sk,kn,kf->snf", weights, u, x) + self.gains @ prior  # [S, n, F+1]
+        moment = np.einsum("sk,kn,kf->snf", weights, u, x) + previous @ prior    # [S, n, F+1]
         return np.linalg.solve(gram, np.swapaxes(moment, 1, 2)).swapaxes(1, 2)
 
     def _pi2_fit(self, data: dict[str, np.ndarray], episode_fit: np.ndarray) -> np.ndarray:
