@@ -101,7 +101,8 @@ def search_context(seed: int, budget: int, sigma: float, cma_seed: int) -> dict:
         searched = dict(best)
     env.close()
     return {"seed": seed, "patch_size": size.round(4).tolist(), "cup": cup, "imitation": imitation, "grid": grid,
-            "cmaes": searched, "reached": bool(best["success"]), "best_coverage": best["coverage"], "episodes": episodes}
+            "cmaes": searched, "reached": bool(best["success"]), "best_coverage": best["coverage"],
+            "episodes": episodes}
 
 
 def main() -> None:

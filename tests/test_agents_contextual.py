@@ -228,3 +228,25 @@ def test_sac_leaves_no_sb3_folder_in_the_temporary_directory(tmp_path, monkeypat
     finally:
         agent.close()
     assert not (tmp_path / "sb3").exists()
+
+
+def test_gain_groups_make_only_those_actions_depend_on_the_context():
+    _, _, learner = _toy("creps", _contextual_target, updates=10, length=0.0, gain_prior=0.01,
+                         gain_groups="amplitude")
+    assert np.all(learner.gains[: N - 2, 1:] == 0.0)                   # periodic: one θ for every context
+    assert np.all(np.abs(learner.gains[N - 2:, 1:]) > 1e-3)           # amplitude: context gains learned
+    assert np.any(learner.gains[: N - 2, 0] != 0.0)                   # ... while the shared θ̄ still moves
+    with pytest.raises(ValueError, match="gain_groups"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"gain_groups": "initial"}, space=_space())
+
+
+def test_features_select_context_fields_by_name():
+    space = SearchSpace({"periodic": slice(0, N - 2), "amplitude": slice(N - 2, N)}, 2, np.zeros(3), np.ones(3),
+                        context_names=("patch_size", "patch_size", "table_height"))
+    learner = make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"features": "patch_size"}, space=space)
+    assert learner.features(np.ones((4, 3))).shape == (4, 3)           # constant + the two patch sides
+    assert learner.state_dict()["context_scale"].tolist() == [1.0, 1.0, 0.0]
+    with pytest.raises(ValueError, match="features"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"features": "patch_sise"}, space=space)
+    with pytest.raises(ValueError, match="features"):                  # an env without named fields
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"features": "patch_size"}, space=_space())

@@ -122,3 +122,21 @@ def test_ppo_reports_a_diverged_policy_clearly(context):
             agent.train_update()
     finally:
         agent.close()
+
+
+def test_contextual_learners_explore_the_approach_dimension():
+    """ArmarWipe-v1's ``approach`` (the last action dimension, outside the DMP's parameter groups) is searched
+    and can depend on the context: without it no learner could learn to lift over the cup."""
+    from rdmp_gym.agents.learners import SearchSpace, make_learner
+
+    env = gym.make(WIPE_ID)
+    observations = np.stack([env.reset(seed=s)[0] for s in range(8)]).astype(np.float64)
+    space = SearchSpace.from_env(env, observations)
+    n = env.action_space.shape[0]
+    assert space.slices["approach"] == slice(n - 1, n)
+    assert space.context_names[10:13] == ("obstacle", "obstacle_position", "obstacle_position")
+    learner = make_learner("cpi2", np.zeros(n), 4, np.random.default_rng(0),
+                           {"gain_groups": "amplitude,approach", "features": "patch_size,obstacle"}, space=space)
+    actions = learner.ask(observations[:4])
+    assert np.std(actions[:, -1]) > 0.05
+    env.close()
