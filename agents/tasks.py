@@ -11,10 +11,30 @@ import numpy as np
 
 from .imitation import load_demonstration
 
-__all__ = ["WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics"]
+__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
+
+#: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
+#: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
+#: validation contexts only (README, "Learning to wipe"): the context sets the pattern's amplitudes and the
+#: approach's lift (the rows of K), from the patch size and the cup's presence; every other weight is one
+#: shared refinement; the approach is explored over its whole range (only a lift near its full 6 cm clears
+#: the cup, so a small step never shows its worth).
+CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
+    WIPE_ID: {"gain_groups": "amplitude,approach", "features": "patch_size,obstacle", "sigma_factors": "approach=3"},
+}
+_TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
+
+
+def task_options(env_id: str, agent: str, options: Mapping[str, Any], env_kwargs: Mapping[str, Any] | None = None
+                 ) -> dict[str, Any]:
+    """``options`` over the task's defaults for ``agent`` (:data:`CONTEXTUAL_SEARCH_DEFAULTS`; none when
+    ``env_kwargs`` choose other action ``groups``, which the defaults may not name)."""
+    chosen = agent in _TASK_DEFAULT_AGENTS and "groups" not in (env_kwargs or {})
+    defaults = CONTEXTUAL_SEARCH_DEFAULTS.get(env_id, {}) if chosen else {}
+    return {**defaults, **options}
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ from .ppo_config import PPOConfig
 from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
 from .runs import RunDirectory, write_atomic
 from .sac_config import SACConfig
-from .tasks import WIPE_ID, TaskSpec
+from .tasks import WIPE_ID, TaskSpec, task_options
 
 __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_summary", "environment_record",
            "load_run_config", "train"]
@@ -66,7 +66,8 @@ class TrainConfig:
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
-        options: the agent's settings (fields of ``PI2Config``, ``PIBBConfig``, ``CMAESConfig``, ``PPOConfig``).
+        options: the agent's settings (fields of ``PI2Config``, ``PIBBConfig``, ``CMAESConfig``, ``PPOConfig``, ...);
+            a contextual search on the wiping task starts from ``tasks.CONTEXTUAL_SEARCH_DEFAULTS``.
         start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
             ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
             a smaller, damped movement; the initial conditions as fitted).
@@ -109,6 +110,8 @@ class TrainConfig:
                 raise TypeError(f"{name}: expected a mapping, got {type(getattr(self, name)).__name__}")
         if self.reset_options is not None and not isinstance(self.reset_options, Mapping):
             raise TypeError(f"reset_options: expected a mapping or None, got {type(self.reset_options).__name__}")
+        object.__setattr__(self, "options", task_options(self.env_id, self.agent, self.options,
+                                                               self.env_kwargs))
         from_options(AGENT_CONFIGS[self.agent], self.options, self.agent)  # fail early on a bad setting
 
     @classmethod

@@ -61,6 +61,9 @@ class ContextualConfig:
         gain_groups: comma-separated searched groups whose actions depend on the context (rows of ``K``);
             the others get one value for every context (``θ̄`` only). ``""`` = every searched group. Few
             context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
+        sigma_factors: per-group factors of ``sigma`` and its bounds, ``"group=factor,..."`` (e.g.
+            ``"approach=3"``: a dimension whose effect is only seen far from the imitation, such as a lift
+            that clears an obstacle only near its full height, is explored over its whole range).
         features: comma-separated context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
             ``"patch_size,obstacle"``); ``""`` = every field. The rest is left out of the policy and baselines.
         control_cost: weight of ``½ aᵀRa`` in the cost.
@@ -79,6 +82,7 @@ class ContextualConfig:
     contextual: bool = True
     groups: str = ""
     gain_groups: str = ""
+    sigma_factors: str = ""
     features: str = ""
     control_cost: float = 0.05
     reuse: int = 4
@@ -191,6 +195,24 @@ def _select(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, 
     if not chosen:
         raise ValueError(f"{argument}: {spec!r} selects none of the action's groups {sorted(slices)}")
     return chosen
+
+
+def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice], spec: str) -> np.ndarray:
+    """``[B]`` the ``sigma_factors`` of each exploration block (1 where none is given)."""
+    factors = np.ones(len(blocks))
+    for item in (part.strip() for part in spec.split(",") if part.strip()):
+        name, _, text = item.partition("=")
+        try:
+            factor = float(text)
+        except ValueError:
+            factor = float("nan")
+        if not np.isfinite(factor) or factor <= 0:
+            raise ValueError(f"sigma_factors: {item!r} is not 'group=factor' with a factor > 0")
+        for group in _select(slices, name, "sigma_factors").values():
+            for index, (part, _) in enumerate(blocks):
+                if group.start <= part.start < group.stop:
+                    factors[index] = factor
+    return factors
 
 
 def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
@@ -322,7 +344,8 @@ class ContextualSearch(Learner):
         n_features = 1 + int(self._used.sum()) if self.config.contextual else 1
         self.gains = np.zeros((self.n_params, n_features))        # W = [θ̄, K]
         self.gains[:, 0] = unsquash(self._mean)
-        self.sigmas = np.full(self.noise.n_blocks, self.config.sigma)
+        self._sigma_factor = _block_factors(self.noise.blocks, slices, self.config.sigma_factors)
+        self.sigmas = self.config.sigma * self._sigma_factor
         self.time_weights = None
         if self.config.weighting == "pi2":
             if space.time_weights is None:
@@ -435,7 +458,8 @@ class ContextualSearch(Learner):
             return
         variance = weights @ self.noise.whitened_energy(noise)                           # [B]
         updated = np.sqrt((1 - rate) * self.sigmas**2 + rate * variance)
-        self.sigmas = np.clip(updated, self.config.min_sigma, self.config.max_sigma)
+        self.sigmas = np.clip(updated, self.config.min_sigma * self._sigma_factor,
+                              self.config.max_sigma * self._sigma_factor)
 
     # ------------------------------------------------------------------ state
     def _extra_state(self) -> dict[str, Any]:
