@@ -49,7 +49,7 @@ def cup_in_path_frame(env) -> tuple[np.ndarray, float] | None:
     return base[:2], float(top)
 
 
-def lift_term(env, clearance: float = 0.01, ramp: float = 0.1, profile: tuple[float, float, float] = LIFT_PROFILE
+def lift_term(env, clearance: float = 0.01, ramp: float = 0.15, profile: tuple[float, float, float] = LIFT_PROFILE
               ) -> LiftOver | None:
     """The :class:`LiftOver` term of the episode's cup (``None`` without one): the cup's radius and top in the
     path frame, the sponge's half diagonal plus :data:`REACH_MARGIN` as the reach, the DMP's spring, and the
