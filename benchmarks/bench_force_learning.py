@@ -9,7 +9,9 @@ physics step (500 Hz, unsmoothed), per period after the transient. Also the firs
 last period's error of the contact force and of the wrist force (what the controller measures), and the first
 harmonic of their difference (the hand's and sponge's dynamics between the sensor and the contact).
 
-Then ``wavy_contact`` (a curved surface without MuJoCo, 3 mm and 1 mm harmonics along
+Then the same on a curved table (``curved_table_scene``: the top an ellipsoid of half height 6 cm, the wiped
+patch 1-16 mm below the plane the controller plans on; not tilted), and ``wavy_contact`` (a curved surface
+without MuJoCo, 3 mm and 1 mm harmonics along
 the period, pressed through a 30 ms servo lag, force measured exactly): 15 periods at both gains.
 
     python benchmarks/bench_force_learning.py [--save]
@@ -26,7 +28,12 @@ from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs import wipe_env as wipe_env_module
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings
-from rdmp_gym.envs.force_learning import ForceProfileLearning, period_force_errors, wavy_contact
+from rdmp_gym.envs.force_learning import (
+    ForceProfileLearning,
+    curved_table_scene,
+    period_force_errors,
+    wavy_contact,
+)
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
@@ -87,12 +94,20 @@ def main() -> None:
     add_save_argument(parser)
     args = parser.parse_args()
     tilts = np.vstack([[0.0, 0.0], np.random.default_rng(0).uniform(-0.15, 0.15, size=(8, 2))])
-    envs = {f"{name}, gain {gain}": gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
-            for gain in (0.02, 0.004) for name, flag in (("admittance", False), ("learned profile", True))}
+    controllers = [(f"{name}, gain {gain}", gain, flag) for gain in (0.02, 0.004)
+                   for name, flag in (("admittance", False), ("learned profile", True))]
+
+    def make(gain: float, flag: bool, **kwargs) -> gym.Env:
+        return gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain, **kwargs)
+
+    envs = {name: make(gain, flag) for name, gain, flag in controllers}
+    curved = str(curved_table_scene(results_dir(False)))
+    curved_envs = {name: make(gain, flag, xml_file=curved) for name, gain, flag in controllers}
     tap = _TraceTap()
     wipe_env_module.simulate_wipe = tap
     try:
         rows = [{"controller": name, **episode(env, tilt, tap)} for tilt in tilts for name, env in envs.items()]
+        curved_rows = [{"controller": name, **episode(env, np.zeros(2), tap)} for name, env in curved_envs.items()]
     finally:
         wipe_env_module.simulate_wipe = tap.original
     print(f"{'tilt (roll, pitch) rad':>22} {'controller':<26} {'500 Hz error per period (N): 1st ... 10th':<52} "
@@ -118,12 +133,18 @@ def main() -> None:
         print(f"{name:<26} mean over 9 tables: " + " ".join(f"{v:.2f}" for v in m["mean_error_per_period"])
               + f"  h1 {m['contact_h1']:.2f}/{m['wrist_h1']:.2f}/{m['difference_h1']:.2f}"
               + f"  coverage {m['mean_coverage']:.3f}")
+    print("curved table (crown 6 cm, not tilted):")
+    for row in curved_rows:
+        print(f"  {row['controller']:<26} " + " ".join(f"{v:.2f}" for v in row["period_errors"])
+              + f"  h1 {row['contact_h1']:.2f}/{row['wrist_h1']:.2f}/{row['difference_h1']:.2f}"
+              + f"  coverage {row['coverage']:.3f}  valid {row['valid'] and not row['unstable']}")
     wavy = synthetic()
     print("synthetic wavy contact, error per period (N):")
     for name, errors in wavy.items():
         print(f"  {name:<26} " + " ".join(f"{v:.3f}" for v in errors))
     results = results_dir(args.save) / NAME
-    results.write_text(json.dumps({"rows": rows, "summary": summary, "synthetic": wavy}, indent=1))
+    results.write_text(json.dumps({"rows": rows, "summary": summary, "curved": curved_rows, "synthetic": wavy},
+                                   indent=1))
     print(f"wrote {results}")
 
 

@@ -30,6 +30,7 @@ dynamics along the pattern, which the learning cannot see (see the README's meas
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
@@ -38,7 +39,8 @@ from rdmp_gym.basis import periodic_width, von_mises
 
 from .controller import ForceAdaptation, ForceAdaptationSettings
 
-__all__ = ["ForceProfileLearning", "ForceProfileSettings", "period_force_errors", "wavy_contact"]
+__all__ = ["ForceProfileLearning", "ForceProfileSettings", "curved_table_scene", "period_force_errors",
+           "wavy_contact"]
 
 
 @dataclass(frozen=True)
@@ -175,3 +177,28 @@ def wavy_contact(controller: ForceAdaptation, dt: float, period: float, periods:
         force = max(stiffness * (position - surface[k]), 0.0)
         trace[k] = force
     return trace
+
+
+#: The packaged scene's table top (a box) that :func:`curved_table_scene` replaces.
+_TABLE_TOP = 'type="box" size="0.25 0.45 0.02" pos="0.11 0 -0.02"'
+
+
+def curved_table_scene(directory: str | Path, crown: float = 0.06) -> Path:
+    """Write a copy of the packaged ArmarWipe scene whose table top is curved (for ``gym.make(...,
+    xml_file=path)``) into ``directory`` and return its path.
+
+    The box top becomes the upper half of an ellipsoid with the box's half extents (0.25, 0.45 m) and half height
+    ``crown`` (m), its highest point at the nominal table height (the table frame's origin is 0.11 m from it
+    towards the robot). The controller still plans on the nominal plane, so the depth that holds the force varies
+    along the wiping pattern: with ``crown = 0.06`` the default 12 cm patch at the table frame's origin lies 1 to
+    16 mm below the plane."""
+    if not (np.isfinite(crown) and crown > 0.0):
+        raise ValueError(f"crown: expected a finite positive height (m), got {crown!r}")
+    source = Path(__file__).with_name("assets") / "armar3_wipe.xml"
+    text = source.read_text()
+    if text.count(_TABLE_TOP) != 1:
+        raise RuntimeError(f"{source}: the table top is not the expected box; update curved_table_scene")
+    path = Path(directory) / "armar3_wipe_curved.xml"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text.replace(_TABLE_TOP, f'type="ellipsoid" size="0.25 0.45 {crown!r}" pos="0.11 0 {-crown!r}"'))
+    return path

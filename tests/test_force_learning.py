@@ -5,7 +5,13 @@ import numpy as np
 import pytest
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings
-from rdmp_gym.envs.force_learning import ForceProfileLearning, ForceProfileSettings, period_force_errors, wavy_contact
+from rdmp_gym.envs.force_learning import (
+    ForceProfileLearning,
+    ForceProfileSettings,
+    curved_table_scene,
+    period_force_errors,
+    wavy_contact,
+)
 
 import rdmp_gym  # noqa: F401  (registers the env)
 
@@ -50,8 +56,8 @@ def test_settings_are_checked():
         gym.make(ENV_ID, force_learning="yes")
 
 
-def episode(force_learning, tilt):
-    env = gym.make(ENV_ID, n_periods=8.0, force_learning=force_learning)         # the default admittance gain
+def episode(force_learning, tilt, **kwargs):
+    env = gym.make(ENV_ID, n_periods=8.0, force_learning=force_learning, **kwargs)    # the default admittance gain
     env.reset(seed=0, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
                                "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
     inner = env.unwrapped
@@ -72,3 +78,16 @@ def test_tilted_table_force_error_falls_period_by_period_in_mujoco():
     assert np.all(learned[1:] < plain[1:])
     assert learned[-1] < 0.4 * plain[-1]
     assert info["coverage"] >= plain_info["coverage"] - 0.02
+
+
+def test_curved_table_force_error_falls_period_by_period_in_mujoco(tmp_path):
+    scene = str(curved_table_scene(tmp_path))
+    _, plain_info, plain = episode(False, [0.0, 0.0], xml_file=scene)
+    _, info, learned = episode(True, [0.0, 0.0], xml_file=scene)
+    assert plain_info["valid"] and info["valid"] and not info["unstable"]
+    assert np.ptp(plain[1:]) < 0.02 and plain.mean() > 1.0          # the curvature: a larger error, every period
+    assert np.all(np.diff(learned) < 0.0)
+    assert np.all(learned[1:] < plain[1:])
+    assert learned[-1] < 0.45 * plain[-1]
+    with pytest.raises(ValueError, match="crown"):
+        curved_table_scene(tmp_path, crown=0.0)
