@@ -10,7 +10,7 @@ last period's error of the contact force and of the wrist force (what the contro
 harmonic of their difference (the hand's and sponge's dynamics between the sensor and the contact).
 
 Then the same on a curved table (``curved_table_scene``: the top an ellipsoid of half height 6 cm, the wiped
-patch 1-16 mm below the plane the controller plans on; not tilted), and ``wavy_contact`` (a curved surface
+patch 1-17 mm below the plane the controller plans on; not tilted), and ``wavy_contact`` (a curved surface
 without MuJoCo, 3 mm and 1 mm harmonics along
 the period, pressed through a 30 ms servo lag, force measured exactly): 15 periods at both gains.
 

@@ -191,7 +191,7 @@ def curved_table_scene(directory: str | Path, crown: float = 0.06) -> Path:
     ``crown`` (m), its highest point at the nominal table height (the table frame's origin is 0.11 m from it
     towards the robot). The controller still plans on the nominal plane, so the depth that holds the force varies
     along the wiping pattern: with ``crown = 0.06`` the default 12 cm patch at the table frame's origin lies 1 to
-    16 mm below the plane."""
+    17 mm below the plane."""
     if not (np.isfinite(crown) and crown > 0.0):
         raise ValueError(f"crown: expected a finite positive height (m), got {crown!r}")
     source = Path(__file__).with_name("assets") / "armar3_wipe.xml"
