@@ -182,47 +182,58 @@ def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
 
 
 def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
-    """``beyond_force.png``: force-profile learning on a tilted table in the MuJoCo env, the contact force at 500 Hz
-    (needs the ``envs`` extra; returns ``None`` without it)."""
+    """``beyond_force.png``: force-profile learning in the MuJoCo env, the contact force at 500 Hz on a tilted and
+    on a curved table (needs the ``envs`` extra; returns ``None`` without it)."""
     try:
+        import tempfile
+
         import gymnasium as gym
 
         from .envs import ENV_ID
-        from .envs.force_learning import period_force_errors
+        from .envs.force_learning import curved_table_scene, period_force_errors
     except ImportError:
         logger.info("beyond_force.png skipped: gymnasium and mujoco are not installed")
         return None
     tilt = [-0.138, -0.145]
-    fig, (trace, bars) = plt.subplots(1, 2, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1]})
-    errors = {}
-    runs = (("admittance, gain 0.02 (default)", False, 0.02, "tab:gray"),
-            ("+ learned profile, gain 0.02", True, 0.02, "tab:red"),
-            ("admittance, gain 0.004", False, 0.004, "tab:blue"),
-            ("+ learned profile, gain 0.004", True, 0.004, "tab:purple"))
-    for name, flag, gain, color in runs:
-        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
-        env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
-                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
-        inner = env.unwrapped
-        inner.fine_force = True
-        info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
-        fine_dt = inner.dt / inner.frame_skip
-        force = info["fine_force_trace"]
-        if gain == 0.02:
-            trace.plot(np.arange(force.size) * fine_dt, force, color=color, lw=0.8, label=name)
-        errors[name] = period_force_errors(force, fine_dt, inner.dmp.transients[0].length, inner.dmp.period,
-                                           inner.reward_settings.target_force, smoothing=0.0)
-        env.close()
-    trace.axhline(18.0, color="k", lw=0.8, ls="--")
-    trace.set(xlabel="t [s]", ylabel="contact force at 500 Hz [N]", ylim=(14, 22),
-              title=f"default admittance, table tilted by ({tilt[0]}, {tilt[1]}) rad")
-    trace.legend(fontsize=8)
-    width = 0.2
-    for offset, (name, values), run in zip((-1.5 * width, -0.5 * width, 0.5 * width, 1.5 * width), errors.items(),
-                                           runs, strict=True):
-        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name, color=run[3])
-    bars.set(xlabel="period", ylabel="mean |F - 18 N| at 500 Hz [N]", title="force error period by period")
-    bars.legend(fontsize=7)
+    fig, (tilted, curved, bars) = plt.subplots(1, 3, figsize=(16, 4), gridspec_kw={"width_ratios": [3, 3, 2]})
+    errors, colors = {}, {}
+    with tempfile.TemporaryDirectory() as folder:
+        scene = str(curved_table_scene(folder))
+        runs = (("tilted", tilted, tilt, None, 0.02), ("curved", curved, [0.0, 0.0], scene, 0.02),
+                ("tilted", None, tilt, None, 0.004))
+        for table, axis, table_tilt, xml_file, gain in runs:
+            for flag, color in ((False, "tab:gray"), (True, "tab:red" if gain == 0.02 else "tab:purple")):
+                name = f"{table}, gain {gain}, " + ("+ learned profile" if flag else "admittance")
+                env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain, xml_file=xml_file)
+                env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": table_tilt, "patch_centre": [0.0, 0.0],
+                                              "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08],
+                                              "obstacle": 0})
+                inner = env.unwrapped
+                inner.fine_force = True
+                info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
+                fine_dt = inner.dt / inner.frame_skip
+                force = info["fine_force_trace"]
+                if axis is not None:
+                    axis.plot(np.arange(force.size) * fine_dt, force, color=color, lw=0.8,
+                              label=name.split(", ", 2)[2])
+                errors[name] = period_force_errors(force, fine_dt, inner.dmp.transients[0].length, inner.dmp.period,
+                                                   inner.reward_settings.target_force, smoothing=0.0)
+                colors[name] = color if gain == 0.02 or flag else "tab:blue"
+                env.close()
+    for axis, title in ((tilted, f"table tilted by ({tilt[0]}, {tilt[1]}) rad"),
+                        (curved, "curved table (ellipsoid top, crown 6 cm)")):
+        axis.axhline(18.0, color="k", lw=0.8, ls="--")
+        axis.set(xlabel="t [s]", ylabel="contact force at 500 Hz [N]", ylim=(14, 22),
+                 title=f"default admittance (0.02): {title}")
+        axis.legend(fontsize=8)
+    width = 0.8 / len(errors)
+    for index, (name, values) in enumerate(errors.items()):
+        hatch = "//" if name.startswith("curved") else None
+        bars.bar(np.arange(1, values.size + 1) + (index - (len(errors) - 1) / 2) * width, values, width,
+                 label=name, color=colors[name], hatch=hatch, edgecolor="white" if hatch else None)
+    bars.set(xlabel="period", ylabel="mean |F - 18 N| at 500 Hz [N]", title="force error period by period",
+             yscale="log")
+    bars.legend(fontsize=6)
     fig.tight_layout()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
