@@ -3,7 +3,8 @@ integrated online in the :class:`~rdmp_gym.DMPStepper` and run through ``env.run
 
 :func:`coupling_baseline_scores` is the baseline of the agents table: on ArmarWipe-v1 it lifts the approach
 over the episode's cup (:class:`~rdmp_gym.coupling.LiftOver`: the cup as a cylinder, its radius inflated by the
-sponge's half diagonal, the lift gated to the approach) and runs the plain imitation where there is no cup.
+sponge's half diagonal, the lift gated to the approach; :class:`~rdmp_gym.coupling.AdaptiveLift`: only as far as
+the free approach needs) and runs the plain imitation where there is no cup.
 The planar steering term of Hoffmann et al. (:func:`run_avoiding`, a point obstacle on the sponge's centre in
 the table plane) does not avoid the cup: the sponge and the hand are wider than the detour (see
 ``benchmarks/bench_obstacle.py``).
@@ -15,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from rdmp_gym.coupling import LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
+from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 
 from .approach import LIFT_PROFILE
 
@@ -49,7 +50,7 @@ def cup_in_path_frame(env) -> tuple[np.ndarray, float] | None:
     return base[:2], float(top)
 
 
-def lift_term(env, clearance: float = 0.01, ramp: float = 0.15, profile: tuple[float, float, float] = LIFT_PROFILE
+def lift_term(env, clearance: float = 0.02, ramp: float = 0.15, profile: tuple[float, float, float] = LIFT_PROFILE
               ) -> LiftOver | None:
     """The :class:`LiftOver` term of the episode's cup (``None`` without one): the cup's radius and top in the
     path frame, the sponge's half diagonal plus :data:`REACH_MARGIN` as the reach, the DMP's spring, and the
@@ -81,16 +82,19 @@ def _online_path(env, terms: list, substeps: int, smoothing: float = 0.0) -> np.
     return path[::substeps]
 
 
-def lifting_path(env, substeps: int = 5, **term_kwargs: Any) -> np.ndarray:
-    """Sponge path ``[T_ctrl, 3]`` (path frame) of the imitation lifted over the episode's cup by
-    :func:`lift_term` (``term_kwargs``), integrated online; the plain imitation (``rollout_path``) without a cup."""
+def lifting_path(env, substeps: int = 5, adaptive: bool = True, lead: float = 0.3, **term_kwargs: Any
+                 ) -> np.ndarray:
+    """Sponge path ``[T_ctrl, 3]`` (path frame) of the imitation lifted over the episode's cup, integrated online:
+    by :class:`~rdmp_gym.coupling.AdaptiveLift` (``lead`` s) of :func:`lift_term` (``term_kwargs``), or with
+    ``adaptive=False`` by the conservative :class:`~rdmp_gym.coupling.LiftOver` itself (the full height everywhere
+    over the footprint); the plain imitation (``rollout_path``) without a cup."""
     inner = env.unwrapped
     if inner.context is None:
         raise RuntimeError("call reset() before lifting_path()")
     term = lift_term(env, **term_kwargs)
     if term is None:
         return inner.rollout_path(inner.action_map.theta0)
-    return _online_path(env, [term], substeps)
+    return _online_path(env, [AdaptiveLift(term, lead) if adaptive else term], substeps)
 
 
 def path_jerk_ratio(env, path: np.ndarray) -> float:
@@ -110,7 +114,7 @@ def run_lifting(env, **kwargs: Any) -> tuple[float, dict]:
     sponge's disc passes beside or above the cup)."""
     path = lifting_path(env, **kwargs)
     reward, info = env.unwrapped.run_path(path)
-    term = lift_term(env, **{k: v for k, v in kwargs.items() if k != "substeps"})
+    term = lift_term(env, **{k: v for k, v in kwargs.items() if k not in ("substeps", "adaptive", "lead")})
     if term is not None:
         info["obstacle_clearance"] = float(np.min(term.clearance_of(path)))
     info["path_jerk_ratio"] = path_jerk_ratio(env, path)

@@ -23,7 +23,12 @@ the equilibrium of the height's spring by a smooth height field
 ``rho`` the horizontal distance of ``y`` from the cylinder's axis, ``s`` the minimum-jerk step on [0, 1],
 ``k = alpha_z beta_z Omega^2`` the DMP's spring (so the path rises by ``L``, filtered by the critically damped
 spring), and ``gate`` a minimum-jerk rise from the start and fall before a given time (the approach), so that
-the periodic pattern after it is the DMP's own.
+the periodic pattern after it is the DMP's own. That lift is conservative: it raises the path by the obstacle's
+full height even where the free movement already passes high. :class:`AdaptiveLift` lifts only by what is
+missing: it keeps a copy of the shift it has caused (the spring's response to its own past coupling; the
+transformation system is linear), so it knows the free movement's height ``y_z - s`` and its rate, and raises
+the equilibrium by ``gate(t) (1 - s(...))`` (the footprint of ``L``) times a smooth maximum of 0 and
+``top + clearance - (free height predicted lead seconds ahead)``.
 """
 
 from __future__ import annotations
@@ -35,7 +40,8 @@ import numpy as np
 
 from .validation import as_finite_array, check_positive
 
-__all__ = ["LiftOver", "ObstacleAvoidance", "avoiding_rollout", "minimum_jerk_step", "spring_stiffness"]
+__all__ = ["AdaptiveLift", "LiftOver", "ObstacleAvoidance", "avoiding_rollout", "minimum_jerk_step",
+           "spring_stiffness"]
 
 
 @dataclass(frozen=True)
@@ -211,6 +217,70 @@ class LiftOver:
         return out
 
 
+class AdaptiveLift:
+    """Lift over the volume of a :class:`LiftOver` only as far as the free movement needs (see the module).
+
+    The term is stateful (call :meth:`reset` before reusing it) and must be called once per integration step with
+    non-decreasing ``time``, as :func:`avoiding_rollout` does. Its copy of the shift assumes the DMP's critically
+    damped spring (``beta_z = alpha_z / 4``, so the damping is ``2 sqrt(k)``).
+
+    Args:
+        volume: the obstacle, its footprint, gate and the DMP's stiffness ``k``; the height to keep over the
+            footprint is its ``top + clearance``.
+        lead: how far ahead (s) the free height is predicted from its rate (the spring's lag, about
+            ``2 / sqrt(k)``).
+        width: width (m) of the smooth maximum ``(x + sqrt(x^2 + width^2)) / 2`` (no kink where the need starts).
+    """
+
+    def __init__(self, volume: LiftOver, lead: float = 0.3, width: float = 0.01):
+        if not isinstance(volume, LiftOver):
+            raise TypeError(f"volume: expected a LiftOver, got {type(volume).__name__}")
+        if isinstance(lead, bool) or not isinstance(lead, (int, float, np.floating, np.integer)) \
+                or not np.isfinite(lead) or lead < 0:
+            raise ValueError(f"lead: expected a finite number >= 0, got {lead!r}")
+        self.volume, self.lead, self.width = volume, float(lead), check_positive(width, "width")
+        self.damping = 2.0 * np.sqrt(volume.stiffness)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the shift caused so far (before a new rollout)."""
+        self.shift = self.shift_rate = self.target = 0.0
+        self.time: float | None = None
+
+    def _advance(self, time: float) -> None:
+        """Integrate the copy of the shift (the spring's response to ``target`` held since the last call)."""
+        if self.time is not None:
+            if time < self.time:
+                raise ValueError(f"time: expected non-decreasing times, got {time!r} after {self.time!r}")
+            steps = max(1, int(np.ceil((time - self.time) * np.sqrt(self.volume.stiffness) / 0.01)))
+            h, stiffness = (time - self.time) / steps, self.volume.stiffness
+            for _ in range(steps):        # semi-implicit Euler, about 0.01 of the spring's time constant per step
+                self.shift_rate += h * (stiffness * (self.target - self.shift) - self.damping * self.shift_rate)
+                self.shift += h * self.shift_rate
+        self.time = float(time)
+
+    def acceleration(self, y: np.ndarray, yd: np.ndarray, time: float | None = None) -> np.ndarray:
+        """The lifting acceleration ``[d]`` (m/s^2; height dimension only) at position ``y [d]``, velocity ``yd [d]``
+        and ``time`` (s since the start; required)."""
+        volume = self.volume
+        y = as_finite_array(y, "y", ndim=1)
+        yd = as_finite_array(yd, "yd", ndim=1)
+        if y.shape != yd.shape or max(volume.dims) >= y.size:
+            raise ValueError(f"y: expected matching positions and velocities with more than {max(volume.dims)} "
+                             f"dimensions, got {y.shape} and {yd.shape}")
+        if time is None or not np.isfinite(time):
+            raise ValueError(f"time: AdaptiveLift needs the finite time, got {time!r}")
+        self._advance(float(time))
+        z = volume.dims[2]
+        free = (y[z] - self.shift) + self.lead * (yd[z] - self.shift_rate)       # predicted free height
+        missing = volume.lift - free
+        footprint = float(volume.height(y)) / volume.lift                         # 1 over it, 0 beyond the ramp
+        self.target = float(volume.gate(time)) * footprint * 0.5 * (missing + np.sqrt(missing**2 + self.width**2))
+        out = np.zeros_like(y)
+        out[z] = volume.stiffness * self.target
+        return out
+
+
 def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[ObstacleAvoidance], *,
                      smoothing: float = 0.0, stop_at: float | None = None, **start_kwargs
                      ) -> tuple[np.ndarray, np.ndarray]:
@@ -219,8 +289,9 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
     Args:
         dmp: a :class:`rdmp_gym.RhythmicDMP`.
         t: ``[T]`` evenly spaced times from the start.
-        obstacles: one or several terms (:class:`ObstacleAvoidance`, :class:`LiftOver`; their accelerations
-            add); a term whose ``acceleration`` takes ``time`` gets the time since the start.
+        obstacles: one or several terms (:class:`ObstacleAvoidance`, :class:`LiftOver`, :class:`AdaptiveLift`;
+            their accelerations add); a term whose ``acceleration`` takes ``time`` gets the time since the start;
+            a term with a ``reset`` method is reset first.
         smoothing: time constant (s) of a first-order low-pass on the coupling term (0: none, Hoffmann et
             al.'s term as is). The raw term switches on and off within a few centimetres and, against the stiff
             spring of (4), makes sharp accelerations; 0.1 s cuts the squared jerk by about 10x (see README).
@@ -239,6 +310,9 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
     if not (np.isfinite(smoothing) and smoothing >= 0.0):
         raise ValueError(f"smoothing: expected a time constant >= 0, got {smoothing!r}")
     timed = ["time" in inspect.signature(term.acceleration).parameters for term in terms]
+    for term in terms:
+        if callable(getattr(term, "reset", None)):
+            term.reset()
     stepper = dmp.start(float((t[-1] - t[0]) / (t.size - 1)), **start_kwargs)
     share = 1.0 if smoothing == 0.0 else 1.0 - np.exp(-stepper.dt / smoothing)
     coupling = np.zeros(dmp.n_dims)

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.coupling import LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
+from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 
 vectors = st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3).map(np.array)
 
@@ -209,6 +209,54 @@ def test_lift_raises_the_approach_and_leaves_the_wiping_unchanged(wiping):
     assert squared_jerk(yd) < 2.0 * squared_jerk(free_velocity)
 
 
+def test_adaptive_lift_raises_only_as_far_as_needed(wiping):
+    t = np.arange(0.0, 8.0, 2e-3)
+    start = np.array([0.0, 0.20, 0.10])
+    free, free_velocity = wiping.rollout(t, y0=start, return_velocity=True)
+    length = wiping.transients[0].length
+    k = np.argmin(np.abs(t - 0.5 * length))
+    window = (0.35 * length, 0.6 * length, 0.88 * length)
+    volume = LiftOver(free[k, :2], free[k, 2] + 0.03, 0.035, 0.06, spring_stiffness(wiping), clearance=0.02,
+                      window=window)
+    term = AdaptiveLift(volume)
+    y, yd = avoiding_rollout(wiping, t, term, y0=start)
+    fixed, _ = avoiding_rollout(wiping, t, volume, y0=start)
+    approach = t < length
+    assert np.min(volume.clearance_of(free[approach])) < 0.0 < np.min(volume.clearance_of(y[approach]))
+    assert np.max(y[:, 2] - free[:, 2]) < 0.95 * np.max(fixed[:, 2] - free[:, 2])    # less than the full lift
+    later = t > length + 0.5 * wiping.period
+    assert np.abs(y[later] - free[later]).max() < 1e-5 and np.abs(y[:, :2] - free[:, :2]).max() < 1e-6
+
+    def squared_jerk(velocity):
+        return np.sum(np.gradient(np.gradient(velocity, 2e-3, axis=0), 2e-3, axis=0) ** 2)
+
+    assert squared_jerk(yd) < 2.0 * squared_jerk(free_velocity)
+    # its copy of the shift is the shift the rollout shows (the transformation system is linear)
+    middle = t <= 0.7 * length
+    part, _ = avoiding_rollout(wiping, t[middle], term, y0=start)
+    assert abs(term.shift - (part[-1, 2] - free[middle][-1, 2])) < 1e-3 * (part[-1, 2] - free[middle][-1, 2])
+    # away from the volume's footprint it does nothing
+    far = AdaptiveLift(LiftOver([1.0, 1.0], 0.1, 0.035, 0.06, spring_stiffness(wiping), window=window))
+    assert not np.any(far.acceleration(free[k], free_velocity[k], time=t[k]))
+    np.testing.assert_allclose(avoiding_rollout(wiping, t, far, y0=start)[0], free, atol=1e-9)
+
+
+def test_adaptive_lift_checks_its_input():
+    with pytest.raises(TypeError, match="volume"):
+        AdaptiveLift(ObstacleAvoidance([0.0, 0.0]))
+    with pytest.raises(ValueError, match="lead"):
+        AdaptiveLift(lift(), lead=-0.1)
+    with pytest.raises(ValueError, match="width"):
+        AdaptiveLift(lift(), width=0.0)
+    term = AdaptiveLift(lift())
+    with pytest.raises(ValueError, match="time"):
+        term.acceleration(np.zeros(3), np.zeros(3))
+    term.acceleration(np.zeros(3), np.zeros(3), time=0.7)
+    with pytest.raises(ValueError, match="time"):
+        term.acceleration(np.zeros(3), np.zeros(3), time=0.6)                   # back in time
+    assert np.all(np.isfinite(term.acceleration(np.array([0.1, 0.0, 0.0]), np.ones(3), time=0.8)))
+
+
 def test_env_coupling_baseline_lifts_over_the_cup():
     gym = pytest.importorskip("gymnasium")
     from rdmp_gym.envs import ENV_ID
@@ -232,6 +280,7 @@ def test_env_coupling_baseline_lifts_over_the_cup():
     path, free = lifting_path(env), inner.rollout_path(inner.action_map.theta0)
     term = lift_term(env)
     assert np.min(term.clearance_of(free)) < 0.0 < np.min(term.clearance_of(path[inner.times < 2.0]))
+    assert path[:, 2].max() <= free[:, 2].max() + 1e-3           # lifted only where the free approach is low
     later = inner.times > inner.dmp.transients[0].length + 0.5 * inner.dmp.period
     assert np.abs(path[later] - free[later]).max() < 1e-4                         # the wiping unchanged
     for bad in (np.array([]), np.array([0.5]), np.array([[1, 2]])):
