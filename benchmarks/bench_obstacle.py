@@ -107,16 +107,24 @@ def env_baseline() -> list[dict]:
     return out
 
 
-def _imitation_scores(env, seeds: np.ndarray) -> dict[str, np.ndarray]:
-    """The imitation (action 0) in the contexts of ``seeds``, with the same fields as ``coupling_baseline_scores``."""
+def _imitation_scores(env, seeds: np.ndarray, approach: float = 0.0) -> dict[str, np.ndarray]:
+    """The imitation (action 0; ``approach``: the env's approach action dimension, last) in the contexts of
+    ``seeds``, with the same fields as ``coupling_baseline_scores``."""
+    from rdmp_gym.envs.obstacle_baseline import path_jerk_ratio
+
     rows = []
     for seed in seeds:
         observation, _ = env.reset(seed=int(seed))
-        reward, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[1::3]
-        rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"], 1.0,
-                     observation[10] > 0.5, info["obstacle_touch_steps"] > 0, info["obstacle_shift"]))
+        action = np.zeros(env.action_space.shape, dtype=np.float32)
+        action[-1] = approach
+        reward, info = env.step(action)[1::3]
+        base = env.unwrapped
+        jerk = 1.0 if approach == 0.0 else path_jerk_ratio(env, base.rollout_path(base.action_to_params(action)))
+        rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"], jerk,
+                     observation[10] > 0.5, info["obstacle_touch_steps"] > 0, info["obstacle_shift"],
+                     info["peak_joint_accel"]))
     names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
-             "cup_shift")
+             "cup_shift", "peak_joint_accel")
     return {"seeds": np.asarray(seeds), **{name: np.asarray(column) for name, column in
                                            zip(names, zip(*rows, strict=True), strict=True)}}
 
@@ -132,9 +140,9 @@ def _planar_scores(env, seeds: np.ndarray) -> dict[str, np.ndarray]:
         reward, info = env.unwrapped.run_path(path)
         rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"],
                      path_jerk_ratio(env, path), observation[10] > 0.5, info["obstacle_touch_steps"] > 0,
-                     info["obstacle_shift"]))
+                     info["obstacle_shift"], info["peak_joint_accel"]))
     names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
-             "cup_shift")
+             "cup_shift", "peak_joint_accel")
     return {"seeds": np.asarray(seeds), **{name: np.asarray(column) for name, column in
                                            zip(names, zip(*rows, strict=True), strict=True)}}
 
@@ -148,7 +156,9 @@ def _summary(scores: dict[str, np.ndarray]) -> dict[str, float]:
             "cup_success": int(np.sum(scores["success"][cup])),
             "cup_coverage": float(np.mean(scores["coverage"][cup])) if cup.any() else float("nan"),
             "jerk_ratio_max": float(np.max(scores["jerk_ratio"])),
-            "jerk_ratio_cup_mean": float(np.mean(scores["jerk_ratio"][cup])) if cup.any() else float("nan")}
+            "jerk_ratio_cup_mean": float(np.mean(scores["jerk_ratio"][cup])) if cup.any() else float("nan"),
+            "joint_accel_cup_median": float(np.median(scores["peak_joint_accel"][cup])) if cup.any() else float("nan"),
+            "joint_accel_cup_max": float(np.max(scores["peak_joint_accel"][cup])) if cup.any() else float("nan")}
 
 
 def _first_touch(env, seeds: np.ndarray) -> list[float]:
@@ -191,18 +201,22 @@ def cup_contexts(count: int = 40, first_seed: int = 10_000) -> dict:
                                       if env.reset(seed=s)[0][10] > 0.5][:count])}
     for name, seeds in seeds_by_set.items():
         scores = {"imitation": _imitation_scores(env, seeds), "planar steering": _planar_scores(env, seeds),
+                  "approach +1 (action)": _imitation_scores(env, seeds, approach=1.0),
+                  "conservative lift": coupling_baseline_scores(env, seeds, adaptive=False),
                   "coupling baseline": coupling_baseline_scores(env, seeds)}
         out[name] = {controller: {"summary": _summary(s), "per_context": {k: np.asarray(v).tolist()
                                                                          for k, v in s.items()}}
                      for controller, s in scores.items()}
         print(f"{name}: reset seeds {seeds[0]}..{seeds[-1]} ({len(seeds)} contexts)")
-        print(f"{'controller':<18} {'success':>7} {'coverage':>8} {'return':>7} {'cups':>4} {'touched':>7} "
-              f"{'moved>5mm':>9} {'cov. w/ cup':>11} {'jerk max':>8} {'jerk cup mean':>13}")
+        print(f"{'controller':<21} {'success':>7} {'coverage':>8} {'return':>7} {'cups':>4} {'touched':>7} "
+              f"{'moved>5mm':>9} {'cov. w/ cup':>11} {'jerk max':>8} {'jerk cup mean':>13} "
+              f"{'joint acc. cup med/max':>22}")
         for controller, result in out[name].items():
             m = result["summary"]
-            print(f"{controller:<18} {m['success']:>7.2f} {m['coverage']:>8.3f} {m['returns']:>7.3f} {m['cups']:>4d} "
+            print(f"{controller:<21} {m['success']:>7.2f} {m['coverage']:>8.3f} {m['returns']:>7.3f} {m['cups']:>4d} "
                   f"{m['cup_touched']:>7d} {m['cup_moved_5mm']:>9d} {m['cup_coverage']:>11.3f} "
-                  f"{m['jerk_ratio_max']:>8.2f} {m['jerk_ratio_cup_mean']:>13.2f}")
+                  f"{m['jerk_ratio_max']:>8.2f} {m['jerk_ratio_cup_mean']:>13.2f} "
+                  f"{m['joint_accel_cup_median']:>15.1f}/{m['joint_accel_cup_max']:<6.1f}")
     touches = _first_touch(env, seeds_by_set["cups"])
     length = env.unwrapped.dmp.transients[0].length
     out["cups"]["coupling baseline"]["first_touch"] = touches

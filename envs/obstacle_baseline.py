@@ -128,7 +128,8 @@ def coupling_baseline_scores(env, seeds: np.ndarray, options: dict[str, Any] | N
 
     Returns per-context arrays ``[E]``: ``seeds``, ``returns``, ``coverage``, ``force_in_band``, ``valid``,
     ``success`` (``info["is_success"]``), ``jerk_ratio`` (integrated squared jerk of the commanded path over the
-    imitation's), ``cup`` (the context has one), ``cup_touched`` (the arm touched it), ``cup_shift`` (m).
+    imitation's), ``cup`` (the context has one), ``cup_touched`` (the arm touched it), ``cup_shift`` (m),
+    ``peak_joint_accel`` (rad/s^2, of the planned joint path; NaN for an invalid path).
     """
     seeds = np.asarray(seeds)
     if seeds.ndim != 1 or seeds.size == 0 or not np.issubdtype(seeds.dtype, np.integer):
@@ -139,11 +140,11 @@ def coupling_baseline_scores(env, seeds: np.ndarray, options: dict[str, Any] | N
         reward, info = run_lifting(env, **kwargs)
         rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"],
                      info["path_jerk_ratio"], env.unwrapped.context.obstacle, info["obstacle_touch_steps"] > 0,
-                     info["obstacle_shift"]))
+                     info["obstacle_shift"], info["peak_joint_accel"]))
     columns = list(zip(*rows, strict=True))
     names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
-             "cup_shift")
-    kinds = (np.float64, np.float64, np.float64, bool, bool, np.float64, bool, bool, np.float64)
+             "cup_shift", "peak_joint_accel")
+    kinds = (np.float64, np.float64, np.float64, bool, bool, np.float64, bool, bool, np.float64, np.float64)
     out = {"seeds": seeds.astype(np.int64)}
     out.update({name: np.asarray(column, dtype=kind) for name, column, kind in zip(names, columns, kinds, strict=True)})
     return out
