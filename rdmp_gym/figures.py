@@ -257,16 +257,19 @@ def write_obstacle_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
     env.reset(seed=context_seed)
     term = lift_term(env)
     free = inner.rollout_path(inner.action_map.theta0)
-    lifted = lifting_path(env)
+    lifted, conservative = lifting_path(env), lifting_path(env, adaptive=False)
     env.close()
     fig, (side, top) = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [3, 2]})
-    for path, name, color in ((free, "imitation", "tab:gray"), (lifted, "coupling baseline (LiftOver)", "tab:red")):
-        side.plot(inner.times, path[:, 2], color=color, label=name)
-        top.plot(path[:, 0], path[:, 1], color=color, lw=0.8)
+    for path, name, color, style in ((free, "imitation", "tab:gray", "-"),
+                                     (conservative, "LiftOver alone (full lift)", "tab:orange", "--"),
+                                     (lifted, "coupling baseline (AdaptiveLift)", "tab:red", "-")):
+        side.plot(inner.times, path[:, 2], color=color, ls=style, label=name)
+        top.plot(path[:, 0], path[:, 1], color=color, ls=style, lw=0.8)
     near = np.linalg.norm(free[:, :2] - term.centre, axis=1) < term.radius + term.reach
     side.fill_between(inner.times, 0.0, term.top, where=near, color="tab:brown", alpha=0.3,
                       label="cup's height where the sponge is over its footprint")
-    side.plot(inner.times, term.gate(inner.times) * term.lift, color="tab:blue", ls=":", lw=1, label="gate x lift")
+    side.plot(inner.times, term.gate(inner.times) * term.lift, color="tab:blue", ls=":", lw=1,
+              label="gate x (top + clearance)")
     side.set(xlabel="t [s]", ylabel="sponge height above the table [m]", xlim=(0, 3.5),
              title=f"ArmarWipe-v1, reset seed {context_seed}")
     side.legend(fontsize=8)
