@@ -5,7 +5,8 @@ The style-1 wiping DMP (circle of radius 5 cm about the anchor, smooth periodic 
 outside the wiped circle), with Hoffmann et al.'s steering term (beta = 20/pi) and a Gaussian distance
 window (the library's default fit, alpha_z = 5): gain 1e4 with lambda = 2 cm, gain 2e4 with lambda = 3 cm
 (the env baseline's setting), and the same with the coupling low-passed over 0.1 s. Then the env baseline with a
-virtual point obstacle on the wiped circle, and on ArmarWipe-v1 contexts with a cup (:func:`cup_contexts`).
+virtual point obstacle on the wiped circle, and the coupling baseline of the agents table (the approach lifted over
+the cup by :class:`~rdmp_gym.coupling.LiftOver`) on ArmarWipe-v1 contexts with a cup (:func:`cup_contexts`).
 Reported on the periodic part (t > 3 s): the smallest clearance
 without and with the coupling, the peak acceleration, the largest change of the path where the free path
 is more than 8 cm from the obstacle, and the integrated squared jerk against the free path.
@@ -106,44 +107,124 @@ def env_baseline() -> list[dict]:
     return out
 
 
-def cup_contexts(count: int = 20, first_seed: int = 10_000) -> dict:
-    """The baseline on ArmarWipe-v1 contexts with a cup (the first ``count`` reset seeds from ``first_seed``
-    whose drawn context has one): success rate, coverage, reward, arm-cup contact steps and cup displacement
-    of the imitation and of :func:`run_avoiding` (the cup from the context)."""
+def _imitation_scores(env, seeds: np.ndarray, approach: float = 0.0) -> dict[str, np.ndarray]:
+    """The imitation (action 0; ``approach``: the env's approach action dimension, last) in the contexts of
+    ``seeds``, with the same fields as ``coupling_baseline_scores``."""
+    from rdmp_gym.envs.obstacle_baseline import path_jerk_ratio
+
+    rows = []
+    for seed in seeds:
+        observation, _ = env.reset(seed=int(seed))
+        action = np.zeros(env.action_space.shape, dtype=np.float32)
+        action[-1] = approach
+        reward, info = env.step(action)[1::3]
+        base = env.unwrapped
+        jerk = 1.0 if approach == 0.0 else path_jerk_ratio(env, base.rollout_path(base.action_to_params(action)))
+        rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"], jerk,
+                     observation[10] > 0.5, info["obstacle_touch_steps"] > 0, info["obstacle_shift"],
+                     info["peak_joint_accel"]))
+    names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
+             "cup_shift", "peak_joint_accel")
+    return {"seeds": np.asarray(seeds), **{name: np.asarray(column) for name, column in
+                                           zip(names, zip(*rows, strict=True), strict=True)}}
+
+
+def _planar_scores(env, seeds: np.ndarray) -> dict[str, np.ndarray]:
+    """The planar steering term (:func:`run_avoiding`, Hoffmann et al.) in the contexts of ``seeds``."""
+    from rdmp_gym.envs.obstacle_baseline import avoiding_path, path_jerk_ratio
+
+    rows = []
+    for seed in seeds:
+        observation, _ = env.reset(seed=int(seed))
+        path = avoiding_path(env)
+        reward, info = env.unwrapped.run_path(path)
+        rows.append((reward, info["coverage"], info["force_in_band_fraction"], info["valid"], info["is_success"],
+                     path_jerk_ratio(env, path), observation[10] > 0.5, info["obstacle_touch_steps"] > 0,
+                     info["obstacle_shift"], info["peak_joint_accel"]))
+    names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
+             "cup_shift", "peak_joint_accel")
+    return {"seeds": np.asarray(seeds), **{name: np.asarray(column) for name, column in
+                                           zip(names, zip(*rows, strict=True), strict=True)}}
+
+
+def _summary(scores: dict[str, np.ndarray]) -> dict[str, float]:
+    cup = scores["cup"].astype(bool)
+    return {"success": float(np.mean(scores["success"])), "coverage": float(np.mean(scores["coverage"])),
+            "returns": float(np.mean(scores["returns"])), "valid": float(np.mean(scores["valid"])),
+            "cups": int(cup.sum()), "cup_touched": int(np.sum(scores["cup_touched"][cup])),
+            "cup_moved_5mm": int(np.sum(scores["cup_shift"][cup] >= 0.005)),
+            "cup_success": int(np.sum(scores["success"][cup])),
+            "cup_coverage": float(np.mean(scores["coverage"][cup])) if cup.any() else float("nan"),
+            "jerk_ratio_max": float(np.max(scores["jerk_ratio"])),
+            "jerk_ratio_cup_mean": float(np.mean(scores["jerk_ratio"][cup])) if cup.any() else float("nan"),
+            "joint_accel_cup_median": float(np.median(scores["peak_joint_accel"][cup])) if cup.any() else float("nan"),
+            "joint_accel_cup_max": float(np.max(scores["peak_joint_accel"][cup])) if cup.any() else float("nan")}
+
+
+def _first_touch(env, seeds: np.ndarray) -> list[float]:
+    """Time (s) of the first arm-cup contact of the coupling baseline per seed (-1: none)."""
+    from rdmp_gym.envs import wipe_env
+    from rdmp_gym.envs.obstacle_baseline import run_lifting
+
+    original, times = wipe_env.simulate_wipe, []
+
+    def tapped(*args, **kwargs):
+        trace = original(*args, **kwargs)
+        contact = trace.obstacle_contact
+        times.append(float(np.argmax(contact)) * env.unwrapped.dt if contact.any() else -1.0)
+        return trace
+
+    wipe_env.simulate_wipe = tapped
+    try:
+        for seed in seeds:
+            env.reset(seed=int(seed))
+            run_lifting(env)
+    finally:
+        wipe_env.simulate_wipe = original
+    return times
+
+
+def cup_contexts(count: int = 40, first_seed: int = 10_000) -> dict:
+    """The coupling baseline (:func:`coupling_baseline_scores`: the approach lifted over the cup) against the
+    imitation (action 0) and the planar steering term, on the agents protocol's 20 test contexts
+    (``final_test_seeds(20)``) and on the first ``count`` reset seeds from ``first_seed`` whose context has a cup
+    (where the first contact of the baseline with the cup happens: approach or wiping)."""
     import gymnasium as gym
+    from rdmp_gym.agents.protocol import final_test_seeds
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import run_avoiding
+    from rdmp_gym.envs.obstacle_baseline import coupling_baseline_scores
 
     env = gym.make(ENV_ID)
-    rows, seed = [], first_seed
-    while len(rows) < count:
-        observation, _ = env.reset(seed=seed)
-        if observation[10] > 0.5:
-            _, imitation_reward, _, _, imitation = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
-            env.reset(seed=seed)
-            reward, info = run_avoiding(env)
-            rows.append({"seed": seed, **{f"{name}_{key}": float(source[key]) for name, source in
-                                          (("imitation", imitation), ("baseline", info))
-                                          for key in ("is_success", "coverage", "obstacle_touch_steps",
-                                                      "obstacle_shift", "valid")},
-                         "imitation_reward": float(imitation_reward), "baseline_reward": float(reward),
-                         "baseline_clearance": info["obstacle_clearance"]})
-        seed += 1
-    summary = {}
-    print(f"v1 contexts with a cup (seeds {first_seed}..{seed - 1}, {count} with a cup):")
-    print(f"{'controller':<10} {'success':>7} {'coverage':>8} {'reward':>7} {'touch steps':>11} {'cup shift mm':>20}")
-    for name in ("imitation", "baseline"):
-        shift = 1e3 * np.array([r[f"{name}_obstacle_shift"] for r in rows])
-        summary[name] = {"success_rate": float(np.mean([r[f"{name}_is_success"] for r in rows])),
-                         "coverage_mean": float(np.mean([r[f"{name}_coverage"] for r in rows])),
-                         "reward_mean": float(np.mean([r[f"{name}_reward"] for r in rows])),
-                         "touch_steps_mean": float(np.mean([r[f"{name}_obstacle_touch_steps"] for r in rows])),
-                         "touched_share": float(np.mean([r[f"{name}_obstacle_touch_steps"] > 0 for r in rows])),
-                         "cup_shift_median_mm": float(np.median(shift)), "cup_shift_max_mm": float(shift.max())}
-        m = summary[name]
-        print(f"{name:<10} {m['success_rate']:>7.2f} {m['coverage_mean']:>8.3f} {m['reward_mean']:>7.3f} "
-              f"{m['touch_steps_mean']:>11.1f} {m['cup_shift_median_mm']:>9.1f} (max {m['cup_shift_max_mm']:>6.1f})")
-    return {"rows": rows, "summary": summary}
+    out = {}
+    seeds_by_set = {"test": final_test_seeds(20),
+                    "cups": np.array([s for s in range(first_seed, first_seed + 4 * count)
+                                      if env.reset(seed=s)[0][10] > 0.5][:count])}
+    for name, seeds in seeds_by_set.items():
+        scores = {"imitation": _imitation_scores(env, seeds), "planar steering": _planar_scores(env, seeds),
+                  "approach +1 (action)": _imitation_scores(env, seeds, approach=1.0),
+                  "conservative lift": coupling_baseline_scores(env, seeds, adaptive=False),
+                  "coupling baseline": coupling_baseline_scores(env, seeds)}
+        out[name] = {controller: {"summary": _summary(s), "per_context": {k: np.asarray(v).tolist()
+                                                                         for k, v in s.items()}}
+                     for controller, s in scores.items()}
+        print(f"{name}: reset seeds {seeds[0]}..{seeds[-1]} ({len(seeds)} contexts)")
+        print(f"{'controller':<21} {'success':>7} {'coverage':>8} {'return':>7} {'cups':>4} {'touched':>7} "
+              f"{'moved>5mm':>9} {'cov. w/ cup':>11} {'jerk max':>8} {'jerk cup mean':>13} "
+              f"{'joint acc. cup med/max':>22}")
+        for controller, result in out[name].items():
+            m = result["summary"]
+            print(f"{controller:<21} {m['success']:>7.2f} {m['coverage']:>8.3f} {m['returns']:>7.3f} {m['cups']:>4d} "
+                  f"{m['cup_touched']:>7d} {m['cup_moved_5mm']:>9d} {m['cup_coverage']:>11.3f} "
+                  f"{m['jerk_ratio_max']:>8.2f} {m['jerk_ratio_cup_mean']:>13.2f} "
+                  f"{m['joint_accel_cup_median']:>15.1f}/{m['joint_accel_cup_max']:<6.1f}")
+    touches = _first_touch(env, seeds_by_set["cups"])
+    length = env.unwrapped.dmp.transients[0].length
+    out["cups"]["coupling baseline"]["first_touch"] = touches
+    approach = sum(0.0 <= t < length for t in touches)
+    wiping = sum(t >= length for t in touches)
+    print(f"coupling baseline, first cup contact: in the approach (t < {length:.2f} s) {approach}, "
+          f"in the wiping {wiping}, never {touches.count(-1.0)}")
+    return out
 
 
 if __name__ == "__main__":

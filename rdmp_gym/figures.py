@@ -25,8 +25,8 @@ from .plots import (
 from .smoothness import finite_derivatives
 from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["BEYOND_PAPER_FIGURES", "write_force_figure", "write_paper_figures", "write_rhythm_figure",
-           "write_stop_figure"]
+__all__ = ["BEYOND_PAPER_FIGURES", "write_force_figure", "write_obstacle_figure", "write_paper_figures",
+           "write_rhythm_figure", "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
@@ -182,49 +182,111 @@ def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
 
 
 def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
-    """``beyond_force.png``: force-profile learning on a tilted table in the MuJoCo env (needs the ``envs``
-    extra; returns ``None`` without it)."""
+    """``beyond_force.png``: force-profile learning in the MuJoCo env, the contact force at 500 Hz on a tilted and
+    on a curved table (needs the ``envs`` extra; returns ``None`` without it)."""
     try:
+        import tempfile
+
         import gymnasium as gym
 
         from .envs import ENV_ID
-        from .envs.force_learning import period_force_errors
+        from .envs.force_learning import curved_table_scene, period_force_errors
     except ImportError:
         logger.info("beyond_force.png skipped: gymnasium and mujoco are not installed")
         return None
     tilt = [-0.138, -0.145]
-    fig, (trace, bars) = plt.subplots(1, 2, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1]})
-    errors = {}
-    runs = (("admittance, gain 0.02 (default)", False, 0.02, "tab:gray"), ("admittance, gain 0.004", False, 0.004,
-            "tab:blue"), ("learned profile, gain 0.004", True, 0.004, "tab:red"))
-    for name, flag, gain, color in runs:
-        env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain)
-        env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
-                                      "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
-        info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
-        inner = env.unwrapped
-        window = max(round(0.1 / inner.dt), 1)
-        smooth = np.convolve(info["force_trace"], np.ones(window) / window, mode="same")
-        trace.plot(inner.times, smooth, color=color, lw=1, label=name)
-        errors[name] = period_force_errors(info["force_trace"], inner.dt, inner.dmp.transients[0].length,
-                                           inner.dmp.period, inner.reward_settings.target_force)
-        env.close()
-    trace.axhline(18.0, color="k", lw=0.8, ls="--")
-    trace.set(xlabel="t [s]", ylabel="contact force, 0.1 s mean [N]", ylim=(0, 40),
-              title=f"table tilted by ({tilt[0]}, {tilt[1]}) rad")
-    trace.legend(fontsize=8)
-    width = 0.27
-    for offset, (name, values), run in zip((-width, 0.0, width), errors.items(), runs, strict=True):
-        bars.bar(np.arange(1, values.size + 1) + offset, values, width, label=name, color=run[3])
-    bars.set(xlabel="period", ylabel="mean |F - 18 N| [N]", title="force error period by period")
-    bars.legend(fontsize=8)
+    fig, (tilted, curved, bars) = plt.subplots(1, 3, figsize=(16, 4), gridspec_kw={"width_ratios": [3, 3, 2]})
+    errors, colors = {}, {}
+    with tempfile.TemporaryDirectory() as folder:
+        scene = str(curved_table_scene(folder))
+        runs = (("tilted", tilted, tilt, None, 0.02), ("curved", curved, [0.0, 0.0], scene, 0.02),
+                ("tilted", None, tilt, None, 0.004))
+        for table, axis, table_tilt, xml_file, gain in runs:
+            for flag, color in ((False, "tab:gray"), (True, "tab:red" if gain == 0.02 else "tab:purple")):
+                name = f"{table}, gain {gain}, " + ("+ learned profile" if flag else "admittance")
+                env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain, xml_file=xml_file)
+                env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": table_tilt, "patch_centre": [0.0, 0.0],
+                                              "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08],
+                                              "obstacle": 0})
+                inner = env.unwrapped
+                inner.fine_force = True
+                info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
+                fine_dt = inner.dt / inner.frame_skip
+                force = info["fine_force_trace"]
+                if axis is not None:
+                    axis.plot(np.arange(force.size) * fine_dt, force, color=color, lw=0.8,
+                              label=name.split(", ", 2)[2])
+                errors[name] = period_force_errors(force, fine_dt, inner.dmp.transients[0].length, inner.dmp.period,
+                                                   inner.reward_settings.target_force, smoothing=0.0)
+                colors[name] = color if gain == 0.02 or flag else "tab:blue"
+                env.close()
+    for axis, title in ((tilted, f"table tilted by ({tilt[0]}, {tilt[1]}) rad"),
+                        (curved, "curved table (ellipsoid top, crown 6 cm)")):
+        axis.axhline(18.0, color="k", lw=0.8, ls="--")
+        axis.set(xlabel="t [s]", ylabel="contact force at 500 Hz [N]", ylim=(14, 22),
+                 title=f"default admittance (0.02): {title}")
+        axis.legend(fontsize=8)
+    width = 0.8 / len(errors)
+    for index, (name, values) in enumerate(errors.items()):
+        hatch = "//" if name.startswith("curved") else None
+        bars.bar(np.arange(1, values.size + 1) + (index - (len(errors) - 1) / 2) * width, values, width,
+                 label=name, color=colors[name], hatch=hatch, edgecolor="white" if hatch else None)
+    bars.set(xlabel="period", ylabel="mean |F - 18 N| at 500 Hz [N]", title="force error period by period",
+             yscale="log")
+    bars.legend(fontsize=6)
     fig.tight_layout()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return _save(fig, out / "beyond_force.png")
 
 
-BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure, write_force_figure]
+def write_obstacle_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
+    """``beyond_obstacle.png``: the imitation and the coupling baseline that lifts it over the cup, in the first
+    ArmarWipe-v1 context from reset seed ``seed`` on with a cup (needs the ``envs`` extra; ``None`` without it)."""
+    try:
+        import gymnasium as gym
+
+        from .envs import ENV_ID
+        from .envs.obstacle_baseline import lift_term, lifting_path
+    except ImportError:
+        logger.info("beyond_obstacle.png skipped: gymnasium and mujoco are not installed")
+        return None
+    env = gym.make(ENV_ID)
+    inner = env.unwrapped
+    context_seed = next(s for s in range(seed, seed + 1000) if env.reset(seed=s)[0][10] > 0.5)
+    env.reset(seed=context_seed)
+    term = lift_term(env)
+    free = inner.rollout_path(inner.action_map.theta0)
+    lifted, conservative = lifting_path(env), lifting_path(env, adaptive=False)
+    env.close()
+    fig, (side, top) = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [3, 2]})
+    for path, name, color, style in ((free, "imitation", "tab:gray", "-"),
+                                     (conservative, "LiftOver alone (full lift)", "tab:orange", "--"),
+                                     (lifted, "coupling baseline (AdaptiveLift)", "tab:red", "-")):
+        side.plot(inner.times, path[:, 2], color=color, ls=style, label=name)
+        top.plot(path[:, 0], path[:, 1], color=color, ls=style, lw=0.8)
+    near = np.linalg.norm(free[:, :2] - term.centre, axis=1) < term.radius + term.reach
+    side.fill_between(inner.times, 0.0, term.top, where=near, color="tab:brown", alpha=0.3,
+                      label="cup's height where the sponge is over its footprint")
+    side.plot(inner.times, term.gate(inner.times) * term.lift, color="tab:blue", ls=":", lw=1,
+              label="gate x (top + clearance)")
+    side.set(xlabel="t [s]", ylabel="sponge height above the table [m]", xlim=(0, 3.5),
+             title=f"ArmarWipe-v1, reset seed {context_seed}")
+    side.legend(fontsize=8)
+    angles = np.linspace(0.0, 2.0 * np.pi, 100)
+    for radius, style in ((term.radius, "-"), (term.radius + term.reach, "--"),
+                          (term.radius + term.reach + term.ramp, ":")):
+        top.plot(term.centre[0] + radius * np.cos(angles), term.centre[1] + radius * np.sin(angles), "k", ls=style,
+                 lw=0.8)
+    top.set(xlabel="x [m]", ylabel="y [m]", title="cup, + sponge reach, + ramp (top view)")
+    top.set_aspect("equal")
+    fig.tight_layout()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out / "beyond_obstacle.png")
+
+
+BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure, write_force_figure, write_obstacle_figure]
 """Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
 
 
