@@ -4,13 +4,15 @@ For every agent and seed: one training run of ``budget`` episodes (``budget / ro
 random training contexts (reset seeds in ``[0, 2**30)``), its policy evaluated every ``eval_every``
 updates on the validation contexts (the held-out learning curves), then the **final** policy (never a
 "best") evaluated once on the test contexts, which no run trains or selects on. Beside the learners,
-every table shows the imitation (``a = 0``), the amplitude-only search (``amplitude``: one θ over the 3
-amplitude factors) and the random-return control (``random``: contextual REPS fed random returns).
+every table shows the imitation (``a = 0``), the obstacle-coupling baseline (``coupling``: the imitation
+with the online lift over the cup of ``rdmp_gym.envs.obstacle_baseline``; no learning), the amplitude-only
+search (``amplitude``: one θ over the 3 amplitude factors) and the random-return control (``random``:
+contextual REPS fed random returns).
 
 Per agent: the interquartile mean over seeds of each seed's test-context mean, with a 95 % percentile
 bootstrap interval over seeds (success rate, coverage, path jerk relative to the imitation's, return),
-and the training episodes until the validation success rate first reaches 90 %. The imitation is one
-deterministic policy: its interval is over the test contexts.
+and the training episodes until the validation success rate first reaches 90 %. The no-learning rows
+(imitation, coupling) are deterministic policies: their intervals are over the test contexts.
 
 Writes ``benchmarks/results/<name>.json`` (settings, per-run curves and per-context test scores, summary)
 and ``<name>.png``, and prints the table.
@@ -87,6 +89,9 @@ def _parse() -> argparse.Namespace:
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
+    parser.add_argument("--update-baselines", action="store_true",
+                        help="re-evaluate the no-learning rows (imitation, coupling) into results/<name>.json, "
+                             "keeping its runs")
     add_save_argument(parser)
     return parser.parse_args()
 
@@ -158,10 +163,26 @@ def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: P
             ray.shutdown()
 
 
-def _summary(runs: list[dict], imitation: dict) -> list[dict]:
-    rows = [{"agent": "imitation", "n": len(imitation["success"]), "over": "contexts",
-             **{m: interval(np.asarray(imitation[m], dtype=float), "mean").to_dict() for m in METRICS},
-             "reached": None, "episodes_to_target": None}]
+def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[str, dict], np.ndarray, np.ndarray]:
+    """The no-learning rows' per-context scores (``imitation``, ``coupling``), the test observations and the
+    imitation's path jerk per context."""
+    from rdmp_gym.envs.obstacle_baseline import coupling_baseline_scores
+
+    with Evaluator(spec, workers) as tester:
+        observations = context_observations(tester.env, seeds)
+        n = tester.n_actions
+        reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
+        imitation = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference).to_dict()
+        coupling = coupling_baseline_scores(tester.env, seeds)
+    fields = PolicyScores.__dataclass_fields__
+    coupling = {key: np.asarray(value).tolist() for key, value in coupling.items() if key in fields}
+    return {"imitation": imitation, "coupling": coupling}, observations, reference
+
+
+def _summary(runs: list[dict], baselines: dict[str, dict]) -> list[dict]:
+    rows = [{"agent": name, "n": len(scores["success"]), "over": "contexts",
+             **{m: interval(np.asarray(scores[m], dtype=float), "mean").to_dict() for m in METRICS},
+             "reached": None, "episodes_to_target": None} for name, scores in baselines.items()]
     for agent in dict.fromkeys(r["agent"] for r in runs):
         group = [r for r in runs if r["agent"] == agent]
         reached = [r["episodes_to_target"] for r in group if r["episodes_to_target"] is not None]
@@ -186,7 +207,8 @@ def _print(rows: list[dict], settings: dict) -> None:
         print(f"{r['agent']:>10} {count:>9} {_cell(r['success']):>22} {_cell(r['coverage']):>22} "
               f"{_cell(r['jerk_ratio']):>22} {_cell(r['returns']):>22} {target:>32}")
     print(f"(final policies on {settings['test_contexts']} test contexts; IQM over seeds with 95 % bootstrap CI; "
-          f"imitation: mean over contexts with CI; budget {settings['budget']} episodes; env {settings['env_id']})")
+          f"no-learning rows: mean over contexts with CI; budget {settings['budget']} episodes; "
+          f"env {settings['env_id']})")
 
 
 def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
@@ -211,11 +233,12 @@ def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
     for col, metric, label in ((2, "success", "test success rate"), (3, "jerk_ratio", "test jerk / imitation")):
         axis = axes[col]
         shown = [imitation] + [r for r in rows if r["agent"] != "imitation"]
+        colours = ["0.6" if r["agent"] not in agents else f"C{agents.index(r['agent'])}" for r in shown]
         estimates = [r[metric]["estimate"] for r in shown]
         errors = np.array([[r[metric]["estimate"] - r[metric]["low"], r[metric]["high"] - r[metric]["estimate"]]
                            for r in shown]).T
         axis.bar(range(len(shown)), estimates, yerr=errors, capsize=3,
-                 color=["0.6"] + [f"C{agents.index(r['agent'])}" for r in shown[1:]])
+                 color=colours)
         axis.set_xticks(range(len(shown)), [r["agent"] for r in shown], rotation=45, fontsize=8)
         axis.set_title(f"{label} (IQM, 95 % CI)", fontsize=9)
         axis.grid(alpha=0.3, axis="y")
@@ -237,8 +260,16 @@ def main() -> None:
     torch.set_num_threads(1)
     args = _parse()
     RESULTS = results_dir(args.save)
-    if args.replot:
-        document = json.loads((RESULTS / f"{args.name}.json").read_text())
+    if args.replot or args.update_baselines:
+        path = RESULTS / f"{args.name}.json"
+        document = json.loads(path.read_text())
+        if args.update_baselines:
+            saved = document["settings"]
+            spec = TaskSpec(saved["env_id"], saved["env_kwargs"])
+            document["baselines"] = _baselines(spec, np.asarray(saved["final_test_seeds"]), args.workers)[0]
+            document.pop("imitation", None)
+            document["summary"] = _summary(document["runs"], document["baselines"])
+            path.write_text(json.dumps(document, indent=1) + "\n")
         _print(document["summary"], document["settings"])
         _plot(document["runs"], document["summary"], RESULTS / f"{args.name}.png", _title(document["settings"]))
         return
@@ -249,11 +280,7 @@ def main() -> None:
     scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
     runs = []
     try:
-        with Evaluator(spec, 1 if args.backend == "ray" else args.workers) as tester:
-            observations = context_observations(tester.env, seeds)
-            n = tester.n_actions
-            reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
-            imitation: PolicyScores = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference)
+        baselines, observations, reference = _baselines(spec, seeds, 1 if args.backend == "ray" else args.workers)
         workers = 1 if args.backend == "ray" else args.workers
         configs = [TrainConfig(agent=agent, env_id=args.env_id, updates=args.budget // args.rollouts,
                                rollouts=args.rollouts, seed=seed, workers=workers, env_kwargs=env_kwargs,
@@ -268,13 +295,13 @@ def main() -> None:
                         for config in tqdm(configs, desc="runs", unit="run")]
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-    rows = _summary(runs, imitation.to_dict())
+    rows = _summary(runs, baselines)
     settings = {key: value for key, value in vars(args).items()
                 if key not in ("option", "env_option", "replot", "ray_address")}
     settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
                      "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
     _print(rows, settings)
-    document = {"settings": settings, "summary": rows, "imitation": imitation.to_dict(), "runs": runs}
+    document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
     _plot(runs, rows, RESULTS / f"{args.name}.png", _title(settings))
     print(f"wrote {RESULTS / (args.name + '.json')} and {args.name}.png")
