@@ -250,3 +250,16 @@ def test_features_select_context_fields_by_name():
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"features": "patch_sise"}, space=space)
     with pytest.raises(ValueError, match="features"):                  # an env without named fields
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"features": "patch_size"}, space=_space())
+
+
+def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_the_config():
+    from rdmp_gym.agents.tasks import CONTEXTUAL_SEARCH_DEFAULTS, WIPE_ID
+
+    defaults = CONTEXTUAL_SEARCH_DEFAULTS[WIPE_ID]
+    config = TrainConfig(agent="cpi2", options={"sigma_factors": "approach=2"})
+    assert config.options == {**defaults, "sigma_factors": "approach=2"}            # the run's own option wins
+    assert TrainConfig.from_dict(config.to_dict()) == config                       # and it round-trips
+    assert TrainConfig(agent="random").options == defaults                          # the control explores alike
+    assert TrainConfig(agent="amplitude").options == {}
+    assert TrainConfig(agent="cpi2", env_kwargs={"groups": ["periodic"]}).options == {}
+    assert TrainConfig(agent="cpi2", env_id=TRACKING_ID).options == {}
