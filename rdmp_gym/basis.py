@@ -202,7 +202,9 @@ class BasisSet:
         blocks = []
         for start in range(0, max(phi.shape[-1], 1), FORCING_BLOCK):
             raw = self.activations(phi[..., start:start + FORCING_BLOCK], r[..., start:start + FORCING_BLOCK])
-            blocks.append((raw @ transposed) / (raw.sum(axis=-1, keepdims=True) + self.fading.floor))
+            block = raw @ transposed
+            block /= raw.sum(axis=-1, keepdims=True) + self.fading.floor
+            blocks.append(block)
         return blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-2)
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
