@@ -11,14 +11,15 @@ same expanded distance as ``BasisSet.activations``), so ``Psi = exp(C^T F)`` wit
 (:func:`exponent_matrix`). A gate that ``BasisSet`` floors to exactly 0 gets the log ``-1500``. The weights
 get one extra column of ones, so one product per rollout gives the numerator and the denominator of (5).
 
-An activation whose exponent is below ``log(floor) - 45`` is left at 0 instead of being exponentiated (the
-periodic functions are narrow: about 14 of 40 are above it at any phase, and a family whose gate is 0 has
-none). Leaving out D such terms moves the mixture ``sum Psi w / (sum Psi + floor)`` by at most
-``2 D e^-45 max|w|`` (< 1e-17 max|w| for D = 80), below its own round-off (about 1e-16 max|w|).
+A periodic activation whose exponent is below ``log(floor) - 45`` is left at 0 instead of being exponentiated
+(the periodic functions are narrow: about 14 of 40 are above it at any phase, and none where their gate is 0;
+the transient ones are wide and all exponentiated). Leaving out D such terms moves the mixture
+``sum Psi w / (sum Psi + floor)`` by at most ``2 D e^-45 max|w|`` (< 1e-17 max|w| for D = 80), below its own
+round-off (about 1e-16 max|w|).
 
-Rollouts are processed a few at a time in buffers that are reused, so the ``[D, T]`` blocks stay in the
-core's cache and no large temporaries are allocated. The numbers equal those of ``BasisSet.forcing`` on
-each path to round-off (``tests/test_batched.py``).
+Rollouts are processed a few at a time (one at a time for T >= 1024; their features in bigger blocks) in
+buffers that are reused, so the ``[D, T]`` blocks stay in the core's cache and no large temporaries are
+allocated. The numbers equal those of ``BasisSet.forcing`` on each path to round-off (``tests/test_batched.py``).
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ NEGLIGIBLE_EXPONENT = 45.0
 """Activations below ``exp(-NEGLIGIBLE_EXPONENT) * floor`` are left out of the mixture (see the module docstring)."""
 
 _LOG_ZERO = -1500.0          # exp() of anything at or below this is exactly 0.0 in float64
-_CHUNK_SAMPLES = 1024        # samples (x rollouts) per block: a [D, 1024] float64 block (640 KB for D = 80)
+_BLOCK_SAMPLES = 1024        # samples (x rollouts) per block of activations ([D, 1024] float64, 640 KB for D = 80)
+_FEATURE_SAMPLES = 8192      # samples (x rollouts) per block of features ([8, 8192] float64, 512 KB)
 _PERIODIC_ROWS, _TRANSIENT_ROWS = slice(0, 4), slice(3, 8)      # the features each family's exponents use
 
 
@@ -98,30 +100,33 @@ def batched_forcing(basis: BasisSet, phi: np.ndarray, r: np.ndarray, weights: np
     periodic = np.ascontiguousarray(matrix[_PERIODIC_ROWS, :n].T)                  # [N, 4]
     transient = np.ascontiguousarray(matrix[_TRANSIENT_ROWS, n:].T)                # [M, 5]
     threshold = np.log(basis.fading.floor) - NEGLIGIBLE_EXPONENT
-    extended = np.concatenate([weights, np.ones((batch, 1, size))], axis=1)         # [B, d + 1, D]
+    extended = np.concatenate([weights, np.ones((batch, 1, size))], axis=1).transpose(0, 2, 1).copy()  # [B, D, d+1]
     result = np.empty((batch, samples, dims))
-    step = max(1, min(batch, _CHUNK_SAMPLES // max(samples, 1)))
-    features = np.empty((8, step * samples))
-    activation = np.empty((size, step * samples))
-    exponents, live = np.empty((n, step * samples)), np.empty((n, step * samples), dtype=bool)     # periodic only
-    sums = np.empty((step, dims + 1, samples))              # numerators [:, :d], denominator [:, d]
     phi_flat, r_flat = phi.reshape(-1), r.reshape(-1)
-    for start in range(0, batch, step):
-        count = min(step, batch - start)
-        width = count * samples
-        _features(basis.fading, phi_flat[start * samples:start * samples + width],
-                  r_flat[start * samples:start * samples + width], features[:, :width])
-        # periodic: only the activations above the negligible level (about 14 of 40 at any phase)
-        np.matmul(periodic, features[_PERIODIC_ROWS, :width], out=exponents[:, :width])
-        np.greater(exponents[:, :width], threshold, out=live[:, :width])
-        activation[:n, :width] = 0.0
-        np.exp(exponents[:, :width], out=activation[:n, :width], where=live[:, :width])
-        # transient: wide functions, mostly above it (a masked exp would cost more than it saves)
-        np.matmul(transient, features[_TRANSIENT_ROWS, :width], out=activation[n:, :width])
-        np.exp(activation[n:, :width], out=activation[n:, :width])
-        block = sums[:count]
-        np.matmul(extended[start:start + count], activation[:, :width].reshape(size, count, samples).transpose(1, 0, 2),
-                  out=block)
-        block[:, dims] += basis.fading.floor
-        np.divide(block[:, :dims], block[:, dims:], out=result[start:start + count].transpose(0, 2, 1))
+    step = max(1, min(batch, _BLOCK_SAMPLES // max(samples, 1)))           # rollouts per block of activations
+    rows = step * max(1, min(batch, _FEATURE_SAMPLES // max(step * samples, 1)))   # ... per block of features
+    features = np.empty((8, rows * samples))
+    activation = np.empty((size, step * samples))
+    exponents, live = np.empty((n, step * samples)), np.empty((n, step * samples), dtype=bool)    # periodic only
+    sums = np.empty((step, samples, dims + 1))              # numerators [..., :d], denominator [..., d]
+    for first in range(0, batch, rows):
+        count = min(rows, batch - first)
+        _features(basis.fading, phi_flat[first * samples:(first + count) * samples],
+                  r_flat[first * samples:(first + count) * samples], features[:, :count * samples])
+        for inner in range(0, count, step):                 # a [D, step * T] block at a time: it stays in cache
+            size_k = min(step, count - inner)
+            width, own = size_k * samples, features[:, inner * samples:(inner + size_k) * samples]
+            # periodic: only the activations above the negligible level (about 14 of 40 at any phase)
+            np.matmul(periodic, own[_PERIODIC_ROWS], out=exponents[:, :width])
+            np.greater(exponents[:, :width], threshold, out=live[:, :width])
+            activation[:n, :width] = 0.0
+            np.exp(exponents[:, :width], out=activation[:n, :width], where=live[:, :width])
+            # transient: wide functions, mostly above it (a masked exp would cost more than it saves)
+            np.matmul(transient, own[_TRANSIENT_ROWS], out=activation[n:, :width])
+            np.exp(activation[n:, :width], out=activation[n:, :width])
+            rollouts, block = slice(first + inner, first + inner + size_k), sums[:size_k]
+            np.matmul(activation[:, :width].reshape(size, size_k, samples).transpose(1, 2, 0), extended[rollouts],
+                      out=block)
+            block[..., dims] += basis.fading.floor
+            np.divide(block[..., :dims], block[..., dims:], out=result[rollouts])
     return result
