@@ -70,17 +70,31 @@ class DirtField:
             box_pos, box_rot: sponge box pose per step, [K, 3] and [K, 9].
             half: sponge box half sizes [3] (the face is the -x side, area ``4 half[1] half[2]``).
         """
-        count = len(force)
+        rows, cumulative = self.wear_steps(force, slide, box_pos, box_rot, half)
+        return _carry_forward(rows, cumulative, len(force))
+
+    def wear_steps(self, force: np.ndarray, slide: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
+                   half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The steps ``[R]`` that remove dirt and the cumulative wear ``[R, N]`` after each of them (between
+        them it does not change); :meth:`wear` row for row, without the ``[K, N]`` array."""
         pressure = np.where(force >= self.contact_threshold, force, 0.0) / (4.0 * half[1] * half[2])
         dose = self.wear_rate * pressure * slide                      # [K]: dirt removed under the face
-        wear = np.zeros((count, len(self.world)))
         rows = np.flatnonzero(dose > 0)
+        wear = np.empty((rows.size, len(self.world)))
         chunk = max(1, 200_000 // max(1, len(self.world)))
         for start in range(0, rows.size, chunk):
             part = rows[start:start + chunk]
             under = cells_under_sponge(self.world, box_pos[part], box_rot[part], half, self.depth_tolerance)
-            wear[part] = under * dose[part, None]
-        return np.cumsum(wear, axis=0)
+            wear[start:start + part.size] = under * dose[part, None]
+        return rows, np.cumsum(wear, axis=0)
+
+
+def _carry_forward(rows: np.ndarray, values: np.ndarray, count: int) -> np.ndarray:
+    """``[count, ...]``: ``values[j]`` from step ``rows[j]`` until the next row, zeros before ``rows[0]``."""
+    full = np.zeros((count, *values.shape[1:]))
+    latest = np.searchsorted(rows, np.arange(count), side="right") - 1       # the last row at or before each step
+    full[latest >= 0] = values[latest[latest >= 0]]
+    return full
 
 
 @dataclass
@@ -405,10 +419,11 @@ def _removal(dirt: DirtField, force: np.ndarray, box_pos: np.ndarray, box_rot: n
     if cells == 0:
         return np.zeros(count), np.zeros(0)
     slide = np.where(live, _slide(box_pos, dirt.normal), 0.0)
-    cumulative = np.minimum(dirt.wear(np.where(live, force, 0.0), slide, box_pos, box_rot, half), 1.0)
-    total = cumulative.sum(axis=1) / cells
+    rows, cumulative = dirt.wear_steps(np.where(live, force, 0.0), slide, box_pos, box_rot, half)
+    cumulative = np.minimum(cumulative, 1.0)                  # only at the steps that remove dirt
+    total = _carry_forward(rows, cumulative.sum(axis=1) / cells, count)
     removed = np.diff(total, prepend=0.0)
-    return removed, 1.0 - cumulative[-1]
+    return removed, 1.0 - (cumulative[-1] if rows.size else np.zeros(cells))
 
 
 def _dirt_left(dirt: DirtField, contact: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
