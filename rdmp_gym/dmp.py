@@ -405,7 +405,8 @@ class RhythmicDMP:
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> np.ndarray:
         """Forcing term ``[B, T, d]`` at ``times [T]`` along the paths from ``inits [B, 2]``, times
         ``M diag(amplitude)``; the basis is evaluated once per distinct initial condition."""
-        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
+        unique, inverse = (inits, np.zeros(1, dtype=int)) if len(inits) == 1 else np.unique(inits, axis=0,
+                                                                                             return_inverse=True)
         if unique.shape[0] == 1:              # one canonical path shared by the batch
             phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])          # [1, T] each
             forcing = self.basis.forcing(phis[0], radii[0], weights)
