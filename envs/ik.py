@@ -292,11 +292,12 @@ class PathIK:
         knots = np.unique(np.r_[np.arange(0, count, max(1, stride)), count - 1])
         q = np.broadcast_to(start, (len(knots), self.kin.n)).copy()
         blocked = None
+        knot_targets, knot_weight = targets[knots], rot_weight[knots]
         for iteration in range(coarse_iterations):
             q_old = q
             test = iteration + 1 >= min_iterations           # the errors are needed for the stopping test only
-            q, pos_err, rot_err, blocked = self._step(q, targets[knots], normal, basis, rot_weight[knots], blocked,
-                                                    avoid, errors=test)
+            q, pos_err, rot_err, blocked = self._step(q, knot_targets, normal, basis, knot_weight, blocked, avoid,
+                                                    errors=test)
             if test and (
                     (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):

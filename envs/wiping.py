@@ -249,6 +249,7 @@ def simulate_wipe(
     ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
     sensordata = d.sensordata
     wrist = sensordata[scene.force_adr]      # a view: the wrist sensor's force [3], updated by every step
+    rotated = np.empty(3)                    # R @ f, written in place every step
     bias_n = float(scene.wrist_force_world() @ normal)
     a = scene.sponge_contact_adr
     robot_adr = scene.robot_contact_adr
@@ -322,7 +323,7 @@ def simulate_wipe(
             step(m, d, frame_skip)
         if first_contact < 0 and sensordata[a] > 0:
             first_contact = k
-        measured = bias_n - float(dot(normal, dot(ft_rot, wrist)))   # = normal @ (R @ f)
+        measured = bias_n - float(dot(normal, dot(ft_rot, wrist, out=rotated)))   # = normal @ (R @ f)
         wrist_force[k] = measured
         depth_trace[k] = depth
         concatenate(sources, out=record[k])
