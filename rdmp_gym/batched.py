@@ -121,9 +121,14 @@ def batched_forcing(basis: BasisSet, phi: np.ndarray, r: np.ndarray, weights: np
             np.greater(exponents[:, :width], threshold, out=live[:, :width])
             activation[:n, :width] = 0.0
             np.exp(exponents[:, :width], out=activation[:n, :width], where=live[:, :width])
-            # transient: wide functions, mostly above it (a masked exp would cost more than it saves)
-            np.matmul(transient, own[_TRANSIENT_ROWS], out=activation[n:, :width])
-            np.exp(activation[n:, :width], out=activation[n:, :width])
+            # transient: wide functions, mostly above it (a masked exp would cost more than it saves), evaluated
+            # over the span of samples where their gate is not exactly 0 (0 outside it, as in BasisSet.activations)
+            gated = np.flatnonzero(own[4] > _LOG_ZERO)
+            span = slice(int(gated[0]), int(gated[-1]) + 1) if gated.size else slice(0, 0)
+            if span.stop - span.start < width:
+                activation[n:, :width] = 0.0
+            np.matmul(transient, own[_TRANSIENT_ROWS, span], out=activation[n:, span])
+            np.exp(activation[n:, span], out=activation[n:, span])
             rollouts, block = slice(first + inner, first + inner + size_k), sums[:size_k]
             np.matmul(activation[:, :width].reshape(size, size_k, samples).transpose(1, 2, 0), extended[rollouts],
                       out=block)

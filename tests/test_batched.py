@@ -63,3 +63,19 @@ def test_batched_forcing_rejects_mismatched_shapes(dmp):
         batched_forcing(dmp.basis, phi, np.ones((2, 11)), np.zeros((2, 3, dmp.basis.n_basis)))
     with pytest.raises(ValueError, match="weights"):
         batched_forcing(dmp.basis, phi, np.ones((2, 10)), np.zeros((3, 3, dmp.basis.n_basis)))
+
+
+def test_batched_forcing_where_a_gate_is_exactly_zero(dmp):
+    """Paths from inside the cycle start where the transient gate is floored to 0, paths from far outside where the
+    periodic one is: the skipped spans are exactly 0, as in ``BasisSet.activations``."""
+    t = np.arange(600) * 0.01
+    r0 = np.array([0.15, 0.3, 1.0, 3.0, 40.0])
+    phi, r = dmp.canonical.state(t, np.linspace(0.0, 2.0, r0.size), r0)
+    weights = np.random.default_rng(2).normal(0, 5.0, (r0.size, dmp.n_dims, dmp.basis.n_basis))
+    raw = [dmp.basis.activations(phi[b], r[b]) for b in range(r0.size)]
+    n = dmp.basis.n_periodic
+    assert np.any(raw[0][:, n:].sum(axis=1) == 0.0) and np.any(raw[-1][:, :n].sum(axis=1) == 0.0)
+    forcing = batched_forcing(dmp.basis, phi, r, weights)
+    for b in range(r0.size):
+        single = dmp.basis.forcing(phi[b], r[b], weights[b])
+        np.testing.assert_allclose(forcing[b], single, rtol=0, atol=1e-12 * np.abs(single).max())
