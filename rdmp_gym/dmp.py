@@ -110,7 +110,8 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
         if lengths.size > 1:
             profiles = profiles[row_length.ravel()]                                     # [B, 2, T]
         shift = profiles[:, 0, :, None] * offset[:, None, :]
-        shift += profiles[:, 1, :, None] * velocity_offset[:, None, :]
+        for dim in range(shift.shape[-1]):          # one coordinate at a time: a [B, T] temporary, not [B, T, d]
+            shift[..., dim] += profiles[:, 1] * velocity_offset[:, None, dim]
         return shift
 
 
@@ -487,7 +488,7 @@ class RhythmicDMP:
             path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
         system = _transformation(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
-            u = system.input(path, forcing, out=forcing)
+            u = system.input(path, forcing, out=forcing, scratch=path is not anchors)     # a fresh path may go
             del path, forcing
             y, z = system.rollout(u, y0, yd0 / omega, velocity)
             if velocity:

@@ -89,11 +89,15 @@ class TransformationSystem:
             numerators.append(strictly_proper + (output @ b1) * denominator)
         return numerators[0], numerators[1], denominator
 
-    def input(self, anchor: np.ndarray, forcing: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    def input(self, anchor: np.ndarray, forcing: np.ndarray, out: np.ndarray | None = None,
+              scratch: bool = False) -> np.ndarray:
         """Input ``u = Omega (alpha_z beta_z g + f)`` for ``forcing [..., T, d]`` and a constant anchor
-        ``[..., d]`` or a moving one ``[..., T, d]``; written into ``out`` if given (it may be ``forcing``)."""
+        ``[..., d]`` or a moving one ``[..., T, d]``; written into ``out`` if given (it may be ``forcing``).
+        With ``scratch`` a moving anchor is overwritten instead of copied (no ``[..., T, d]`` temporary)."""
         anchor = anchor if anchor.ndim == forcing.ndim else anchor[..., None, :]
-        u = np.add(self.alpha_z * self.beta_z * anchor, forcing, out=out)
+        in_place = scratch and anchor.shape == forcing.shape
+        scaled = np.multiply(anchor, self.alpha_z * self.beta_z, out=anchor if in_place else None)
+        u = np.add(scaled, forcing, out=out)
         u *= self.omega
         return u
 

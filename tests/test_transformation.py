@@ -31,6 +31,10 @@ def test_input_in_place_equals_input():
     copy = forcing.copy()
     np.testing.assert_array_equal(system.input(moving, copy, out=copy), expected_moving)
     assert not np.array_equal(expected, expected_moving)
+    scratch, kept = moving.copy(), anchor.copy()                  # a moving anchor may be overwritten, a constant not
+    np.testing.assert_array_equal(system.input(scratch, forcing.copy(), scratch=True), expected_moving)
+    np.testing.assert_array_equal(system.input(kept, forcing.copy(), scratch=True), expected)
+    assert not np.array_equal(scratch, moving) and np.array_equal(kept, anchor)
 
 
 def test_more_initial_states_than_inputs_broadcast():
