@@ -463,11 +463,10 @@ class RhythmicDMP:
                   ) -> tuple[np.ndarray, np.ndarray | None]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
         anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]`` (``None`` for the
-        velocities unless ``velocity``). The forcing term is
-        multiplied by ``M diag(amplitude)``. With ``blend_length [B]`` (s) the start is blended
-        (``start_blend``): the result is the settled motion plus a quintic offset ``e(t)`` that starts at
-        ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length`` on. A ``stop`` (with
-        ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
+        velocities unless ``velocity``). The forcing term is multiplied by ``M diag(amplitude)``. With
+        ``blend_length [B]`` (s) the start is blended (``start_blend``): the result is the settled motion plus a
+        quintic offset ``e(t)`` that starts at ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length``
+        on. A ``stop`` (with ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -488,7 +487,7 @@ class RhythmicDMP:
             path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
         system = _transformation(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
-            u = system.input(path, forcing, out=forcing, scratch=path is not anchors)     # a fresh path may go
+            u = system.input(path, forcing, out=forcing, scratch=path is not anchors)   # a blended path is ours
             del path, forcing
             y, z = system.rollout(u, y0, yd0 / omega, velocity)
             if velocity:

@@ -109,20 +109,22 @@ class TransformationSystem:
         (there it is below the float64 resolution of the initial state it decays from).
         """
         responses = []
-        for live in self._live_free_response(times, state):
+        for live in self._live_free_response(times, state, (0, 1)):
             response = np.zeros((*state.shape[:-2], times.size, state.shape[-1]))
             response[..., :live.shape[-2], :] = live
             responses.append(response)
         return responses[0], responses[1]
 
-    def _live_free_response(self, times: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`free_response` up to the sample from which it is 0: ``(y, z)`` each ``[..., L, d]``, L <= T."""
+    def _live_free_response(self, times: np.ndarray, state: np.ndarray, rows: tuple[int, ...]
+                            ) -> tuple[np.ndarray, ...]:
+        """:meth:`free_response` up to the sample from which it is 0, for the state rows ``rows`` (0: y, 1: z):
+        one ``[..., L, d]`` array per row, L <= T."""
         lam = -0.5 * self.alpha_z * self.omega
         slope = (self.system_matrix - lam * np.eye(2)) @ state                    # [..., 2, d]
         decay = np.exp(lam * times)
         live = int(np.count_nonzero(decay * (1.0 - lam * times) > FREE_RESPONSE_FLOOR))   # times increase
         decay, t = decay[:live, None], times[:live, None]
-        return tuple(decay * (state[..., row, None, :] + t * slope[..., row, None, :]) for row in (0, 1))
+        return tuple(decay * (state[..., row, None, :] + t * slope[..., row, None, :]) for row in rows)
 
     def rollout(self, u: np.ndarray, y0: np.ndarray, z0: np.ndarray, velocity: bool = True
                 ) -> tuple[np.ndarray, np.ndarray | None]:
@@ -141,8 +143,8 @@ class TransformationSystem:
         xi0 = np.stack([y0, z0], axis=-2) - b1[:, None] * u[..., 0, None, :]
         batch = np.broadcast_shapes(u.shape[:-2], xi0.shape[:-2])
         outputs = []
-        for numerator, free in zip((b_y, b_z) if velocity else (b_y,), self._live_free_response(times, xi0),
-                                   strict=False):
+        rows = (0, 1) if velocity else (0,)
+        for numerator, free in zip((b_y, b_z), self._live_free_response(times, xi0, rows), strict=False):
             output = lfilter(numerator, a, u, axis=-2)                          # the filter runs along the time axis
             if batch != output.shape[:-2]:      # initial states for more rollouts than inputs
                 output = np.broadcast_to(output, (*batch, *output.shape[-2:])).copy()
