@@ -103,14 +103,14 @@ class BodyClearance:
             outside = local - np.clip(local, -self.box_half, self.box_half)
             out_norm = np.linalg.norm(outside, axis=2)
             depth = self.box_half - np.abs(local)                                       # > 0 on every axis inside
-            face = np.argmin(depth, axis=2)
-            inside_dir = np.where(np.arange(3) == face[..., None], np.sign(local), 0.0)
             is_out = out_norm > 1e-9
-            direction = np.where(is_out[..., None], outside / np.maximum(out_norm, 1e-9)[..., None], inside_dir)
             distance = np.where(is_out, out_norm, -np.min(depth, axis=2))
             clearance.append(distance - radius)
             if not gradient:
                 continue
+            face = np.argmin(depth, axis=2)
+            inside_dir = np.where(np.arange(3) == face[..., None], np.sign(local), 0.0)
+            direction = np.where(is_out[..., None], outside / np.maximum(out_norm, 1e-9)[..., None], inside_dir)
             normal = np.einsum("bij,bsj->bsi", box_rot, direction)                      # world [B, s, 3]
             count = int(self.kin.body_joints[c + 1])
             lever = world[:, :, None, :] - state.anchors[:, None, :count]               # [B, s, k, 3]
@@ -178,10 +178,12 @@ class PathIK:
         self.clearance_gain = clearance_gain
 
     def _linearise(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
-                   rot_weight: np.ndarray, blocked: np.ndarray | None, state: ChainState | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   rot_weight: np.ndarray, blocked: np.ndarray | None, state: ChainState | None = None,
+                   errors: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None,
+                                                 np.ndarray | None]:
         """Task error and weighted Jacobians at ``q`` [B, n]: (error [B, 5], jac [B, 5, n], jw = W^-1 J^T
-        [B, n, 5], A = J W^-1 J^T + lambda^2 I [B, 5, 5], pos_err [B], rot_err [B])."""
+        [B, n, 5], A = J W^-1 J^T + lambda^2 I [B, 5, 5], pos_err [B], rot_err [B]); the last two are None
+        unless ``errors``."""
         state = self.kin.forward(q) if state is None else state
         jac_pos, jac_rot = state.jacobian()
         up = state.rot[:, :, 0]
@@ -197,19 +199,23 @@ class PathIK:
         jw = np.swapaxes(jac, 1, 2) * inv_weight[:, :, None]                    # W^-1 J^T [B, n, 5]
         a = jac @ jw
         a[:, range(5), range(5)] += self.damping2
+        if not errors:
+            return error, jac, jw, a, None, None
         cos_angle = np.clip(up @ normal, -1.0, 1.0)
         return error, jac, jw, a, np.linalg.norm(e_pos, axis=1), np.arccos(cos_angle)
 
     def _step(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
-              rot_weight: np.ndarray, blocked: np.ndarray | None = None, avoid: bool = False
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+              rot_weight: np.ndarray, blocked: np.ndarray | None = None, avoid: bool = False, errors: bool = True
+              ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray]:
         """One DLS update of ``q`` [B, n] with the null-space posture and limit task.
 
         ``blocked`` [B, n] marks joints held at a limit (they get almost no mobility). Returns
-        (q_new, pos_err [B], rot_err [B], blocked_new [B, n]); the errors are those at ``q``.
+        (q_new, pos_err [B], rot_err [B], blocked_new [B, n]); the errors are those at ``q`` (None unless
+        ``errors``).
         """
         state = self.kin.forward(q)
-        error, jac, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, blocked, state)
+        error, jac, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, blocked, state,
+                                                              errors)
         v = self.nullspace_gain * (self.posture - q)                               # [B, n]
         v += self.limit_gain * (np.maximum(0.0, self.zone_lower - q) - np.maximum(0.0, q - self.zone_upper))
         if avoid:
@@ -286,11 +292,13 @@ class PathIK:
         knots = np.unique(np.r_[np.arange(0, count, max(1, stride)), count - 1])
         q = np.broadcast_to(start, (len(knots), self.kin.n)).copy()
         blocked = None
+        knot_targets, knot_weight = targets[knots], rot_weight[knots]
         for iteration in range(coarse_iterations):
             q_old = q
-            q, pos_err, rot_err, blocked = self._step(q, targets[knots], normal, basis, rot_weight[knots], blocked,
-                                                    avoid)
-            if iteration + 1 >= min_iterations and (
+            test = iteration + 1 >= min_iterations           # the errors are needed for the stopping test only
+            q, pos_err, rot_err, blocked = self._step(q, knot_targets, normal, basis, knot_weight, blocked, avoid,
+                                                    errors=test)
+            if test and (
                     (pos_err.max() < self.tolerance and rot_err.max() < self.rot_tolerance)
                     or np.max(np.abs(q - q_old)) < self.tolerance):
                 break
@@ -304,7 +312,7 @@ class PathIK:
         # The fine pass treats every joint as free (limits still enforced by projection): a "blocked" flag
         # that switches between neighbouring points would make the joint path jump there.
         for _ in range(fine_iterations):
-            q, *_ = self._step(q, targets, normal, basis, rot_weight, None, avoid)
+            q, *_ = self._step(q, targets, normal, basis, rot_weight, None, avoid, errors=False)
         state = self.kin.forward(q)
         _, _, jw, a, pos_err, rot_err = self._linearise(q, targets, normal, basis, rot_weight, None, state)
         unit = np.zeros((count, 5, 1))

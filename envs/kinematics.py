@@ -149,6 +149,9 @@ class ChainKinematics:
         def rvec(r: np.ndarray, v: np.ndarray) -> np.ndarray:
             return (r.reshape(-1, 3) @ v).reshape(batch, 3)
 
+        # the sines and cosines of all active joints at once (the same numbers as column by column)
+        sines, cosines = np.sin(q), np.cos(q)
+        fall = 1.0 - cosines
         frames = []
         for body_pos, body_rot, jnts in self._bodies:
             if body_pos is not None:
@@ -158,18 +161,20 @@ class ChainKinematics:
             for index, axis, k, k2, jnt_pos, qpos0 in jnts:
                 has_offset = jnt_pos is not None
                 anchor = pos + rvec(rot, jnt_pos) if has_offset else pos
-                angle = q[:, index] if index >= 0 else np.full(batch, qpos0)
                 if index >= 0:
                     axes[:, index] = rvec(rot, axis)
                     anchors[:, index] = anchor
-                s = np.sin(angle)[:, None, None]
-                c = np.cos(angle)[:, None, None]
+                    s, one_minus_c = sines[:, index, None, None], fall[:, index, None, None]
+                else:                                   # a chain joint held at qpos0
+                    angle = np.full(batch, qpos0)
+                    s, one_minus_c = np.sin(angle)[:, None, None], 1.0 - np.cos(angle)[:, None, None]
                 turn = rmul(rot, k)                     # rot + s (rot K) + (1 - c) (rot K^2), in place
                 turn *= s
                 bend = rmul(rot, k2)
-                bend *= 1.0 - c
-                rot = rot + turn
-                rot += bend
+                bend *= one_minus_c
+                turn += rot                             # = rot + turn
+                turn += bend
+                rot = turn
                 pos = anchor - rvec(rot, jnt_pos) if has_offset else anchor
             frames.append((pos, rot))
         site_pos = pos + rvec(rot, self._site_pos)

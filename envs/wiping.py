@@ -70,17 +70,31 @@ class DirtField:
             box_pos, box_rot: sponge box pose per step, [K, 3] and [K, 9].
             half: sponge box half sizes [3] (the face is the -x side, area ``4 half[1] half[2]``).
         """
-        count = len(force)
+        rows, cumulative = self.wear_steps(force, slide, box_pos, box_rot, half)
+        return _carry_forward(rows, cumulative, len(force))
+
+    def wear_steps(self, force: np.ndarray, slide: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
+                   half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The steps ``[R]`` that remove dirt and the cumulative wear ``[R, N]`` after each of them (between
+        them it does not change); :meth:`wear` row for row, without the ``[K, N]`` array."""
         pressure = np.where(force >= self.contact_threshold, force, 0.0) / (4.0 * half[1] * half[2])
         dose = self.wear_rate * pressure * slide                      # [K]: dirt removed under the face
-        wear = np.zeros((count, len(self.world)))
         rows = np.flatnonzero(dose > 0)
+        wear = np.empty((rows.size, len(self.world)))
         chunk = max(1, 200_000 // max(1, len(self.world)))
         for start in range(0, rows.size, chunk):
             part = rows[start:start + chunk]
             under = cells_under_sponge(self.world, box_pos[part], box_rot[part], half, self.depth_tolerance)
-            wear[part] = under * dose[part, None]
-        return np.cumsum(wear, axis=0)
+            wear[start:start + part.size] = under * dose[part, None]
+        return rows, np.cumsum(wear, axis=0)
+
+
+def _carry_forward(rows: np.ndarray, values: np.ndarray, count: int) -> np.ndarray:
+    """``[count, ...]``: ``values[j]`` from step ``rows[j]`` until the next row, zeros before ``rows[0]``."""
+    full = np.zeros((count, *values.shape[1:]))
+    latest = np.searchsorted(rows, np.arange(count), side="right") - 1       # the last row at or before each step
+    full[latest >= 0] = values[latest[latest >= 0]]
+    return full
 
 
 @dataclass
@@ -190,6 +204,12 @@ def arm_table_penetration(scene: WipeScene) -> float:
     return deepest
 
 
+def _undispatched(function: Callable) -> Callable:
+    """numpy's C implementation of ``function`` without the ``__array_function__`` dispatch (about 0.25 us per call
+    saved in the control loop; the same function on the same arrays), or ``function`` itself where numpy has none."""
+    return getattr(function, "_implementation", function)
+
+
 def simulate_wipe(
     scene: WipeScene,
     plan: JointTargetPlan,
@@ -234,7 +254,8 @@ def simulate_wipe(
     table_normal = np.asarray(dirt.normal, dtype=np.float64)
     ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
     sensordata = d.sensordata
-    force_adr = scene.force_adr
+    wrist = sensordata[scene.force_adr]      # a view: the wrist sensor's force [3], updated by every step
+    rotated = np.empty(3)                    # R @ f, written in place every step
     bias_n = float(scene.wrist_force_world() @ normal)
     a = scene.sponge_contact_adr
     robot_adr = scene.robot_contact_adr
@@ -250,7 +271,7 @@ def simulate_wipe(
     record = np.zeros((count, rows.width))
     sources = (sensordata, d.qpos, d.site_xpos[scene.sponge_site], d.geom_xpos[scene.sponge_geom],
                d.geom_xmat[scene.sponge_geom])
-    concatenate = np.concatenate
+    concatenate = _undispatched(np.concatenate)
     contact = record[:, a:a + 4]          # found, net force (world)
     box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
     wrist_force = np.zeros(count)
@@ -263,7 +284,7 @@ def simulate_wipe(
     if not np.shares_memory(ctrl, d.ctrl):
         ctrl = None
     q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
-    add_scaled, dot = mujoco.mju_addScl, np.dot     # q - depth ndq, elementwise as numpy rounds it (no FMA)
+    add_scaled, dot = mujoco.mju_addScl, _undispatched(np.dot)   # q - depth ndq, elementwise as numpy rounds it
     # the admittance law of ForceAdaptation.update, inlined (same operations in the same order)
     law = adaptation.settings
     adapt = law.enabled
@@ -286,8 +307,13 @@ def simulate_wipe(
         filtered += alpha * (measured - filtered)
         if adapt:
             rate = gain * (target - filtered) * engage[k]
-            rate = min(max_rate, max(-max_rate, rate))
-            offset = min(max_offset, max(min_offset, offset + rate * dt))
+            # min(max_rate, max(-max_rate, rate)) and the same for the offset, as conditional expressions that
+            # return what the builtins return (the first argument unless the second is strictly beyond it)
+            rate = rate if rate > -max_rate else -max_rate
+            rate = rate if rate < max_rate else max_rate
+            offset = offset + rate * dt
+            offset = offset if offset > min_offset else min_offset
+            offset = offset if offset < max_offset else max_offset
         depth = preload + offset
         if learn is not None:
             depth += learn(filtered, engage[k])
@@ -308,7 +334,7 @@ def simulate_wipe(
             step(m, d, frame_skip)
         if first_contact < 0 and sensordata[a] > 0:
             first_contact = k
-        measured = bias_n - float(dot(normal, dot(ft_rot, sensordata[force_adr])))   # = normal @ (R @ f)
+        measured = bias_n - float(dot(normal, dot(ft_rot, wrist, out=rotated)))   # = normal @ (R @ f)
         wrist_force[k] = measured
         depth_trace[k] = depth
         concatenate(sources, out=record[k])
@@ -405,10 +431,11 @@ def _removal(dirt: DirtField, force: np.ndarray, box_pos: np.ndarray, box_rot: n
     if cells == 0:
         return np.zeros(count), np.zeros(0)
     slide = np.where(live, _slide(box_pos, dirt.normal), 0.0)
-    cumulative = np.minimum(dirt.wear(np.where(live, force, 0.0), slide, box_pos, box_rot, half), 1.0)
-    total = cumulative.sum(axis=1) / cells
+    rows, cumulative = dirt.wear_steps(np.where(live, force, 0.0), slide, box_pos, box_rot, half)
+    cumulative = np.minimum(cumulative, 1.0)                  # only at the steps that remove dirt
+    total = _carry_forward(rows, cumulative.sum(axis=1) / cells, count)
     removed = np.diff(total, prepend=0.0)
-    return removed, 1.0 - cumulative[-1]
+    return removed, 1.0 - (cumulative[-1] if rows.size else np.zeros(cells))
 
 
 def _dirt_left(dirt: DirtField, contact: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,

@@ -182,15 +182,17 @@ class BasisSet:
         out = np.zeros((*phi.shape, self.n_basis))
         periodic_gate, transient_gate = self.fading.periodic_gate(r), self.fading.transient_gate(r)
         span = _active_span(periodic_gate)
-        out[..., span, : self.n_periodic] = (von_mises(phi[..., span], self.periodic_centres, self.periodic_widths)
-                                             * periodic_gate[..., span, None])
+        np.multiply(von_mises(phi[..., span], self.periodic_centres, self.periodic_widths),
+                    periodic_gate[..., span, None], out=out[..., span, : self.n_periodic])
         span = _active_span(transient_gate)
         radius, angle = r[..., span, None], phi[..., span, None]
         q = self.transient_centres
         distance_sq = (radius**2 + np.sum(q**2, axis=1)
                        - 2.0 * radius * (np.cos(angle) * q[:, 0] + np.sin(angle) * q[:, 1]))
-        out[..., span, self.n_periodic :] = (np.exp(-self.transient_widths * np.maximum(distance_sq, 0.0))
-                                             * transient_gate[..., span, None])
+        np.maximum(distance_sq, 0.0, out=distance_sq)
+        distance_sq *= -self.transient_widths           # = -vbar * max(distance^2, 0)
+        np.exp(distance_sq, out=distance_sq)
+        np.multiply(distance_sq, transient_gate[..., span, None], out=out[..., span, self.n_periodic :])
         return out
 
     def forcing(self, phi: np.ndarray, r: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -202,7 +204,9 @@ class BasisSet:
         blocks = []
         for start in range(0, max(phi.shape[-1], 1), FORCING_BLOCK):
             raw = self.activations(phi[..., start:start + FORCING_BLOCK], r[..., start:start + FORCING_BLOCK])
-            blocks.append((raw @ transposed) / (raw.sum(axis=-1, keepdims=True) + self.fading.floor))
+            block = raw @ transposed
+            block /= raw.sum(axis=-1, keepdims=True) + self.fading.floor
+            blocks.append(block)
         return blocks[0] if len(blocks) == 1 else np.concatenate(blocks, axis=-2)
 
     def normalized(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:

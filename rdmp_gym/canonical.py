@@ -32,6 +32,7 @@ _X_LOW = np.log(1e-12)          # log of the smallest tabulated |r - mu| / mu
 _X_HIGH_ABOVE = np.log(1e6)     # r up to about 1e6 mu
 _R_MIN_BELOW = 1e-9             # smallest r / mu tabulated below the limit cycle
 _GRID_STEP = 2e-3
+_BLOCK_SAMPLES = 8192           # samples per block in CanonicalSystem.radius
 
 
 @dataclass(frozen=True)
@@ -101,16 +102,27 @@ class _TravelTime:
             mask = sign == branch.sign
             if not np.any(mask):
                 continue
-            target = c[mask]
+            whole = bool(np.all(mask))                      # one branch only: no gather and scatter
+            target = c.reshape(-1) if whole else c[mask]
             x = self._x_of_c(branch, target)
             # One Newton step on C(x) = target removes the inverse spline's error.
             inside = target > 0.0
             if np.any(inside):
-                xi = x[inside]
+                every = bool(np.all(inside))
+                xi = x if every else x[inside]
                 value, slope = _value_and_slope(branch, xi)
-                xi = xi - (value - target[inside]) * (1.0 / slope)
-                x[inside] = xi
-            r[mask] = self.mu + branch.sign * np.exp(x)
+                xi = xi - (value - (target if every else target[inside])) * (1.0 / slope)
+                if every:
+                    x = xi
+                else:
+                    x[inside] = xi
+            np.exp(x, out=x)
+            x *= branch.sign
+            x += self.mu
+            if whole:
+                r = x.reshape(c.shape)
+            else:
+                r[mask] = x
         return r
 
     def _x_of_c(self, branch: _Branch, c: np.ndarray) -> np.ndarray:
@@ -213,11 +225,16 @@ class CanonicalSystem:
         t = as_finite_array(t, "t", ndim=1)
         r0 = self._check_r0(r0)
         table = self._table
-        start = table.travel(r0)[..., None]                   # [B, 1] or [1]
-        sign = np.broadcast_to(table.branch(r0)[..., None], start.shape[:-1] + t.shape)
-        travel = np.where(np.isinf(start), np.inf, start - self.tempo * t)
-        travel = np.broadcast_to(travel, sign.shape)
-        return table.radius_after(np.where(sign == 0, 0.0, travel), sign)
+        starts, signs = table.travel(r0.reshape(-1)), table.branch(r0.reshape(-1))          # [B] each
+        elapsed = self.tempo * t
+        out = np.empty((starts.size, t.size))
+        rows = max(1, _BLOCK_SAMPLES // max(t.size, 1))  # a few paths at a time: small temporaries, in cache
+        for first in range(0, starts.size, rows):
+            block = slice(first, first + rows)
+            sign = np.broadcast_to(signs[block, None], out[block].shape)
+            travel = np.where(sign == 0, 0.0, starts[block, None] - elapsed)   # sign 0 (on the cycle): r = mu
+            out[block] = table.radius_after(travel, sign)
+        return out.reshape(r0.shape + t.shape)
 
     def phase(self, t: np.ndarray, phi0: float | np.ndarray) -> np.ndarray:
         """phi(t) = phi0 + tempo * Omega * t, ``[T]`` or ``[B, T]`` for ``phi0`` of shape ``[B]``."""

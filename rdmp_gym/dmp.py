@@ -107,8 +107,12 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
     with np.errstate(all="ignore"):      # a tempo so small that omega**2 underflows: inf/NaN, refused by _simulate
         gains = 1.0 / np.array([1.0, beta_z * omega, alpha_z * beta_z * np.float64(omega) ** 2])
         profiles = np.stack([gains @ start_blend_profiles(elapsed, float(value)) for value in lengths])
-        profiles = profiles[row_length.ravel()]                                         # [B, 2, T]
-        return profiles[:, 0, :, None] * offset[:, None, :] + profiles[:, 1, :, None] * velocity_offset[:, None, :]
+        if lengths.size > 1:
+            profiles = profiles[row_length.ravel()]                                     # [B, 2, T]
+        shift = profiles[:, 0, :, None] * offset[:, None, :]
+        for dim in range(shift.shape[-1]):          # one coordinate at a time: a [B, T] temporary, not [B, T, d]
+            shift[..., dim] += profiles[:, 1] * velocity_offset[:, None, dim]
+        return shift
 
 
 def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tuple[np.ndarray, np.ndarray]:
@@ -402,12 +406,18 @@ class RhythmicDMP:
                  amplitudes: np.ndarray, transform: np.ndarray | None) -> np.ndarray:
         """Forcing term ``[B, T, d]`` at ``times [T]`` along the paths from ``inits [B, 2]``, times
         ``M diag(amplitude)``; the basis is evaluated once per distinct initial condition."""
-        unique, inverse = np.unique(inits, axis=0, return_inverse=True)
-        phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])              # [U, T] each
+        unique, inverse = (inits, np.zeros(1, dtype=int)) if len(inits) == 1 else np.unique(inits, axis=0,
+                                                                                             return_inverse=True)
         if unique.shape[0] == 1:              # one canonical path shared by the batch
+            phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])          # [1, T] each
             forcing = self.basis.forcing(phis[0], radii[0], weights)
         else:                                 # every rollout on its own path (perturbed initial conditions)
-            forcing = batched_forcing(self.basis, phis[inverse.ravel()], radii[inverse.ravel()], weights)
+            if unique.shape[0] < inits.shape[0]:
+                phis, radii = canonical.state(times, unique[:, 0], unique[:, 1])      # [U, T] each
+                phis, radii = phis[inverse.ravel()], radii[inverse.ravel()]
+            else:                             # all distinct: the paths in the rows' order, with no copy
+                phis, radii = canonical.state(times, inits[:, 0], inits[:, 1])        # [B, T] each
+            forcing = batched_forcing(self.basis, phis, radii, weights)
         forcing *= amplitudes[:, None, :]
         return forcing if transform is None else forcing @ transform.T
 
@@ -449,14 +459,14 @@ class RhythmicDMP:
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                   amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
                   transform: np.ndarray | None, blend_length: np.ndarray | None = None,
-                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None, velocity: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
-        anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]``. The forcing term is
-        multiplied by ``M diag(amplitude)``. With ``blend_length [B]`` (s) the start is blended
-        (``start_blend``): the result is the settled motion plus a quintic offset ``e(t)`` that starts at
-        ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length`` on. A ``stop`` (with
-        ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
+        anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]`` (``None`` for the
+        velocities unless ``velocity``). The forcing term is multiplied by ``M diag(amplitude)``. With
+        ``blend_length [B]`` (s) the start is blended (``start_blend``): the result is the settled motion plus a
+        quintic offset ``e(t)`` that starts at ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length``
+        on. A ``stop`` (with ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -470,16 +480,19 @@ class RhythmicDMP:
         path = anchors
         if blend_length is not None:
             y_settled, yd_settled = self._settled(canonical, weights, inits, anchors, amplitudes, transform)
-            path = anchors[:, None, :] + _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled,
-                                                      omega, self.alpha_z)
+            path = _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled, omega, self.alpha_z)
+            path += anchors[:, None, :]
         if stop is not None:        # the anchor blends to the goal (after the start blend has ended)
             blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[None, :, None]
             path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
         system = _transformation(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
-            y, z = system.rollout(system.input(path, forcing), y0, yd0 / omega)
-            z = z * omega
-        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
+            u = system.input(path, forcing, out=forcing, scratch=path is not anchors)   # a blended path is ours
+            del path, forcing
+            y, z = system.rollout(u, y0, yd0 / omega, velocity)
+            if velocity:
+                z *= omega
+        if not (np.all(np.isfinite(y)) and (z is None or np.all(np.isfinite(z)))):
             raise ValueError("rollout: the result overflowed to NaN or inf; the period, gains, weights or time grid "
                              f"are out of range (period {self.period:g} s, alpha_z {self.alpha_z:g}, tempo {tempo:g})")
         return y, z
@@ -563,7 +576,7 @@ class RhythmicDMP:
         stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
                                self._blend_lengths(k, tempo, start_blend), stop,
-                               None if stop is None else self.ending.weights[None])
+                               None if stop is None else self.ending.weights[None], return_velocity)
         return (y[0], yd[0]) if return_velocity else y[0]
 
     def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, start: TransientStart,
@@ -628,7 +641,7 @@ class RhythmicDMP:
         if stop_at is None:
             self._stop_plan(None, exit_phase, goal, self.transients[0], tempo, anchors, amplitudes)
             return self._simulate(t, weights, inits, anchors, amplitudes, y0, yd0, tempo, None,
-                                  self._blend_lengths(k, tempo, start_blend))[0]
+                                  self._blend_lengths(k, tempo, start_blend), velocity=False)[0]
         result = np.empty((batch, check_time_grid(t, "t").size, self.n_dims))
         for index in np.unique(k):      # the exit time follows each transient's own phase
             rows = np.flatnonzero(k == index)
@@ -637,7 +650,7 @@ class RhythmicDMP:
                 amplitudes[rows])
             result[rows] = self._simulate(t, weights[rows], inits[rows], anchors[rows], amplitudes[rows], y0[rows],
                                           yd0[rows], tempo, None, self._blend_lengths(k[rows], tempo, start_blend),
-                                          stop, stop_weights[rows])[0]
+                                          stop, stop_weights[rows], velocity=False)[0]
         return result
 
     def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,

@@ -89,11 +89,17 @@ class TransformationSystem:
             numerators.append(strictly_proper + (output @ b1) * denominator)
         return numerators[0], numerators[1], denominator
 
-    def input(self, anchor: np.ndarray, forcing: np.ndarray) -> np.ndarray:
+    def input(self, anchor: np.ndarray, forcing: np.ndarray, out: np.ndarray | None = None,
+              scratch: bool = False) -> np.ndarray:
         """Input ``u = Omega (alpha_z beta_z g + f)`` for ``forcing [..., T, d]`` and a constant anchor
-        ``[..., d]`` or a moving one ``[..., T, d]``."""
+        ``[..., d]`` or a moving one ``[..., T, d]``; written into ``out`` if given (it may be ``forcing``).
+        With ``scratch`` a moving anchor is overwritten instead of copied (no ``[..., T, d]`` temporary)."""
         anchor = anchor if anchor.ndim == forcing.ndim else anchor[..., None, :]
-        return self.omega * (self.alpha_z * self.beta_z * anchor + forcing)
+        in_place = scratch and anchor.shape == forcing.shape
+        scaled = np.multiply(anchor, self.alpha_z * self.beta_z, out=anchor if in_place else None)
+        u = np.add(scaled, forcing, out=out)
+        u *= self.omega
+        return u
 
     def free_response(self, times: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``exp(A t) x0`` for ``times [T]`` and ``state [..., 2, d]``, as ``(y, z)`` each ``[..., T, d]``.
@@ -102,24 +108,32 @@ class TransformationSystem:
         It is evaluated while ``exp(lam t) (1 + |lam| t)`` exceeds ``FREE_RESPONSE_FLOOR`` and is 0 after
         (there it is below the float64 resolution of the initial state it decays from).
         """
+        responses = []
+        for live in self._live_free_response(times, state, (0, 1)):
+            response = np.zeros((*state.shape[:-2], times.size, state.shape[-1]))
+            response[..., :live.shape[-2], :] = live
+            responses.append(response)
+        return responses[0], responses[1]
+
+    def _live_free_response(self, times: np.ndarray, state: np.ndarray, rows: tuple[int, ...]
+                            ) -> tuple[np.ndarray, ...]:
+        """:meth:`free_response` up to the sample from which it is 0, for the state rows ``rows`` (0: y, 1: z):
+        one ``[..., L, d]`` array per row, L <= T."""
         lam = -0.5 * self.alpha_z * self.omega
         slope = (self.system_matrix - lam * np.eye(2)) @ state                    # [..., 2, d]
         decay = np.exp(lam * times)
         live = int(np.count_nonzero(decay * (1.0 - lam * times) > FREE_RESPONSE_FLOOR))   # times increase
         decay, t = decay[:live, None], times[:live, None]
-        responses = []
-        for row in (0, 1):
-            response = np.zeros((*state.shape[:-2], times.size, state.shape[-1]))
-            response[..., :live, :] = decay * (state[..., row, None, :] + t * slope[..., row, None, :])
-            responses.append(response)
-        return responses[0], responses[1]
+        return tuple(decay * (state[..., row, None, :] + t * slope[..., row, None, :]) for row in rows)
 
-    def rollout(self, u: np.ndarray, y0: np.ndarray, z0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def rollout(self, u: np.ndarray, y0: np.ndarray, z0: np.ndarray, velocity: bool = True
+                ) -> tuple[np.ndarray, np.ndarray | None]:
         """Integrate a whole input sequence.
 
         Args:
             u: input samples ``[..., T, d]`` at spacing ``dt``.
             y0, z0: initial position and scaled velocity ``z = ydot / Omega``, ``[..., d]``.
+            velocity: also compute ``z`` (``False``: ``z`` is ``None``; ``y`` is the same).
         Returns:
             ``(y, z)`` each ``[..., T, d]``.
         """
@@ -127,11 +141,16 @@ class TransformationSystem:
         _, _, b1 = self._discrete
         times = np.arange(u.shape[-2]) * self.dt
         xi0 = np.stack([y0, z0], axis=-2) - b1[:, None] * u[..., 0, None, :]
-        y_free, z_free = self.free_response(times, xi0)
-        u_time_last = np.ascontiguousarray(np.swapaxes(u, -1, -2))               # lfilter is fastest on the last axis
-        y = np.swapaxes(lfilter(b_y, a, u_time_last, axis=-1), -1, -2) + y_free
-        z = np.swapaxes(lfilter(b_z, a, u_time_last, axis=-1), -1, -2) + z_free
-        return y, z
+        batch = np.broadcast_shapes(u.shape[:-2], xi0.shape[:-2])
+        outputs = []
+        rows = (0, 1) if velocity else (0,)
+        for numerator, free in zip((b_y, b_z), self._live_free_response(times, xi0, rows), strict=False):
+            output = lfilter(numerator, a, u, axis=-2)                          # the filter runs along the time axis
+            if batch != output.shape[:-2]:      # initial states for more rollouts than inputs
+                output = np.broadcast_to(output, (*batch, *output.shape[-2:])).copy()
+            output[..., :free.shape[-2], :] += free                             # in place: no [..., T, d] temporaries
+            outputs.append(output)
+        return outputs[0], outputs[1] if velocity else None
 
     def step(self, y: np.ndarray, z: np.ndarray, u_now: np.ndarray, u_next: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:

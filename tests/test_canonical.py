@@ -45,6 +45,18 @@ def test_batched_radius_equals_single():
         np.testing.assert_array_equal(row, cs.radius(t, start))
 
 
+def test_radius_of_many_paths_in_blocks_equals_one_path_at_a_time():
+    """Many paths (several blocks of samples): paths below, on and above the cycle, one branch per block or mixed."""
+    cs = CanonicalSystem(period=1.5)
+    t = np.linspace(0.0, 10.0, 1001)
+    r0 = np.r_[np.linspace(1.5, 30.0, 20), np.linspace(0.2, 0.9, 9), 1.0, np.linspace(2.0, 3.0, 10)]
+    batched = cs.radius(t, r0)
+    assert batched.shape == (r0.size, t.size) and r0.size * t.size > 4 * 8192
+    for row, start in zip(batched, r0, strict=True):
+        np.testing.assert_array_equal(row, cs.radius(t, start))
+    np.testing.assert_array_equal(batched[29], np.ones(t.size))                  # on the cycle it stays there
+
+
 @pytest.mark.parametrize(("length", "expected"), [(1.0, 8.5), (2.4, 41.0), (5.0, 141.0)])
 def test_init_T_reaches_target_and_matches_design_figures(length, expected):
     cs = CanonicalSystem(period=1.5)

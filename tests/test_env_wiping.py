@@ -331,3 +331,24 @@ def test_servo_targets_are_rounded_as_numpy_rounds_them():
         q, direction, depth = rng.normal(size=10), rng.normal(size=10), 0.05 * rng.normal()
         mujoco.mju_addScl(out, q, direction, -depth)
         assert np.array_equal(out, q - depth * direction)
+
+
+def test_wear_at_the_steps_that_remove_dirt_is_the_dense_cumulative_sum():
+    """``wear_steps`` (what an episode's dirt bookkeeping uses) holds exactly the rows of the dense cumulative wear at
+    the steps with a dose, and the dense wear repeats them in between (steps without contact or slide)."""
+    rng = np.random.default_rng(3)
+    cells = np.c_[rng.uniform(-0.06, 0.06, (120, 2)), np.zeros(120)]
+    dirt = DirtField(cells, np.array([0.0, 0.0, 1.0]))
+    half = np.array([0.02, 0.04, 0.03])
+    steps = 60
+    rot = np.tile(np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).ravel(), (steps, 1))
+    box = np.c_[rng.uniform(-0.03, 0.03, (steps, 2)), np.full(steps, half[0])]
+    force = np.where(rng.random(steps) < 0.6, rng.uniform(5.0, 30.0, steps), 0.0)
+    slide = np.where(rng.random(steps) < 0.8, rng.uniform(0.0, 0.02, steps), 0.0)
+    rows, compact = dirt.wear_steps(force, slide, box, rot, half)
+    wear = dirt.wear(force, slide, box, rot, half)
+    pressure = np.where(force >= dirt.contact_threshold, force, 0.0) / (4 * half[1] * half[2])
+    dense = np.cumsum(cells_under_sponge(cells, box, rot, half, dirt.depth_tolerance)
+                      * (dirt.wear_rate * pressure * slide)[:, None], axis=0)
+    assert 0 < rows.size < steps and np.array_equal(rows, np.flatnonzero(force * slide > 0))
+    assert np.array_equal(compact, dense[rows]) and np.array_equal(wear, dense)
