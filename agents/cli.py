@@ -72,8 +72,8 @@ def _needs_extra(args: argparse.Namespace) -> None:
     raise ModuleNotFoundError(f"needs the agents extra (missing module {args.missing!r}): {_EXTRA_HINT}",
                               name=args.missing)
 
-#: updates of ``rdmp-gym main`` (x 10 rollouts): about two minutes on 2 cores with the evaluations
-MAIN_UPDATES = 20
+#: updates of ``rdmp-gym main`` (x 10 rollouts, 500 episodes): about one minute of training on 2 cores
+MAIN_UPDATES = 50
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -376,8 +376,8 @@ def _add_agents_commands(commands: Any) -> None:
     job.add_argument("--out", default="runs/main", help="output directory")
     job.add_argument("--episodes", type=int, default=20, help="test contexts")
     job.add_argument("--video", action="store_true", help="record the best evaluation episode")
-    job.add_argument("--agent", default="creps", help="learner")
-    _add_training_arguments(job, updates=MAIN_UPDATES, agent=False, eval_episodes=6, eval_every=4)
+    job.add_argument("--agent", default="cpi2", help="learner")
+    _add_training_arguments(job, updates=MAIN_UPDATES, agent=False, eval_episodes=6, eval_every=5)
     job.set_defaults(handler=_command_main)
 
 

@@ -17,13 +17,14 @@ and the training episodes until the validation success rate first reaches 90 %. 
 Writes ``benchmarks/results/<name>.json`` (settings, per-run curves and per-context test scores, summary)
 and ``<name>.png``, and prints the table.
 
-    # the full protocol (10 seeds x 9 agents x 1000 episodes; several hours on 2 cores):
+    # the full protocol (10 seeds x 8 agents x 1000 episodes; several hours on 2 cores):
     python benchmarks/bench_agents.py
-    # the reduced run on ArmarWipe-v1 (the default env, cup on) in benchmarks/results/agents.json and agents_cmaes.json:
-    python benchmarks/bench_agents.py --agents creps cpi2 amplitude random --seeds 3 --budget 300 \\
-        --rollouts 10 --val-contexts 6 --eval-every 5 --save
-    python benchmarks/bench_agents.py --agents cmaes --seeds 3 --budget 300 --rollouts 10 --val-contexts 6 \\
-        --eval-every 5 --name agents_cmaes --save
+    # the committed runs on ArmarWipe-v1 (the default env, cup on): results/agents.json (27 min on 2 cores)
+    # and results/agents_rl_cmaes.json:
+    python benchmarks/bench_agents.py --agents cpi2 amplitude random cpibb creps --seeds 10 --budget 500 \\
+        --rollouts 10 --val-contexts 6 --eval-every 10 --save
+    python benchmarks/bench_agents.py --agents cmaes ppo --seeds 3 --budget 500 --rollouts 10 --val-contexts 6 \\
+        --eval-every 10 --name agents_rl_cmaes --save
     # every run a Ray task of one CPU (RAY_ADDRESS or --ray-address: a cluster); the same result files:
     python benchmarks/bench_agents.py --backend ray
 """
