@@ -19,7 +19,7 @@ and ``<name>.png``, and prints the table.
 
     # the full protocol (10 seeds x 8 agents x 1000 episodes; several hours on 2 cores):
     python benchmarks/bench_agents.py
-    # the committed runs on ArmarWipe-v1 (the default env, cup on): results/agents.json (27 min on 2 cores)
+    # the committed runs on ArmarWipe-v1 (the default env, cup on): results/agents.json (36 min on 2 cores)
     # and results/agents_rl_cmaes.json:
     python benchmarks/bench_agents.py --agents cpi2 amplitude random cpibb creps --seeds 10 --budget 500 \\
         --rollouts 10 --val-contexts 6 --eval-every 10 --save
