@@ -14,10 +14,10 @@ Smoothness: the integrated squared jerk ``∫ |d³y/dt³|² dt`` of the commande
 context.
 
 Aggregates: the interquartile mean (``scipy.stats.trim_mean(x, 0.25)``) with a 95 % percentile
-bootstrap interval (``scipy.stats.bootstrap``). ``rliable`` computes the same thing but its current
-release does not import with the packages pip resolves for it (rliable 1.2.0 -> arch 7.2.0 with
-pandas 3.1.1: ``TypeError: deprecate_kwarg()``) and it adds pandas, statsmodels, arch and seaborn
-(~160 MB) for two scipy calls.
+bootstrap interval (``scipy.stats.bootstrap``). ``rliable`` computes the same thing (its IQM is
+``trim_mean`` too) but adds pandas, statsmodels, arch and seaborn (~160 MB) for these two scipy calls, and
+its 1.2.0 release only imports with ``pandas<3`` (with pandas 3.1 arch 7.2 fails: ``TypeError:
+deprecate_kwarg()``).
 """
 
 from __future__ import annotations
