@@ -66,7 +66,8 @@ def init_ray(workers: int, address: str | None) -> bool:
 
 
 class RayPool:
-    """``workers`` :class:`EnvActor` actors (one CPU each); episodes go to whichever actor is free.
+    """``workers`` :class:`EnvActor` actors (one CPU each); each actor has ``IN_FLIGHT`` episodes queued and gets
+    the next one as it returns a result (results in submission order).
 
     Args:
         spec: the task.
@@ -75,14 +76,14 @@ class RayPool:
             new local instance.
     """
 
+    IN_FLIGHT = 2   #: episodes queued per actor
+
     def __init__(self, spec: TaskSpec, workers: int, address: str | None = None) -> None:
         ray = import_ray()
-        from ray.util import ActorPool
 
         self._owns = init_ray(workers, address)
         actor = ray.remote(num_cpus=1)(EnvActor)
         self.actors = [actor.remote(spec) for _ in range(workers)]
-        self._pool = ActorPool(self.actors)
         logger.info("evaluating on %d Ray actors", workers)
 
     def map(self, actions: np.ndarray, seeds: Sequence[int]) -> list[dict[str, Any]]:
@@ -91,8 +92,27 @@ class RayPool:
 
         from .evaluation import WorkerError
 
+        ray = import_ray()
+        jobs = list(zip(actions, seeds, strict=True))
+        results: list[dict[str, Any] | None] = [None] * len(jobs)
+        pending: dict[Any, tuple[int, Any]] = {}
+        queued = iter(range(len(jobs)))
+
+        def submit(actor: Any) -> None:
+            index = next(queued, None)
+            if index is not None:
+                pending[actor.episode.remote(*jobs[index])] = (index, actor)
+
         try:
-            return list(self._pool.map(lambda actor, job: actor.episode.remote(*job), zip(actions, seeds, strict=True)))
+            for _ in range(self.IN_FLIGHT):      # a queued episode hides the round trip to the driver
+                for actor in self.actors:
+                    submit(actor)
+            while pending:
+                (done,), _ = ray.wait(list(pending), num_returns=1)
+                index, actor = pending.pop(done)
+                results[index] = ray.get(done)
+                submit(actor)
+            return results
         except RayActorError as error:
             raise WorkerError("evaluation: a Ray actor died (killed, node lost or out of memory); the run's last "
                               "checkpoint is intact: rerun with --resume to continue") from error
