@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from rdmp_gym.smoothness import integrated_squared_jerk
+
 from .learners.base import EpisodeBatch
 
 __all__ = [
@@ -89,8 +91,7 @@ def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] |
     base = env.unwrapped
     path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
     dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
-    jerk = np.diff(path, n=3, axis=0) / dt**3
-    return float(np.sum(jerk**2) * dt)
+    return integrated_squared_jerk(path, dt)
 
 
 @dataclass(frozen=True)

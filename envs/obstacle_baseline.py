@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
+from rdmp_gym.smoothness import integrated_squared_jerk
 
 from .approach import LIFT_PROFILE
 
@@ -101,11 +102,8 @@ def path_jerk_ratio(env, path: np.ndarray) -> float:
     """Integrated squared jerk of ``path [T_ctrl, 3]`` over the imitation's in the current context (as
     ``rdmp_gym.agents.protocol.path_jerk``: third differences of the commanded path at the control rate)."""
     inner = env.unwrapped
-
-    def jerk(p: np.ndarray) -> float:
-        return float(np.sum((np.diff(p, n=3, axis=0) / inner.dt**3) ** 2) * inner.dt)
-
-    return jerk(path) / max(jerk(inner.rollout_path(inner.action_map.theta0)), 1e-300)
+    imitation = integrated_squared_jerk(inner.rollout_path(inner.action_map.theta0), inner.dt)
+    return integrated_squared_jerk(path, inner.dt) / max(imitation, 1e-300)
 
 
 def run_lifting(env, **kwargs: Any) -> tuple[float, dict]:

@@ -20,7 +20,7 @@ from numpy.polynomial import Polynomial
 from .demonstrations import Demonstration, SyntheticTruth
 from .validation import as_finite_array, check_positive, check_time_grid
 
-__all__ = ["SmoothTestSignal", "finite_derivatives", "motion_metrics", "random_test_signal"]
+__all__ = ["SmoothTestSignal", "finite_derivatives", "integrated_squared_jerk", "motion_metrics", "random_test_signal"]
 
 # C4 blend: 0 -> 1 on [0, 1] with derivatives 1..4 zero at both ends (the minimum-snap profile).
 _BLEND = Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
@@ -35,6 +35,13 @@ def finite_derivatives(Y: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     velocity = np.gradient(Y, dt, axis=0, edge_order=2)
     acceleration = np.gradient(velocity, dt, axis=0, edge_order=2)
     return velocity, acceleration, np.gradient(acceleration, dt, axis=0, edge_order=2)
+
+
+def integrated_squared_jerk(path: np.ndarray, dt: float) -> float:
+    """``∫ |d³y/dt³|² dt`` of a path ``[T, d]`` sampled every ``dt`` (third differences; the smoothness
+    measure of commanded paths in the agents' protocol and the env baselines)."""
+    jerk = np.diff(path, n=3, axis=0) / dt**3
+    return float(np.sum(jerk**2) * dt)
 
 
 def motion_metrics(Y: np.ndarray, reference: tuple[np.ndarray, np.ndarray, np.ndarray], dt: float,
