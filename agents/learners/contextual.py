@@ -188,9 +188,14 @@ class SearchSpace:
                    _context_names(base, observations.shape[1]))
 
 
+def _items(spec: str) -> list[str]:
+    """The non-empty, stripped items of a comma-separated option."""
+    return [item.strip() for item in spec.split(",") if item.strip()]
+
+
 def _select(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, slice]:
     """The groups of ``slices`` named in the comma-separated ``spec`` (``transient`` names every ``transient:k``)."""
-    wanted = [g.strip() for g in spec.split(",") if g.strip()]
+    wanted = _items(spec)
     chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
     if not chosen:
         raise ValueError(f"{argument}: {spec!r} selects none of the action's groups {sorted(slices)}")
@@ -200,7 +205,7 @@ def _select(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, 
 def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice], spec: str) -> np.ndarray:
     """``[B]`` the ``sigma_factors`` of each exploration block (1 where none is given)."""
     factors = np.ones(len(blocks))
-    for item in (part.strip() for part in spec.split(",") if part.strip()):
+    for item in _items(spec):
         name, _, text = item.partition("=")
         try:
             factor = float(text)
@@ -330,7 +335,7 @@ class ContextualSearch(Learner):
         if self.center.ndim != 1 or scale.shape != self.center.shape or np.any(scale < 0):
             raise ValueError("space: context_center and context_scale must be 1-D of one length, scale >= 0")
         if self.config.features:
-            wanted = {name.strip() for name in self.config.features.split(",") if name.strip()}
+            wanted = set(_items(self.config.features))
             names = space.context_names
             if names is None or not wanted <= set(names):
                 raise ValueError(f"features: {self.config.features!r} names fields the env's context does not have "
