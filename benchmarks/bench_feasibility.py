@@ -31,6 +31,7 @@ import cma
 import gymnasium as gym
 import numpy as np
 from output import add_save_argument, results_dir
+from rdmp_gym.agents.evaluation import run_episode
 from rdmp_gym.agents.protocol import final_test_seeds, interval
 from rdmp_gym.agents.tasks import WIPE_ID
 from rdmp_gym.envs.context import CONTEXT_FIELDS
@@ -52,10 +53,9 @@ def _parse() -> argparse.Namespace:
 
 
 def _episode(env: gym.Env, seed: int, action: np.ndarray) -> dict:
-    env.reset(seed=seed)
-    _, reward, _, _, info = env.step(np.clip(action, -1.0, 1.0))
-    return {"coverage": float(info["coverage"]), "success": bool(info["is_success"]), "reward": float(reward),
-            "force_in_band": float(info["force_in_band_fraction"]), "valid": bool(info["valid"])}
+    metrics = run_episode(env, action, seed, None)
+    return {"coverage": metrics["coverage"], "success": bool(metrics["success"]), "reward": metrics["return"],
+            "force_in_band": metrics["force_in_band"], "valid": metrics["valid"]}
 
 
 def _better(a: dict, b: dict | None) -> bool:
