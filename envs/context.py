@@ -13,7 +13,8 @@ The context is the observation of the episodic env: a float32 vector ``[13]``
 Each field has a *sampling* range (what ``reset`` draws from, well inside the reach) and wider
 *bounds* (the observation space; what ``reset(options=...)`` accepts). Whatever is drawn or given,
 the whole dirt patch lies on the table top, and a cup stands on the table, off the patch; a context
-that breaks either raises ``ValueError``.
+that breaks either raises ``ValueError``. The cup keeps ``patch_clearance`` from the patch (1 cm in
+``ArmarWipe-v1``; in ``ArmarWipe-v2`` the pad's half-diagonal plus 1 cm, so the pad can wipe the patch edge).
 
 The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
@@ -49,7 +50,7 @@ _SAMPLE_HIGH = np.array([0.02, 0.05, 0.05, 0.03, 0.04, 0.22, 0.22, 0.00, 0.28, 0
 _BOUND_LOW = np.array([-0.06, -0.15, -0.15, -0.15, -0.20, 0.02, 0.02, -0.30, -0.30, 0.0, 0.0, -0.30, -0.45])
 _BOUND_HIGH = np.array([0.06, 0.15, 0.15, 0.15, 0.20, 0.30, 0.30, 0.20, 0.30, 0.25, 1.0, 0.40, 0.45])
 
-#: Clearance (m) kept between the cup's rim and the dirty patch when it is placed.
+#: Default clearance (m) kept between the cup's rim and the dirty patch (``ArmarWipe-v1``'s).
 PATCH_CLEARANCE = 0.01
 
 
@@ -90,11 +91,13 @@ class ContextSpec:
         obstacle: whether contexts may have a cup at all.
         obstacle_probability: share of drawn contexts that get a cup (when it fits).
         obstacle_radius: the cup's radius (m).
+        patch_clearance: the least distance (m) between the cup's rim and the dirty patch.
     """
 
     def __init__(self, ranges: Mapping[str, tuple] | None = None,
                  table_extent: tuple[float, float, float, float] = (-0.14, 0.36, -0.45, 0.45),
-                 obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035):
+                 obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035,
+                 patch_clearance: float = PATCH_CLEARANCE):
         self.low = _SAMPLE_LOW.copy()
         self.high = _SAMPLE_HIGH.copy()
         self.bound_low = _BOUND_LOW.copy()
@@ -105,6 +108,9 @@ class ContextSpec:
             raise ValueError(f"obstacle_probability: expected a number in [0, 1], got {obstacle_probability!r}")
         self.obstacle_probability = float(obstacle_probability)
         self.obstacle_radius = float(obstacle_radius)
+        if not (np.isfinite(patch_clearance) and patch_clearance >= 0.0):
+            raise ValueError(f"patch_clearance: expected a number >= 0 (m), got {patch_clearance!r}")
+        self.patch_clearance = float(patch_clearance)
         for key, value in (ranges or {}).items():
             start, length = self._field(key, "context_ranges")
             if start >= _DRAWN:
@@ -198,7 +204,7 @@ class ContextSpec:
         r = self.obstacle_radius
         off_table = xy[0] - r < x_lo or xy[0] + r > x_hi or xy[1] - r < y_lo or xy[1] + r > y_hi
         gap = np.maximum(np.abs(xy - context.patch_centre) - context.patch_size / 2, 0.0)
-        on_patch = bool(np.hypot(*gap) < r + PATCH_CLEARANCE)
+        on_patch = bool(np.hypot(*gap) < r + self.patch_clearance)
         return off_table or on_patch
 
     def _corridor_point(self, context: Context, draw: np.ndarray) -> np.ndarray | None:

@@ -15,9 +15,11 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
 - ``impact``: ``-w`` x ``min(1, max(0, F_peak - F_imp) / F_imp)``, F_peak the peak normal force within
   0.2 s of the first contact (sampled at every physics step), charged at the step of the peak;
 - ``smoothness``: ``-w`` x ``ln(max(1, J / J_imitation))``, J the integrated squared jerk of the
-  commanded sponge path and J_imitation that of the imitation (action 0) in the same context; it is
-  spread over the steps in proportion to the squared jerk at each. Weight 0.25 (0.1 before the smooth
-  core of issue 7): the smooth core's wide basis and soft spring low-pass random weights, so a uniformly
+  commanded sponge path and J_imitation that of the imitation (action 0) in the same context (in
+  ``ArmarWipe-v2`` both per unit of integrated squared speed, :meth:`Smoothness.speed_normalised`, so that
+  a larger or travelling pattern that is as smooth costs nothing); it is
+  spread over the steps in proportion to the squared jerk at each. Weight 0.25: the smooth
+  core's wide basis and soft spring low-pass random weights, so a uniformly
   random action is now 7-25x as jerky as the imitation (was 30-45x) while its amplitude can still buy
   coverage; at 0.25 it costs 0.49-0.80 and such an action scores at least 0.49 below its smooth twin
   with the same coverage (20 contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17
@@ -134,6 +136,21 @@ class Smoothness:
         jerk = np.diff(path, 3, axis=0) / dt**3
         sq = np.sum(jerk**2, axis=1)
         return np.r_[sq[:1], sq[:1], sq, sq[-1:]]
+
+    @staticmethod
+    def integrated_jerk(path: np.ndarray, dt: float) -> float:
+        """Integrated squared jerk of a path ``[T, d]`` (sum over its steps of :meth:`jerk_squared`)."""
+        return float(np.sum(Smoothness.jerk_squared(path, dt)))
+
+    @staticmethod
+    def speed_normalised(path: np.ndarray, dt: float) -> float:
+        """Integrated squared jerk per integrated squared speed of a path ``[T, d]`` (1/s⁴).
+
+        Scaling a path by any factor leaves it unchanged, and a slow travel of a fast pattern adds little
+        to either integral, so a larger or travelling pattern that is as smooth scores as the imitation; a
+        rough one (high-frequency content) scores its mean squared frequency⁴ higher."""
+        speed = float(np.sum(np.diff(path, axis=0) ** 2)) / dt**2
+        return Smoothness.integrated_jerk(path, dt) / max(speed, 1e-12)
 
     @staticmethod
     def peak_accel(q: np.ndarray, dt: float) -> np.ndarray:
