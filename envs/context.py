@@ -18,7 +18,8 @@ that breaks either raises ``ValueError``. The cup keeps ``patch_clearance`` from
 
 The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
-the way, within 1 cm of the line, where the imitation's approach comes down on it. A draw that would
+the way (``ArmarWipe-v2``: 0-3 cm beyond the nearest point that keeps the clearance), within 1 cm of the
+line, where the imitation's approach comes down on it. A draw that would
 put it on the patch or off the table leaves the context without a cup.
 """
 
@@ -92,12 +93,14 @@ class ContextSpec:
         obstacle_probability: share of drawn contexts that get a cup (when it fits).
         obstacle_radius: the cup's radius (m).
         patch_clearance: the least distance (m) between the cup's rim and the dirty patch.
+        near_patch: place the cup in the corridor as close to the patch as ``patch_clearance`` allows (plus up to
+            3 cm) instead of 35-60 % of the way; ``ArmarWipe-v2``'s clearance leaves too little room otherwise.
     """
 
     def __init__(self, ranges: Mapping[str, tuple] | None = None,
                  table_extent: tuple[float, float, float, float] = (-0.14, 0.36, -0.45, 0.45),
                  obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035,
-                 patch_clearance: float = PATCH_CLEARANCE):
+                 patch_clearance: float = PATCH_CLEARANCE, near_patch: bool = False):
         self.low = _SAMPLE_LOW.copy()
         self.high = _SAMPLE_HIGH.copy()
         self.bound_low = _BOUND_LOW.copy()
@@ -111,6 +114,7 @@ class ContextSpec:
         if not (np.isfinite(patch_clearance) and patch_clearance >= 0.0):
             raise ValueError(f"patch_clearance: expected a number >= 0 (m), got {patch_clearance!r}")
         self.patch_clearance = float(patch_clearance)
+        self.near_patch = bool(near_patch)
         for key, value in (ranges or {}).items():
             start, length = self._field(key, "context_ranges")
             if start >= _DRAWN:
@@ -215,7 +219,16 @@ class ContextSpec:
             return None
         along = line / length
         across = np.array([-along[1], along[0]])
-        xy = start + (0.35 + 0.25 * draw[0]) * line + (draw[1] - 0.5) * 0.02 * across
+        side = (draw[1] - 0.5) * 0.02 * across
+        if self.near_patch:
+            fractions = np.arange(0.95, 0.0, -0.005)        # from the patch towards the start
+            clear = [f for f in fractions if not self._misplaced(context, start + f * line + side)]
+            if not clear:
+                return None
+            fraction = clear[0] - draw[0] * 0.03 / length
+        else:
+            fraction = 0.35 + 0.25 * draw[0]
+        xy = start + fraction * line + side
         if self._misplaced(context, xy):
             return None
         return xy

@@ -7,14 +7,15 @@ via points (:class:`rdmp_gym.Sweep`, the discrete part of a discrete + rhythmic 
 pattern is carried along it rigidly.
 
 The path is a fixed covering figure scaled per table axis: from the patch centre (where the approach lands,
-at rest) to the corner ``(-x, -y)``, around the rectangle ``[-x, x] x [-y, y]`` through ``(x, -y)``, ``(x, y)``,
-``(-x, y)`` back to ``(-x, -y)``, and home to the centre, where it rests until the episode ends. The via
-points are evenly spaced in time from the end of the transient to shortly before the end of the episode.
+at rest) out to ``(x, 0)``, once around the ellipse with half-axes ``x`` and ``y`` (via points every 45°), and
+home to the centre, where it rests until the episode ends. The via points are evenly spaced in time from the
+end of the transient to half a second before the end of the episode. The loop circling on this path covers a
+ring of the ellipse's size plus its own and the pad's; its passes through the centre cover the middle.
 The offsets are linear in the half-extents ``x`` and ``y``, so the two numbers are two action dimensions,
 ``sweep_x`` and ``sweep_y`` (``x = scale * a``, 6 cm at ``a = +1`` by default), that move the DMP's own
 ``sweep`` parameters (the via points) along a fixed direction each: "cover a patch this much larger than the
 loop" is two numbers, and ``a = 0`` leaves the anchor at rest at the centre (the imitation). A negative
-value runs the same rectangle mirrored (the other way round).
+value mirrors the figure (the ellipse run the other way round).
 """
 
 from __future__ import annotations
@@ -25,8 +26,11 @@ from rdmp_gym import RhythmicDMP, Sweep
 
 __all__ = ["COVERING_FIGURE", "covering_sweep", "sweep_directions"]
 
-#: The covering figure's via points in units of the half-extents (x, y), after the start at the centre.
-COVERING_FIGURE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [0.0, 0.0]])
+_ANGLES = np.deg2rad(np.arange(0.0, 361.0, 45.0))
+#: The covering figure's via points in units of the half-extents (x, y), after the start at the centre: out along
+#: x, once around the ellipse in 45° steps, back to the centre. The minimum-jerk path through them stays within
+#: the ellipse's box to 0.3 % (a rectangle's corners made it overshoot by 57 %).
+COVERING_FIGURE = np.r_[[[0.5, 0.0]], np.c_[np.cos(_ANGLES), np.sin(_ANGLES)], [[0.5, 0.0], [0.0, 0.0]]]
 
 
 def covering_sweep(start: float, end: float, n_dims: int) -> Sweep:

@@ -28,6 +28,8 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
   acceleration (a_max = 10 rad/s², ARMAR-III's joint limit), charged at the step of the peak;
 - ``arm_collision``: ``-w`` x fraction of steps with a robot geom other than the sponge on the table;
 - ``self_collision``: ``-w`` x fraction of steps with the arm touching the robot's torso, head or platform;
+  in ``ArmarWipe-v2`` these two, ``joint_limit`` and ``joint_accel`` also cost ``RewardSettings.event_charge``
+  x ``w`` once they happen at all (``is_success`` forbids each);
 - ``obstacle``: ``-w/2`` x (``sqrt(min(1, steps touching the cup / 100))`` + ``sqrt(min(1, cup displacement /
   20 cm))``), each charged in the step in which it grows (touching it, pushing it further); the square
   roots make a brief touch or a small push cost much (1 step: 0.05 w, 2 cm: 0.16 w) while a learner that
@@ -102,6 +104,10 @@ class RewardSettings:
         max_joint_accel: commanded joint acceleration a_max above which the peak is charged (rad/s²).
         touch_steps: steps of touching the obstacle that cost the full obstacle-touch charge.
         obstacle_shift: obstacle displacement that costs the full obstacle-displacement charge (m).
+        event_charge: a fixed share of the weight that an arm collision, a self-collision, a joint at its limit
+            or a joint acceleration above ``max_joint_accel`` costs as soon as it happens once (at its first
+            step), on top of its graded cost (``ArmarWipe-v2``: 0.2, so that a brief graze, which ``is_success``
+            forbids, costs more than the coverage it buys; v1: 0).
     """
 
     target_force: float = 18.0
@@ -112,6 +118,7 @@ class RewardSettings:
     max_joint_accel: float = 10.0
     touch_steps: int = 100
     obstacle_shift: float = 0.2
+    event_charge: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -207,19 +214,29 @@ def wipe_reward(trace: WipeTrace, periodic: np.ndarray, smooth: Smoothness, sett
         parts["smoothness"] = weights.smoothness * np.log(smooth.jerk_ratio) * smooth.jerk_sq / total_jerk
     peak = int(np.argmax(smooth.joint_accel))
     over = max(0.0, float(smooth.joint_accel[peak]) - settings.max_joint_accel) / settings.max_joint_accel
-    parts["joint_accel"][peak] = weights.joint_accel * min(1.0, over)
-    parts["arm_collision"] = weights.arm_collision * (trace.arm_contact & live) / count
-    parts["self_collision"] = weights.self_collision * (trace.self_contact & live) / count
+    parts["joint_accel"][peak] = weights.joint_accel * (min(1.0, over) + (settings.event_charge if over > 0 else 0))
+    charge = settings.event_charge
+    parts["arm_collision"] = weights.arm_collision * _with_event((trace.arm_contact & live) / count, charge)
+    parts["self_collision"] = weights.self_collision * _with_event((trace.self_contact & live) / count, charge)
     touching = np.sqrt(np.minimum(1.0, np.cumsum(trace.obstacle_contact & live) / settings.touch_steps))
     shifted = np.sqrt(np.minimum(1.0, trace.obstacle_shift / settings.obstacle_shift))
     parts["obstacle"] = 0.5 * weights.obstacle * (_growth(touching) + _growth(shifted))
-    parts["joint_limit"] = weights.joint_limit * (trace.at_limit & live) / count
+    parts["joint_limit"] = weights.joint_limit * _with_event((trace.at_limit & live) / count, charge)
     if trace.unstable:
         # The rest of the episode is lost: it counts as if the sponge lost contact from here on.
         lost = periodic & ~live
         parts["contact_loss"] = parts["contact_loss"] + weights.contact_loss * lost / n_per
         parts["unstable"][last] = weights.unstable
     return _terms(parts, traces)
+
+
+def _with_event(graded: np.ndarray, charge: float) -> np.ndarray:
+    """A graded per-step cost ``[T]`` plus ``charge`` at its first nonzero step (unchanged if it is all 0)."""
+    steps = np.flatnonzero(graded)
+    if charge and steps.size:
+        graded = graded.copy()
+        graded[steps[0]] += charge
+    return graded
 
 
 def invalid_reward(severity: float, count: int, weights: RewardWeights, traces: dict | None = None

@@ -5,7 +5,7 @@
 =====================  ===========================  =====================================================
 pattern                 loops in place at the patch  travels across the patch: ``sweep_x``, ``sweep_y``
                         centre                       action dimensions (:mod:`rdmp_gym.envs.coverage`)
-periods                 4 after the transient        6 after the transient (wear needs the time)
+periods                 4 after the transient        7 after the transient (wear needs the time)
 cup clearance           1 cm from the patch          the pad's half-diagonal + 1 cm (7.1 cm for the 7 x 10
                                                      cm pad): the pad can wipe the patch edge past the cup
 smoothness              jerk / the imitation's       jerk per unit of squared speed / the imitation's: a
@@ -13,6 +13,8 @@ smoothness              jerk / the imitation's       jerk per unit of squared sp
                                                      nothing
 ``is_success``          coverage, force, collisions, also executable: peak joint acceleration within
                         cup                          ARMAR-III's limit, no joint at its limit
+collisions, limits      charged per step             also a fixed 0.2 x weight once they happen at all, so
+                                                     a graze costs more than the coverage it buys
 =====================  ===========================  =====================================================
 """
 
@@ -40,6 +42,8 @@ class TaskVersion:
         speed_normalised_jerk: smoothness compares jerk per unit of squared speed (else plain jerk).
         executable_success: ``is_success`` also needs the peak joint acceleration within the limit and no
             joint at its limit.
+        event_charge: what a collision, a joint at its limit or a joint acceleration above the limit costs as soon
+            as it happens (a share of its weight, :class:`rdmp_gym.envs.reward.RewardSettings`).
     """
 
     version: int
@@ -48,6 +52,7 @@ class TaskVersion:
     pad_clearance: bool
     speed_normalised_jerk: bool
     executable_success: bool
+    event_charge: float
 
     def patch_clearance(self, sponge_half: np.ndarray) -> float:
         """Clearance (m) between the cup's rim and the patch for a sponge box of half sizes ``[3]`` (face: 1, 2)."""
@@ -58,7 +63,7 @@ class TaskVersion:
 
 TASK_VERSIONS = {
     1: TaskVersion(1, n_periods=4.0, sweep=False, pad_clearance=False, speed_normalised_jerk=False,
-                   executable_success=False),
-    2: TaskVersion(2, n_periods=6.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
-                   executable_success=True),
+                   executable_success=False, event_charge=0.0),
+    2: TaskVersion(2, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
+                   executable_success=True, event_charge=0.2),
 }

@@ -300,7 +300,8 @@ class ArmarWipeEnv(gym.Env):
         self.force_learning = (ForceProfileSettings() if force_learning is True
                                else force_learning or None)
         self.reward_settings = RewardSettings(target_force=target_force,
-                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1])
+                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1],
+                                              event_charge=self.task_version.event_charge)
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
         self.cell_size = check_positive(cell_size, "cell_size")
         self.limit_margin = float(limit_margin)
@@ -318,7 +319,8 @@ class ArmarWipeEnv(gym.Env):
         self.context_spec = ContextSpec(context_ranges, table_extent=self.scene.table_extent, obstacle=self.obstacle,
                                         obstacle_probability=float(obstacle_probability),
                                         obstacle_radius=self.scene.obstacle_radius,
-                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half))
+                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
+                                        near_patch=self.task_version.pad_clearance)
 
         kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS,
                                      bodies=("torso", "r_underarm_link"))
