@@ -31,7 +31,7 @@ from .fitting import smooth_derivatives
 from .segmentation import _refine_period
 from .validation import as_finite_array, check_positive
 
-__all__ = ["RhythmSegmentation", "local_fit", "motion_speed", "rest_onset", "segment_rhythm"]
+__all__ = ["RhythmSegmentation", "local_fit", "motion_speed", "rest_onset", "rest_start", "segment_rhythm"]
 
 logger = logging.getLogger(__name__)
 
@@ -96,6 +96,15 @@ def rest_onset(speed: np.ndarray, threshold: float, dt: float, min_rest: float =
     moving = np.flatnonzero(speed >= threshold)
     first = 0 if moving.size == 0 else int(moving[-1]) + 1
     return first if (speed.size - first) * dt >= min_rest else None
+
+
+def rest_start(demo: Demonstration, fraction: float = 0.05, min_rest: float = _MIN_REST) -> int | None:
+    """Index from which ``demo`` rests to its end (at least ``min_rest`` s), or ``None``: its speed
+    (:func:`motion_speed`) stays below ``fraction`` of its typical speed while moving (:func:`_high_level`), or
+    ``_NOISE_FACTOR`` times its speed in its quietest 0.5 s where that is higher."""
+    speed = motion_speed(demo)
+    threshold = max(fraction * _high_level(speed), _NOISE_FACTOR * _noise_speed(speed, demo.dt))
+    return rest_onset(speed, threshold, demo.dt, min_rest)
 
 
 def _high_level(values: np.ndarray) -> float:
