@@ -244,8 +244,8 @@ def despike(Y: np.ndarray, window: int = 7, threshold: float = 6.0) -> np.ndarra
     """``Y [L, d]`` with outliers replaced by the running median (a Hampel filter).
 
     A sample is an outlier where it differs from the median of the ``window`` samples around it by more than
-    ``threshold`` times the median absolute difference over the whole signal (1.4826 MAD: the noise's
-    standard deviation for Gaussian noise), in any dimension.
+    ``threshold`` times the median absolute difference over the whole signal (1.4826 MAD: the noise's standard
+    deviation for Gaussian noise; at least 1e-3 of the signal's range), in any dimension.
     """
     Y = as_finite_array(Y, "Y", ndim=2)
     if window < 3 or window % 2 == 0:
@@ -253,7 +253,7 @@ def despike(Y: np.ndarray, window: int = 7, threshold: float = 6.0) -> np.ndarra
     median = median_filter(Y, size=(window, 1), mode="nearest")
     deviation = np.abs(Y - median)
     scale = 1.4826 * np.median(deviation, axis=0)
-    floor = 1e-9 * np.maximum(np.ptp(Y, axis=0), 1e-12)
+    floor = 1e-3 * np.maximum(np.ptp(Y, axis=0), 1e-12)   # a noise-free signal: only jumps of its size
     outlier = deviation > threshold * np.maximum(scale, floor)
     return np.where(outlier, median, Y)
 

@@ -120,7 +120,7 @@ def _coarse_period(demo: Demonstration) -> float:
     of the slow motion that its longer windows leave to the harmonics)."""
     scores = np.array([_local_fit(demo, candidate, candidate)[2] for candidate in _CANDIDATES])
     fast = demo.Y - smooth_derivatives(demo.Y, demo.dt, _CANDIDATES[-1] * 2.0, polyorder=3)[0]
-    if scores.max() < _MIN_EXPLAINED * np.mean(np.sum(fast**2, axis=1)):
+    if scores.max() <= _MIN_EXPLAINED * np.mean(np.sum(fast**2, axis=1)):
         raise ValueError("demo: no rhythm found (no period between "
                          f"{_CANDIDATES[0]:g} s and {_CANDIDATES[-1]:g} s explains the motion beyond its slow part)")
     inner = np.arange(1, scores.size - 1)
