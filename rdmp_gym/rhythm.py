@@ -12,7 +12,8 @@ on top of it for part of the time. Method:
    the size of the harmonics is the rhythm's local amplitude. Unlike a moving average, the polynomial follows an
    accelerating approach without smearing it into the rhythm.
 3. Change points. The rhythm runs at full size from where the envelope first reaches ``full`` of its typical
-   level until it last does; it starts to grow where the envelope first exceeds ``begin`` of that level.
+   level until it last does, or until the working point departs (the slow part's speed exceeds a quarter of the
+   rhythm's); it starts to grow where the envelope first exceeds ``begin`` of that level.
 4. Rest. Speed (smoothed over ``_SPEED_WINDOW``) below ``rest_fraction`` of the rhythm's typical speed: the hand
    leaves its first rest at the first faster sample and is at rest after the rhythm from the first sample after
    which it stays slower. Relative to the motion's own scale, so a slow drift and sensor noise at rest pass.
@@ -38,6 +39,7 @@ logger = logging.getLogger(__name__)
 _CANDIDATES = np.geomspace(0.3, 4.0, 45)   # s: the periods the coarse search tries
 _MIN_EXPLAINED = 0.2        # least share of the motion beyond a slow trend that the rhythm must explain
 _SPEED_WINDOW = 0.5         # s: smoothing of the speed used for rest (Savitzky-Golay, then a median over 0.3 s)
+_DEPARTURE_SPEED = 0.25     # share of the rhythm's speed at which the working point's motion is a departure
 _NOISE_FACTOR = 3.0         # the rest threshold is at least this multiple of the speed in the quietest 0.5 s
 _MIN_REST = 0.3             # s: the shortest final rest recognised
 _N_HARMONICS = 4            # harmonics of the local Fourier fit
@@ -218,6 +220,8 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     growing = np.flatnonzero(amplitude[:first + 1] < begin * level)
     entry = int(growing[-1]) if growing.size else 0
     speed = motion_speed(demo)
+    if end is None:
+        last = _departure(slow, speed, first, last, demo.dt)
     threshold = max(rest_fraction * float(np.median(speed[first:last + 1])),
                     _NOISE_FACTOR * _noise_speed(speed, demo.dt))
     moving = np.flatnonzero(speed[:entry + 1] >= threshold)
@@ -229,6 +233,19 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     return RhythmSegmentation(period=float(estimate), onset=float(t[onset]), entry=float(t[entry]),
                               rhythm_start=float(t[first]), rhythm_end=float(t[last]), rest_time=rest_time,
                               slow=slow, amplitude=amplitude, rest_speed=threshold)
+
+
+def _departure(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
+    """The end of the rhythm ``[first, last]``, moved earlier to where its working point departs: where the slow
+    part's speed first exceeds ``_DEPARTURE_SPEED`` of the hand's typical speed in the rhythm (and three times the
+    slow part's own typical speed there: a pattern that travels is not a departure) in the rhythm's second half.
+    A departure about as long as a period looks rhythmic to the local fits, which then see the rhythm end late."""
+    slow_speed = np.linalg.norm(np.gradient(slow, dt, axis=0), axis=1)
+    rhythm = slice(first, last + 1)
+    limit = max(_DEPARTURE_SPEED * float(np.median(speed[rhythm])), 3.0 * float(np.median(slow_speed[rhythm])))
+    middle = (first + last) // 2
+    leaving = np.flatnonzero(slow_speed[middle:last + 1] > limit)
+    return middle + int(leaving[0]) if leaving.size else last
 
 
 def _rhythm_bounds(t: np.ndarray, amplitude: np.ndarray, full: float, start: float | None,
