@@ -21,11 +21,13 @@ import numpy as np
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.cli import main as cli_main
 
+from rdmp_gym.fitting import smooth_derivatives
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.recordings import RECORDING_KINDS, realistic_recording, to_demonstration
 
 
-def _row(name: str, demo, truth, csv_path: Path) -> dict:
+def _row(name: str, demo, truth, csv_path: Path, clean=None) -> dict:
+    """One table row; ``clean``: the noise-free recording (a Demonstration), where known."""
     row = {"recording": name, "duration": round(demo.duration, 2)}
     try:
         result = fit_recording(demo)
@@ -37,6 +39,9 @@ def _row(name: str, demo, truth, csv_path: Path) -> dict:
     if truth is not None:
         row.update(true_period=truth.period, true_start=truth.rhythm_start, true_end=truth.rhythm_end,
                    true_rest=truth.rest_time)
+    if clean is not None and "peak_acceleration" in row:    # the noise-free signal's peak, beside the recording's
+        peak = float(np.max(np.linalg.norm(smooth_derivatives(clean.Y, clean.dt, 0.15)[2], axis=1)))
+        row.update(clean_peak_acceleration=peak, clean_acceleration_ratio=row["peak_acceleration"] / peak)
     with tempfile.TemporaryDirectory() as folder:
         row["cli"] = cli_main(["fit", "--demo", str(csv_path), "--out", folder]) == 0
     return row
@@ -74,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
                 csv_path = Path(folder) / f"{kind}-{seed}.csv"
                 recording.to_csv(csv_path)
                 demo = to_demonstration(recording.t, recording.Y, name=f"{kind} {seed}")
-                rows.append(_row(f"{kind} {seed}", demo, recording.truth, csv_path))
+                clean = to_demonstration(recording.t, recording.truth.clean, outliers=False)
+                rows.append(_row(f"{kind} {seed}", demo, recording.truth, csv_path, clean))
                 _print(rows[-1])
         generated = list(rows)
         if args.data is not None:
@@ -100,7 +106,8 @@ def _print(row: dict) -> None:
           f"rest {rest}{truth} | cycle error {1000 * row['cycle_error']:.2f} mm / variation "
           f"{1000 * row['cycle_variation']:.2f} mm = {row['error_ratio']:.2f} | "
           f"start {1000 * row['start_error']:.1f} mm rest {1000 * row['rest_error']:.1f} mm | "
-          f"accel ratio {row['acceleration_ratio']:.2f} | "
+          f"accel ratio {row['acceleration_ratio']:.2f}"
+          + (f" (clean {row['clean_acceleration_ratio']:.2f})" if "clean_acceleration_ratio" in row else "") + " | "
           f"CLI {'ok' if row['cli'] else 'failed'}")
 
 

@@ -26,17 +26,18 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from .demonstrations import Demonstration
 from .dmp import SMOOTHNESS_REFERENCE, RhythmicDMP, _trajectory_design
 from .fitting import fit_trajectory, second_differences, smooth_derivatives
-from .rhythm import RhythmSegmentation, segment_rhythm
+from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
 from .segmentation import Segmentation
 from .stopping import StopSegmentation, _minimum_jerk_inverse, fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
-__all__ = ["RecordingFit", "fit_recording", "recording_report"]
+__all__ = ["RecordingFit", "fit_recording", "normalise_tempo", "recording_report"]
 
 logger = logging.getLogger(__name__)
 
@@ -86,7 +87,8 @@ def _fit_sweep(demo: Demonstration, seg: RhythmSegmentation, anchor: np.ndarray,
 
 def fit_recording(demo: Demonstration, *, period: float | None = None, start: float | None = None,
                   end: float | None = None, ending: bool | None = None, via_spacing: float | None = None,
-                  n_periodic: int = 40, n_transient: int = 20, n_stop: int = 15, **fit_kwargs) -> RecordingFit:
+                  n_periodic: int = 40, n_transient: int = 20, n_stop: int = 15, normalise: bool = True,
+                  **fit_kwargs) -> RecordingFit:
     """Fit a DMP to a whole recording: rest, approach, rhythm with a drifting working point, departure, rest.
 
     Args:
@@ -96,6 +98,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
             ``True`` raises if it does not).
         via_spacing: time between the anchor's via points (s; default one period, at most ``_VIA_SPACING``).
         n_periodic, n_transient, n_stop: basis functions of the rhythm, of its entry and of the stop.
+        normalise: fit the recording with its cycles stretched to their mean period (:func:`normalise_tempo`).
         fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ``smoothness``, ...).
     """
     if not isinstance(demo, Demonstration):
@@ -103,6 +106,11 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: fit_recording segments the recording itself (give period/start/end)")
     seg = segment_rhythm(demo, period=period, start=start, end=end)
+    if normalise:
+        demo, original = normalise_tempo(demo, seg)
+        start, end = (None if hint is None else float(np.interp(hint, original, demo.t - demo.t[0]))
+                      for hint in (start, end))
+        seg = segment_rhythm(demo, period=seg.period, start=start, end=end)
     spacing = min(seg.period, _VIA_SPACING) if via_spacing is None else check_positive(via_spacing, "via_spacing")
     t = demo.t - demo.t[0]
     first_rest = t <= max(seg.onset, demo.dt)
@@ -168,29 +176,62 @@ def _exit_time(ending, periodic_end: float, nu1_factor: float = 0.9, nu2_factor:
     return periodic_end - u_mid * ending.length
 
 
-def _cycles(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, end: float) -> list[np.ndarray]:
-    """The cycles ``[_PHASE_POINTS, d]`` of ``rhythmic [L, d]`` between ``start`` and ``end`` (s), cut at the upward
-    zero crossings of its main direction (at least 0.6 periods apart) and resampled in phase."""
-    inside = (t >= start) & (t <= end)
+def _cycle_cuts(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, end: float) -> np.ndarray:
+    """Indices ``[C]`` of the upward zero crossings (at least 0.6 periods apart) of the main direction of
+    ``rhythmic [L, d]`` between ``start`` and ``end`` (s): where its cycles begin."""
+    inside = np.flatnonzero((t >= start) & (t <= end))
     signal = rhythmic[inside] - rhythmic[inside].mean(axis=0)
-    direction = np.linalg.svd(signal, full_matrices=False)[2][0]
-    along = signal @ direction
-    upward = np.flatnonzero((along[:-1] < 0.0) & (along[1:] >= 0.0))
+    along = signal @ np.linalg.svd(signal, full_matrices=False)[2][0]
     cuts: list[int] = []
-    for index in upward:
-        if not cuts or t[inside][index] - t[inside][cuts[-1]] >= 0.6 * period:
+    for index in np.flatnonzero((along[:-1] < 0.0) & (along[1:] >= 0.0)):
+        if not cuts or t[inside[index]] - t[inside[cuts[-1]]] >= 0.6 * period:
             cuts.append(int(index))
-    times = t[inside]
+    return inside[np.array(cuts, dtype=int)]
+
+
+def _cycles(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, end: float) -> list[np.ndarray]:
+    """The cycles ``[_PHASE_POINTS, d]`` of ``rhythmic [L, d]`` (centred on its mean between ``start`` and ``end``)
+    cut at :func:`_cycle_cuts` and resampled in phase."""
+    cuts = _cycle_cuts(t, rhythmic, period, start, end)
+    inside = (t >= start) & (t <= end)
+    signal = rhythmic - rhythmic[inside].mean(axis=0)
     grid = np.linspace(0.0, 1.0, _PHASE_POINTS, endpoint=False)
-    return [np.stack([np.interp(times[a] + grid * (times[b] - times[a]), times, column) for column in signal.T],
-                     axis=1) for a, b in itertools.pairwise(cuts)]
+    return [np.stack([np.interp(t[a] + grid * (t[b] - t[a]), t, column) for column in signal.T], axis=1)
+            for a, b in itertools.pairwise(cuts)]
+
+
+def normalise_tempo(demo: Demonstration, seg: RhythmSegmentation) -> tuple[Demonstration, np.ndarray]:
+    """``demo`` with the cycles of its rhythm stretched in time to their mean period, and the original time
+    ``[L]`` (s from ``demo.t[0]``) of each of its samples.
+
+    A person's period wanders from cycle to cycle; a least-squares fit of one constant-period pattern to the
+    wandering cycles averages them out of phase and shrinks the pattern. Time is mapped by a smooth monotone
+    function (a cubic spline through the cycle starts, moved onto an even spacing with the same first and last,
+    and through the identity outside the rhythm), so the approach and the ending keep their timing.
+    """
+    t = demo.t - demo.t[0]
+    cuts = t[_cycle_cuts(t, demo.Y - seg.slow, seg.period, seg.rhythm_start, seg.rhythm_end)]
+    if cuts.size < 3:
+        return demo, t
+    even = np.linspace(cuts[0], cuts[-1], cuts.size)
+    before = np.arange(cuts[0] - seg.period, 0.0, -seg.period)[::-1]
+    after = np.arange(cuts[-1] + seg.period, t[-1], seg.period)
+    source = np.concatenate([[0.0], before[before > 0.5 * seg.period], cuts,
+                             after[after < t[-1] - 0.5 * seg.period], [t[-1]]])
+    target = np.concatenate([source[source < cuts[0]], even, source[source > cuts[-1]]])
+    original = CubicSpline(target, source)(t)
+    if np.any(np.diff(original) <= 0.0):
+        return demo, t
+    samples = CubicSpline(t, demo.Y, axis=0)(original)
+    return Demonstration(demo.t, samples, name=demo.name), original
 
 
 def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, float]:
     """How well ``result`` reproduces ``demo`` (m, m/s^2; times from ``demo.t[0]``).
 
     Keys: ``cycle_variation`` (RMS deviation of the recording's cycles from its mean cycle, relative to the slow
-    part), ``cycle_error`` (RMS deviation of the recording's cycles from the reproduction's mean cycle, cut the same
+    part, times ``sqrt(n / (n - 1))`` for n cycles: the deviation from a mean of the same cycles is biased low),
+    ``cycle_error`` (RMS deviation of the recording's cycles from the reproduction's mean cycle, cut the same
     way), ``error_ratio`` (their ratio: 1 when the reproduction's cycle is the recording's mean cycle),
     ``rhythm_rmse`` (plain RMS position error over the rhythm, including the drift of the person's timing),
     ``start_error`` (at the first sample), ``rest_error`` (mean over the final rest; NaN without one),
@@ -199,15 +240,21 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     """
     seg = result.segmentation
     t = demo.t - demo.t[0]
+    slow = local_fit(demo, seg.period)[0]
     reproduction = result.reproduce(demo.t)
     fine = np.arange(0.0, t[-1], 1e-3)
     acceleration = np.diff(result.reproduce(fine), 2, axis=0) / 1e-6
     recorded = smooth_derivatives(demo.Y, demo.dt, _SMOOTHING)[2]
-    recorded_cycles = _cycles(t, demo.Y - seg.slow, seg.period, seg.rhythm_start, seg.rhythm_end)
-    reproduced_cycles = _cycles(t, reproduction - seg.slow, seg.period, seg.rhythm_start, seg.rhythm_end)
+    recorded_cycles = _cycles(t, demo.Y - slow, seg.period, seg.rhythm_start, seg.rhythm_end)
+    reproduced_cycles = _cycles(t, reproduction - slow, seg.period, seg.rhythm_start, seg.rhythm_end)
     mean_recorded = np.mean(recorded_cycles, axis=0)
     mean_reproduced = _aligned_mean(reproduced_cycles, mean_recorded)
-    variation = float(np.sqrt(np.mean([np.sum((c - mean_recorded) ** 2, axis=1) for c in recorded_cycles])))
+    n_cycles = len(recorded_cycles)
+    if n_cycles < 2 or not reproduced_cycles:
+        raise ValueError(f"demo: {n_cycles} whole cycle(s) of the recording between {seg.rhythm_start:.3g} s and "
+                         f"{seg.rhythm_end:.3g} s, need 2 to measure its cycle-to-cycle variation")
+    spread = np.mean([np.sum((c - mean_recorded) ** 2, axis=1) for c in recorded_cycles])
+    variation = float(np.sqrt(spread * n_cycles / (n_cycles - 1)))      # unbiased: the mean is of the same cycles
     error = float(np.sqrt(np.mean([np.sum((c - mean_reproduced) ** 2, axis=1) for c in recorded_cycles])))
     rhythm = (t >= seg.rhythm_start) & (t <= seg.rhythm_end)
     peak, recorded_peak = (float(np.max(np.linalg.norm(a, axis=1))) for a in (acceleration, recorded))
