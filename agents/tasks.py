@@ -11,9 +11,12 @@ import numpy as np
 
 from .imitation import load_demonstration
 
-__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics", "task_options"]
+__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec", "episode_metrics",
+           "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
+#: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
+WIPE_V2_ID = "rdmp_gym/ArmarWipe-v2"
 
 #: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
 #: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
@@ -23,6 +26,8 @@ WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 #: the cup, so a small step never shows its worth).
 CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
     WIPE_ID: {"gain_groups": "amplitude,approach", "features": "patch_size,obstacle", "sigma_factors": "approach=3"},
+    WIPE_V2_ID: {"gain_groups": "amplitude,approach,sweep_x,sweep_y", "features": "patch_size,obstacle",
+                 "sigma_factors": "approach=3"},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")

@@ -45,11 +45,13 @@ from .demonstrations import (
     _vector3,
 )
 from .fitting import forcing_target, smooth_derivatives
+from .rhythm import rest_start
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_positive
 
 __all__ = ["Ending", "StopFading", "StopPlan", "StopSegmentation", "ending_demonstration", "exit_time", "fit_ending",
+           "fit_stop",
            "minimum_jerk", "plan_stop", "segment_ending"]
 
 logger = logging.getLogger(__name__)
@@ -255,7 +257,7 @@ class StopSegmentation:
         start: the segmentation of the start and periodic part (:func:`rdmp_gym.segment`).
         periodic_end: time from ``demo.t[0]`` of the last sample that fits the periodic pattern (s).
         rest_time: time from ``demo.t[0]`` from which the demonstration is at rest (s).
-        goal: ``[d]`` the rest position (mean over the last 0.2 s).
+        goal: ``[d]`` the rest position (mean over the rest).
     """
 
     start: Segmentation
@@ -264,13 +266,15 @@ class StopSegmentation:
     goal: np.ndarray
 
 
-def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tolerance: float = 5.0,
+def segment_ending(demo: Demonstration, *, period: float | None = None, rest_fraction: float = 0.05,
                    margin: float = 2.0, n_harmonics: int = 12) -> StopSegmentation:
     """Find the start transient, the periodic part, the stop and the rest in a demonstration that ends.
 
-    Rest: the goal is the mean of the last 0.2 s; the demonstration is at rest from the first sample
-    after which its smoothed position stays within ``rest_tolerance`` noise deviations of the goal (the
-    standard deviation of the samples over those last 0.2 s). Periodic part: :func:`rdmp_gym.segment` on
+    Rest: the demonstration is at rest from the first sample after which its speed (smoothed,
+    :func:`rdmp_gym.rhythm.motion_speed`) stays below ``rest_fraction`` of its typical speed while it moves (or
+    three times its speed in its quietest 0.5 s, where that is higher: sensor noise), for at least 0.2 s; the
+    goal is the mean position over the rest. Relative to the motion's own scale, so a slow drift at rest and
+    sensor noise pass. Periodic part: :func:`rdmp_gym.segment` on
     the samples up to two thirds of the rest time (so the stop does not enter it; 3/4 or 0.85 of it when
     that shows too little of the periodic part); the Fourier template of the periodic
     part is then extended to the rest, and the end of the periodic part is the change point of its
@@ -279,21 +283,16 @@ def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tol
     """
     if not isinstance(demo, Demonstration):
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
-    rest_tolerance = check_positive(rest_tolerance, "rest_tolerance")
+    rest_fraction = check_positive(rest_fraction, "rest_fraction")
     t, dt = demo.t - demo.t[0], demo.dt
     tail = max(round(0.2 / dt), 5)
     if demo.n_samples < 10 * tail:
         raise ValueError(f"demo: too short ({demo.duration:.3g} s) to hold a start, periods and a stop")
-    goal = demo.Y[-tail:].mean(axis=0)
-    smooth, _, _ = smooth_derivatives(demo.Y, dt, 0.1)
-    floor = 1e-6 * np.ptp(demo.Y, axis=0) + 1e-12
-    noise = np.maximum(np.std(demo.Y[-tail:], axis=0), floor)
-    if np.any(noise > 3.0 * np.maximum(np.std(demo.Y[-tail:] - smooth[-tail:], axis=0), floor)):
-        raise ValueError("demo: does not come to rest (its last 0.2 s move more than noise)")
-    away = np.flatnonzero(np.any(np.abs(smooth - goal) > rest_tolerance * noise, axis=1))
-    if away.size == 0 or away[-1] >= t.size - tail:
-        raise ValueError("demo: does not come to rest (need at least 0.2 s at rest at the end)")
-    rest_index = int(away[-1]) + 1
+    rest_index = rest_start(demo, rest_fraction, min_rest=tail * dt)
+    if rest_index is None:
+        raise ValueError(f"demo: does not come to rest (its last {tail * dt:.2g} s move faster than "
+                         f"{rest_fraction:.0%} of its typical speed)")
+    goal = demo.Y[rest_index:].mean(axis=0)
     seg, head = None, 0
     for share in _HEAD_SHARES:       # the shortest head that shows the periodic part (less risk of the stop in it)
         head = round(share * rest_index)
@@ -367,14 +366,9 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     """
     from .dmp import RhythmicDMP
 
-    if int(n_stop) < 2:
-        raise ValueError(f"n_stop: expected at least 2, got {n_stop}")
-    if not 0.0 < nu2_factor < nu1_factor < 1.0:
-        raise ValueError(f"nu1_factor, nu2_factor: expected 0 < nu2_factor < nu1_factor < 1, "
-                         f"got {nu1_factor!r}, {nu2_factor!r}")
+    _check_stop_settings(n_stop, nu1_factor, nu2_factor)
     seg = segment_ending(demo) if segmentation is None else segmentation
-    dt = demo.dt
-    end_index = round(seg.periodic_end / dt)
+    end_index = round(seg.periodic_end / demo.dt)
     head = Demonstration(demo.t[: end_index + 1], demo.Y[: end_index + 1], name=demo.name)
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: give the StopSegmentation as segmentation=")
@@ -382,8 +376,33 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
                                         for name in ("delta", "smoothing", "regularization"))
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
+    method = fit_kwargs.get("method", defaults["method"].default)
+    return fit_stop(dmp, demo, seg, n_stop, nu1_factor=nu1_factor, nu2_factor=nu2_factor, stop_overlap=stop_overlap,
+                    rest_margin=rest_margin, delta=delta, regularization=regularization, method=method,
+                    substeps=int(fit_kwargs.get("substeps", defaults["substeps"].default)), smoothing=smoothing)
+
+
+def _check_stop_settings(n_stop: int, nu1_factor: float, nu2_factor: float) -> None:
+    if int(n_stop) < 2:
+        raise ValueError(f"n_stop: expected at least 2, got {n_stop}")
+    if not 0.0 < nu2_factor < nu1_factor < 1.0:
+        raise ValueError(f"nu1_factor, nu2_factor: expected 0 < nu2_factor < nu1_factor < 1, "
+                         f"got {nu1_factor!r}, {nu2_factor!r}")
+
+
+def fit_stop(dmp, demo: Demonstration, seg: StopSegmentation, n_stop: int = 15, *, nu1_factor: float = 0.9,
+             nu2_factor: float = 0.7, stop_overlap: float = 0.9, rest_margin: float = 0.15, delta: float = 1e-3,
+             regularization: float | None = None, method: str = "trajectory", substeps: int = 4,
+             smoothing: float = 0.15):
+    """``dmp`` (a fitted :class:`RhythmicDMP` that reproduces ``demo`` up to its stop) with a stop fitted to the rest
+    of ``demo``: the stop family's ``n_stop`` weights by one ridge regression, start and periodic weights held.
+    ``method="trajectory"`` matches the rollout's positions (and follows an anchor that travels with
+    ``dmp.sweep``); ``"lwr"``/``"ridge"`` match the forcing target (10) (a fixed anchor). Other arguments as in
+    :func:`fit_ending`. Returns a copy of ``dmp`` with ``ending`` set."""
+    _check_stop_settings(n_stop, nu1_factor, nu2_factor)
     if regularization is None:          # resolved per method, as in RhythmicDMP.fit
-        regularization = 1e-4 if fit_kwargs.get("method", defaults["method"].default) == "trajectory" else 1e-6
+        regularization = 1e-4 if method == "trajectory" else 1e-6
+    dt = demo.dt
     canonical, mu = dmp.canonical, dmp.canonical.mu
     fading = StopFading(nu1_factor * mu, nu2_factor * mu, delta=delta)
     u1 = _minimum_jerk_inverse(1.0 - nu1_factor)
@@ -404,9 +423,7 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     ending = Ending(exit_phase, length, u1 * length, seg.goal, centres, widths,
                     np.zeros((dmp.n_dims, int(n_stop))), fading)
 
-    method = fit_kwargs.get("method", defaults["method"].default)
     if method == "trajectory":
-        substeps = int(fit_kwargs.get("substeps", defaults["substeps"].default))
         stop_weights = _trajectory_stop_weights(dmp.with_ending(ending), demo, exit_at, substeps, regularization)
     else:
         rows = slice(int(np.floor(exit_at / dt)), None)

@@ -200,3 +200,25 @@ def test_the_step_twin_runs_the_v2_task_and_its_coupling_travels():
         shifts.append(np.mean(positions[len(positions) // 2:]))
     assert 0.5 * 0.06 < shifts[1] - shifts[0] < 1.2 * 0.06
     assert isinstance(info["is_success"], bool)
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_cheap_strategies_lose_to_the_imitation(seed):
+    """Gaming probes on v2 (full length, a context without the cup): holding still on the patch, pressing and
+    lifting on a grid, hovering above the table, and uniformly random actions all score below action 0."""
+    from rdmp_gym.envs import probes
+
+    env = gym.make(ENV_ID_V2)
+    options = {"obstacle": 0}
+    env.reset(seed=seed, options=options)
+    base = env.unwrapped
+    imitation, _ = base.run_path(base.imitation_path())
+    paths = {"hold": probes.hold_still(base), "press_lift": probes.press_lift_grid(base),
+             "hover": probes.hold_still(base, depth=-0.05)}
+    for name, path in paths.items():
+        reward, info = base.run_path(path)
+        assert reward < imitation - 0.1, name
+    action = np.random.default_rng(seed).uniform(-1, 1, env.action_space.shape).astype(np.float32)
+    env.reset(seed=seed, options=options)
+    _, reward, _, _, info = env.step(action)
+    assert reward < imitation - 0.1 and info["jerk_ratio"] > 3.0
