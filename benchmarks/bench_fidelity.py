@@ -7,7 +7,7 @@ the true peak. References: the noiseless built-in styles at 1 kHz (derivatives b
 :class:`rdmp_gym.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
 (``trajectory`` fit, smooth start), the paper's settings (:data:`rdmp_gym.dmp.PAPER_SETTINGS`, LWR and ridge,
 rolled out from the demonstrated start as in the paper), and the classic periodic DMP.
-Targets (issue 7, defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
+Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
 position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
     python benchmarks/bench_fidelity.py [--seed 0] [--signals 6]
@@ -86,7 +86,7 @@ def main() -> None:
     defaults = [row for row in rows if row["model"] == "default"]
     verdict = {"styles": all(met(r) for r in defaults if r["case"].startswith("style")),
                "signals": [r["case"] for r in defaults if not r["case"].startswith("style") and not met(r)]}
-    print(f"issue-7 targets met by the defaults on the four styles: {verdict['styles']}; "
+    print(f"targets met by the defaults on the four styles: {verdict['styles']}; "
           f"own signals missing a target: {verdict['signals']}")
     RESULTS.write_text(json.dumps({"seed": args.seed, "rows": rows, "targets": verdict}, indent=1))
     print(f"wrote {RESULTS}")
