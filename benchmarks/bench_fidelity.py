@@ -7,7 +7,7 @@ the true peak. References: the noiseless built-in styles at 1 kHz (derivatives b
 :class:`rdmp_gym.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
 (``trajectory`` fit, smooth start), the paper's settings (:data:`rdmp_gym.dmp.PAPER_SETTINGS`, LWR and ridge,
 rolled out from the demonstrated start as in the paper), and the classic periodic DMP.
-Targets of the defaults: acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
+Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
 position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
     python benchmarks/bench_fidelity.py [--seed 0] [--signals 6]

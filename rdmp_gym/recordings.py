@@ -12,7 +12,7 @@ samples with uneven stamps and outliers into a :class:`~rdmp_gym.demonstrations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -132,7 +132,8 @@ def _approach(t: np.ndarray, start: np.ndarray, target: np.ndarray, onset: float
 
 def realistic_recording(kind: str = "wiping", *, rng: np.random.Generator, rate: float = 100.0,
                         cycle_variation: float = 0.1, noise: float = 4e-4, clock_jitter: float = 0.15,
-                        n_periods: int | None = None, period: float | None = None) -> Recording:
+                        n_periods: int | None = None, period: float | None = None,
+                        approach: tuple[float, ...] | None = None) -> Recording:
     """A recording ``Y [L, 3]`` (table frame, m) of a person's rhythmic demonstration, at uneven stamps.
 
     Args:
@@ -146,12 +147,16 @@ def realistic_recording(kind: str = "wiping", *, rng: np.random.Generator, rate:
             fifth; ``_OUTLIER_RATE`` of the samples are outliers of 1-3 cm.
         clock_jitter: relative spread of the sampling intervals; 1 % of the samples are dropped.
         n_periods, period: override the kind's number of periods and mean period (s).
+        approach: override the durations (s) of the approach's moves (a pause between consecutive ones).
     """
     if kind not in RECORDING_KINDS:
         raise ValueError(f"kind: expected one of {sorted(RECORDING_KINDS)}, got {kind!r}")
     if not isinstance(rng, np.random.Generator):
         raise TypeError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
     settings = RECORDING_KINDS[kind]
+    if approach is not None:
+        moves = tuple(float(check_positive(move, "approach")) for move in np.atleast_1d(approach))
+        settings = replace(settings, approach=moves)
     rate = check_positive(rate, "rate")
     period = check_positive(settings.period if period is None else period, "period")
     n_periods = settings.n_periods if n_periods is None else int(n_periods)

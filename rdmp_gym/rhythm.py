@@ -216,10 +216,12 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     if (t[last] - t[first]) / estimate < min_periods:
         raise ValueError(f"demo: the rhythm spans only {(t[last] - t[first]) / estimate:.1f} periods "
                          f"({t[first]:.3g} s to {t[last]:.3g} s), need at least {min_periods:g}")
+    speed = motion_speed(demo)
+    if start is None:
+        first = _arrival(slow, speed, first, last, demo.dt)
     level = _high_level(amplitude[first:last + 1])
     growing = np.flatnonzero(amplitude[:first + 1] < begin * level)
-    entry = int(growing[-1]) if growing.size else 0
-    speed = motion_speed(demo)
+    entry = int(growing[-1]) if growing.size else first
     if end is None:
         last = _departure(slow, speed, first, last, demo.dt)
     threshold = max(rest_fraction * float(np.median(speed[first:last + 1])),
@@ -235,17 +237,32 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
                               slow=slow, amplitude=amplitude, rest_speed=threshold)
 
 
-def _departure(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
-    """The end of the rhythm ``[first, last]``, moved earlier to where its working point departs: where the slow
-    part's speed first exceeds ``_DEPARTURE_SPEED`` of the hand's typical speed in the rhythm (and three times the
-    slow part's own typical speed there: a pattern that travels is not a departure) in the rhythm's second half.
-    A departure about as long as a period looks rhythmic to the local fits, which then see the rhythm end late."""
+def _working_point_moves(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> np.ndarray:
+    """``[T]`` whether the working point (the slow part) moves faster than ``_DEPARTURE_SPEED`` of the hand's
+    typical speed in the rhythm ``[first, last]`` and three times its own typical speed there (a pattern that
+    travels is not a departure)."""
     slow_speed = np.linalg.norm(np.gradient(slow, dt, axis=0), axis=1)
     rhythm = slice(first, last + 1)
     limit = max(_DEPARTURE_SPEED * float(np.median(speed[rhythm])), 3.0 * float(np.median(slow_speed[rhythm])))
+    return slow_speed > limit
+
+
+def _departure(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
+    """The end of the rhythm ``[first, last]``, moved earlier to where its working point departs (first moves,
+    :func:`_working_point_moves`, in the rhythm's second half). A departure about as long as a period looks
+    rhythmic to the local fits, which then see the rhythm end late."""
     middle = (first + last) // 2
-    leaving = np.flatnonzero(slow_speed[middle:last + 1] > limit)
+    leaving = np.flatnonzero(_working_point_moves(slow, speed, first, last, dt)[middle:last + 1])
     return middle + int(leaving[0]) if leaving.size else last
+
+
+def _arrival(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
+    """The start of the rhythm ``[first, last]``, moved later to where its working point has arrived (after its
+    last move, :func:`_working_point_moves`, in the rhythm's first half). An approach shorter than a period looks
+    rhythmic to the local fits, which then see the rhythm start with the approach."""
+    middle = (first + last) // 2
+    arriving = np.flatnonzero(_working_point_moves(slow, speed, first, last, dt)[first:middle + 1])
+    return first + int(arriving[-1]) + 1 if arriving.size else first
 
 
 def _rhythm_bounds(t: np.ndarray, amplitude: np.ndarray, full: float, start: float | None,

@@ -69,11 +69,26 @@ def test_fit_recording_meets_the_accuracy_and_smoothness_targets() -> None:
     assert report["acceleration_ratio"] < 1.5
 
 
+@pytest.mark.parametrize("approach", [(1.0,), (15.0,)])
+def test_the_fit_stays_smooth_for_any_approach_length(approach) -> None:
+    """A 1 s and a 15 s approach (the slow part is the anchor's sweep, not a long transient): the reproduction's
+    peak acceleration stays within 1.5x the smoothed recording's, the start and the rest within 1 cm."""
+    recording = realistic_recording("wiping", rng=np.random.default_rng(3), approach=approach, n_periods=6)
+    demo = to_demonstration(recording.t, recording.Y)
+    result = fit_recording(demo)
+    report = recording_report(demo, result)
+    assert abs(result.segmentation.rhythm_start - recording.truth.rhythm_start) < 0.4 * recording.truth.period
+    assert report["acceleration_ratio"] < 1.5 and report["error_ratio"] < 1.5
+    assert report["start_error"] < 0.01 and report["rest_error"] < 0.01
+
+
 def test_bad_input_names_the_argument() -> None:
     with pytest.raises(ValueError, match="kind"):
         realistic_recording("sanding", rng=np.random.default_rng(0))
     with pytest.raises(TypeError, match="rng"):
         realistic_recording("wiping", rng=0)
+    with pytest.raises(ValueError, match="approach"):
+        realistic_recording("wiping", rng=np.random.default_rng(0), approach=(2.0, -1.0))
     _, demo = _recording("wiping")
     with pytest.raises(ValueError, match="start"):
         segment_rhythm(demo, start=-1.0)
