@@ -9,7 +9,7 @@ PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray]"
 export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
 
-.PHONY: install run test wheel-check lint bench clean
+.PHONY: install run test docs wheel-check lint bench clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,15 @@ test: install
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 
+# The documentation site (MkDocs Material + mkdocstrings) into site/ (ignored); --strict: a broken link or a
+# renamed function fails the build. The docs extra is installed only here, not by `make install`.
+$(VENV)/.docs-installed: $(VENV)/.installed pyproject.toml
+	$(BIN)/pip install --quiet -c .ci/constraints-cpu.txt -e ".[docs]"
+	touch $@
+
+docs: $(VENV)/.docs-installed
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir site
+
 # The packaging check of CI: build the wheel, install it (not editable) in a fresh venv, use it.
 wheel-check:
 	bash .ci/wheel-check.sh
@@ -47,4 +56,4 @@ bench: install
 	$(BIN)/python benchmarks/bench_memory.py $(BENCH_FLAGS)
 
 clean:
-	rm -rf $(VENV) runs figures
+	rm -rf $(VENV) runs figures site
