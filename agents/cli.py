@@ -271,7 +271,7 @@ def _command_fit(args: argparse.Namespace) -> None:
     out = Path(args.out)
     if not args.demo:
         demo = load_demonstration(args.style)
-        dmp = fit_dmp(demo, args.n_periodic, args.n_transient, args.method)
+        dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
         out.mkdir(parents=True, exist_ok=True)
         dmp.save(out / "dmp.json")
         reproduction = dmp.rollout(demo.t)
@@ -298,7 +298,8 @@ def _fit_whole_recording(args: argparse.Namespace, out: Path) -> None:
     loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
     demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
     result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
-                           n_periodic=args.n_periodic, n_transient=args.n_transient, method=args.method)
+                           n_periodic=args.n_periodic, method=args.method,
+                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
     out.mkdir(parents=True, exist_ok=True)
     result.dmp.save(out / "dmp.json")
     seg, report = result.segmentation, recording_report(demo, result)
@@ -435,7 +436,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="resample --demo onto an even grid at this rate in Hz; uneven time stamps are always "
                      "resampled, outliers removed first (default: 100 Hz)")
     fit.add_argument("--n-periodic", type=int, default=40, help="periodic basis functions")
-    fit.add_argument("--n-transient", type=int, default=40, help="transient basis functions")
+    fit.add_argument("--n-transient", type=int, default=None,
+                     help="transient basis functions (default: 40 for --style, 20 for the entry into the rhythm of a "
+                     "whole --demo recording)")
     fit.add_argument("--method", choices=("trajectory", "ridge", "lwr"), default="trajectory",
                      help="regression (trajectory: the rollout itself matches the samples)")
     fit.add_argument("--period", type=float, default=None, help="the rhythm's period in s (default: detected)")
