@@ -3,11 +3,13 @@
 The policy maps the raw context ``s`` (every field, standardised) to a Gaussian over the unbounded search vector
 ``u`` (executed as ``squash(u)``, :mod:`.smooth`):
 
-    u ~ N(mu(s), Sigma),   mu(s) = u0 + MLP(s)   (the last layer starts at 0: the first policy is u0),
+    u ~ N(mu(s), Sigma),   mu(s) = u0 + sigma0 L MLP(s)   (the last layer starts at 0: the first policy is u0),
     Sigma = D C D + U U^T,  D = diag(sigma),  C = (1 - rough) C_smooth + rough I,
 
 ``C_smooth`` the correlation of neighbouring DMP weights (:mod:`.smooth`), the per-dimension scales ``sigma``
-and the low-rank factor ``U [n, r]`` learned, shared by all contexts. The ``rough`` share keeps ``C``
+and the low-rank factor ``U [n, r]`` learned, shared by all contexts; ``L`` is the Cholesky factor of ``C`` and
+``sigma0`` the initial ``sigma``, so the network works in whitened coordinates: an optimiser step of equal size
+in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
 well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
 thousands (the conditional variances of a smooth block are tiny) and the trust region would forbid it.
 Exploration is therefore smooth in time from the first update on, and the low-rank part can learn which
@@ -103,13 +105,14 @@ class _Policy(torch.nn.Module):
         torch.nn.init.zeros_(self.net[-1].bias)
         self.register_buffer("u0", torch.as_tensor(u0))
         self.register_buffer("correlation", torch.as_tensor(correlation))
+        self.register_buffer("shape", sigma * torch.linalg.cholesky(torch.as_tensor(correlation)))
         self.log_sigma = torch.nn.Parameter(torch.full((n,), float(np.log(sigma)), dtype=_DTYPE))
         self.low_rank = torch.nn.Parameter(torch.zeros(n, rank, dtype=_DTYPE))
         self.to(_DTYPE)
 
     def mean(self, contexts: torch.Tensor) -> torch.Tensor:
         """``[K, n]`` means for standardised contexts ``[K, o]``."""
-        return self.u0 + self.net(contexts)
+        return self.u0 + self.net(contexts) @ self.shape.T
 
     def covariance(self, min_sigma: float) -> torch.Tensor:
         """``[n, n]`` the shared covariance."""
@@ -291,4 +294,4 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     x = np.where(scale > 0, (obs - center) / np.where(scale > 0, scale, 1.0), 0.0)
     hidden = np.tanh(x @ params["net.0.weight"].T + params["net.0.bias"])
     hidden = np.tanh(hidden @ params["net.2.weight"].T + params["net.2.bias"])
-    return squash(params["u0"] + hidden @ params["net.4.weight"].T + params["net.4.bias"])
+    return squash(params["u0"] + (hidden @ params["net.4.weight"].T + params["net.4.bias"]) @ params["shape"].T)
