@@ -11,10 +11,9 @@ on top of it for part of the time. Method:
    of the period is fitted by least squares: the polynomial at the centre is the slow part (the working point),
    the size of the harmonics is the rhythm's local amplitude. Unlike a moving average, the polynomial follows an
    accelerating approach without smearing it into the rhythm.
-3. Change points. The rhythm runs at full size over the longest stretch where the envelope is at least ``full``
-   of its typical level (dips shorter than a period bridged), after the working point has arrived and until it
-   departs (the slow part's speed exceeds a quarter of the rhythm's, within two periods of either end); it starts
-   to grow where the envelope first exceeds ``begin`` of that level.
+3. Change points. The rhythm runs at full size from where the envelope first reaches ``full`` of its typical
+   level until it last does, or until the working point departs (the slow part's speed exceeds a quarter of the
+   rhythm's); it starts to grow where the envelope first exceeds ``begin`` of that level.
 4. Rest. Speed (smoothed over ``_SPEED_WINDOW``) below ``rest_fraction`` of the rhythm's typical speed: the hand
    leaves its first rest at the first faster sample and is at rest after the rhythm from the first sample after
    which it stays slower. Relative to the motion's own scale, so a slow drift and sensor noise at rest pass.
@@ -41,8 +40,6 @@ _CANDIDATES = np.geomspace(0.3, 4.0, 45)   # s: the periods the coarse search tr
 _MIN_EXPLAINED = 0.2        # least share of the motion beyond a slow trend that the rhythm must explain
 _SPEED_WINDOW = 0.5         # s: smoothing of the speed used for rest (Savitzky-Golay, then a median over 0.3 s)
 _DEPARTURE_SPEED = 0.25     # share of the rhythm's speed at which the working point's motion is a departure
-_EDGE_PERIODS = 2.0         # periods at either end of the rhythm in which a move of the working point is an
-                            # arrival or a departure (later, earlier: a shift of the working point while working)
 _NOISE_FACTOR = 3.0         # the rest threshold is at least this multiple of the speed in the quietest 0.5 s
 _MIN_REST = 0.3             # s: the shortest final rest recognised
 _N_HARMONICS = 4            # harmonics of the local Fourier fit
@@ -209,24 +206,24 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
         raise ValueError(f"end: expected a time after start={start!r}, got {end!r}")
     estimate = _coarse_period(demo) if period is None else check_positive(period, "period")
     slow, amplitude = local_fit(demo, estimate)
-    first, last = _rhythm_bounds(t, amplitude, full, start, end, estimate)
+    first, last = _rhythm_bounds(t, amplitude, full, start, end)
     if period is None:      # refine on the full-size rhythm, then fit again with the refined period
         Z = demo.Y[first:last + 1] - slow[first:last + 1]
         estimate = _refine_period(t[first:last + 1], Z / np.maximum(np.std(Z, axis=0), 1e-12), estimate, demo.dt,
                                   12, 0.1)
         slow, amplitude = local_fit(demo, estimate)
-        first, last = _rhythm_bounds(t, amplitude, full, start, end, estimate)
+        first, last = _rhythm_bounds(t, amplitude, full, start, end)
     if (t[last] - t[first]) / estimate < min_periods:
         raise ValueError(f"demo: the rhythm spans only {(t[last] - t[first]) / estimate:.1f} periods "
                          f"({t[first]:.3g} s to {t[last]:.3g} s), need at least {min_periods:g}")
     speed = motion_speed(demo)
     if start is None:
-        first = _arrival(slow, speed, first, last, demo.dt, estimate)
+        first = _arrival(slow, speed, first, last, demo.dt)
     level = _high_level(amplitude[first:last + 1])
     growing = np.flatnonzero(amplitude[:first + 1] < begin * level)
     entry = int(growing[-1]) if growing.size else first
     if end is None:
-        last = _departure(slow, speed, first, last, demo.dt, estimate)
+        last = _departure(slow, speed, first, last, demo.dt)
     threshold = max(rest_fraction * float(np.median(speed[first:last + 1])),
                     _NOISE_FACTOR * _noise_speed(speed, demo.dt))
     moving = np.flatnonzero(speed[:entry + 1] >= threshold)
@@ -250,42 +247,30 @@ def _working_point_moves(slow: np.ndarray, speed: np.ndarray, first: int, last: 
     return slow_speed > limit
 
 
-def _departure(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float, period: float) -> int:
+def _departure(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
     """The end of the rhythm ``[first, last]``, moved earlier to where its working point departs (first moves,
-    :func:`_working_point_moves`, in the rhythm's second half and its last ``_EDGE_PERIODS`` periods). A
-    departure about as long as a period looks rhythmic to the local fits, which then see the rhythm end late."""
-    middle = max((first + last) // 2, last - int(_EDGE_PERIODS * period / dt))
+    :func:`_working_point_moves`, in the rhythm's second half). A departure about as long as a period looks
+    rhythmic to the local fits, which then see the rhythm end late."""
+    middle = (first + last) // 2
     leaving = np.flatnonzero(_working_point_moves(slow, speed, first, last, dt)[middle:last + 1])
     return middle + int(leaving[0]) if leaving.size else last
 
 
-def _arrival(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float, period: float) -> int:
+def _arrival(slow: np.ndarray, speed: np.ndarray, first: int, last: int, dt: float) -> int:
     """The start of the rhythm ``[first, last]``, moved later to where its working point has arrived (after its
-    last move, :func:`_working_point_moves`, in the rhythm's first half and its first ``_EDGE_PERIODS`` periods).
-    An approach shorter than a period looks rhythmic to the local fits, which then see the rhythm start with the
-    approach."""
-    middle = min((first + last) // 2, first + int(_EDGE_PERIODS * period / dt))
+    last move, :func:`_working_point_moves`, in the rhythm's first half). An approach shorter than a period looks
+    rhythmic to the local fits, which then see the rhythm start with the approach."""
+    middle = (first + last) // 2
     arriving = np.flatnonzero(_working_point_moves(slow, speed, first, last, dt)[first:middle + 1])
     return first + int(arriving[-1]) + 1 if arriving.size else first
 
 
-def _close_gaps(mask: np.ndarray, longest: int) -> np.ndarray:
-    """``mask [L]`` with its inner runs of False no longer than ``longest`` samples set to True."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[1], mask.astype(np.int8), [1]])))
-    closed = mask.copy()
-    for low, high in zip(edges[::2], edges[1::2], strict=True):
-        if 0 < low and high < mask.size and high - low <= longest:
-            closed[low:high] = True
-    return closed
-
-
 def _rhythm_bounds(t: np.ndarray, amplitude: np.ndarray, full: float, start: float | None,
-                   end: float | None, period: float) -> tuple[int, int]:
+                   end: float | None) -> tuple[int, int]:
     """Indices of the first and last sample of the full-size rhythm: the longest run where the amplitude is at
-    least ``full`` of its high level, bridging dips shorter than a period (a person's hesitation), or the given
-    ``start``/``end`` (s)."""
+    least ``full`` of its high level (or the given ``start``/``end``, s)."""
     level = _high_level(amplitude)
-    low, high = _longest_run(_close_gaps(amplitude >= full * level, int(period / (t[1] - t[0]))))
+    low, high = _longest_run(amplitude >= full * level)
     if high == 0:
         raise ValueError("demo: no rhythm found (its amplitude never reaches its typical level)")
     first = low if start is None else int(np.searchsorted(t, start))

@@ -119,24 +119,3 @@ def test_report_without_a_final_rest_has_no_rest_error() -> None:
     assert result.segmentation.rest_time is None and result.dmp.ending is None
     assert report["rest_error"] is None
     assert report["error_ratio"] < 1.5 and report["acceleration_ratio"] < 1.5
-
-
-def _minimum_jerk(t: np.ndarray, start: float, duration: float) -> np.ndarray:
-    u = np.clip((t - start) / duration, 0.0, 1.0)
-    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
-
-
-def test_a_hesitation_and_a_shift_of_the_working_point_stay_inside_the_rhythm() -> None:
-    """A person's rhythm (3-15 s, period 1 s) whose strokes shrink to a third for about a period at 6 s and whose
-    working point shifts 6 cm in 0.8 s at 9 s: one rhythm from its start, not the stretch after the shift."""
-    t = np.arange(0.0, 19.0, 0.01)
-    slow = (np.array([0.2, 0.0, -0.1]) * _minimum_jerk(t, 1.0, 2.0)[:, None]
-            + np.array([0.0, 0.06, 0.0]) * _minimum_jerk(t, 9.0, 0.8)[:, None]
-            + np.array([0.1, 0.1, 0.2]) * _minimum_jerk(t, 15.0, 1.5)[:, None])
-    dip = 1.0 - 0.7 * np.exp(-0.5 * ((t - 6.0) / 0.3) ** 2)
-    size = 0.05 * dip * (_minimum_jerk(t, 2.7, 0.5) - _minimum_jerk(t, 14.8, 0.5))
-    Y = slow + size[:, None] * np.column_stack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t), np.zeros_like(t)])
-    Y += np.random.default_rng(0).normal(0.0, 3e-4, Y.shape)
-    seg = segment_rhythm(to_demonstration(t, Y))
-    assert seg.period == pytest.approx(1.0, rel=0.02)
-    assert abs(seg.rhythm_start - 3.0) < 0.5 and abs(seg.rhythm_end - 14.8) < 0.75
