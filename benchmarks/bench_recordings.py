@@ -142,12 +142,12 @@ def _print(row: dict) -> None:
     truth = " ".join(f"{key[5:]} {row[key]:.2f}" for key in ("true_period", "true_start", "true_end", "true_rest")
                      if row.get(key) is not None)
     truth = f" (true: {truth})" if truth else ""
-    rest, rest_error = ("-" if row[key] is None else f"{scale * row[key]:.{digits}f}"
-                        for key, scale, digits in (("rest", 1, 2), ("rest_error", 1000, 1)))
+    rest, rest_error = ("-" if row[key] is None else f"{scale * row[key]:.{digits}f}{unit}"
+                        for key, scale, digits, unit in (("rest", 1, 2, ""), ("rest_error", 1000, 1, " mm")))
     print(f"{row['recording']:>24}: period {row['period']:.3f} s, rhythm {row['start']:.2f}-{row['end']:.2f} s, "
           f"rest {rest}{truth} | cycle error {1000 * row['cycle_error']:.2f} mm / variation "
           f"{1000 * row['cycle_variation']:.2f} mm = {row['error_ratio']:.2f} | "
-          f"start {1000 * row['start_error']:.1f} mm rest {rest_error} mm | "
+          f"start {1000 * row['start_error']:.1f} mm rest {rest_error} | "
           f"accel ratio {row['acceleration_ratio']:.2f}"
           + (f" (clean {row['clean_acceleration_ratio']:.2f})" if "clean_acceleration_ratio" in row else "") + " | "
           f"CLI {'ok' if row['cli'] else 'failed'}")
