@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from rdmp_gym import __version__
+from rdmp_gym import __version__, save_dmp
 
 from . import EXTRA_MODULES
 from .errors import WorkerError
@@ -273,7 +273,7 @@ def _command_fit(args: argparse.Namespace) -> None:
         demo = load_demonstration(args.style)
         dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
         out.mkdir(parents=True, exist_ok=True)
-        dmp.save(out / "dmp.json")
+        save_dmp(dmp, out / "dmp.json")
         reproduction = dmp.rollout(demo.t)
         rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
         print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
@@ -301,7 +301,7 @@ def _fit_whole_recording(args: argparse.Namespace, out: Path) -> None:
                            n_periodic=args.n_periodic, method=args.method,
                            **({} if args.n_transient is None else {"n_transient": args.n_transient}))
     out.mkdir(parents=True, exist_ok=True)
-    result.dmp.save(out / "dmp.json")
+    save_dmp(result.dmp, out / "dmp.json")
     seg, report = result.segmentation, recording_report(demo, result)
     rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
     print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")

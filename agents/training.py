@@ -29,6 +29,8 @@ from typing import Any, Protocol
 import numpy as np
 from tqdm.auto import tqdm
 
+from rdmp_gym import save_dmp
+
 from .evaluation import Evaluator
 from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
 from .options import check_choice, check_range, from_options, to_options
@@ -474,9 +476,9 @@ def _invalid_reasons(evaluator: Evaluator, config: TrainConfig, batch: EpisodeBa
 
 def _save_refined_dmp(env: Any, params: np.ndarray, path: Path) -> None:
     """Write the env's DMP with the refined ``params [P]`` (its action groups) as ``dmp.json`` (core format),
-    for ``gym.make(env_id, dmp=path)`` or ``RhythmicDMP.load``; envs without a DMP write nothing."""
+    for ``gym.make(env_id, dmp=path)`` or ``rdmp_gym.load_dmp``; envs without a DMP write nothing."""
     if hasattr(env, "dmp") and hasattr(env, "groups"):
-        env.dmp.with_params(params, env.groups).save(path)
+        save_dmp(env.dmp.with_params(params, env.groups), path)
 
 
 def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,

@@ -20,8 +20,8 @@ The cup is not drawn uniformly: with probability ``obstacle_probability`` it sta
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
 the way, within 1 cm of the line, where the imitation's approach comes down on it. ``ArmarWipe-v2`` keeps
 the clearance from the patch and from the sponge start (whose pad would otherwise start on the cup): the cup
-stands anywhere on the corridor that allows it, or else 0-4 cm beyond the clearance beside the patch, where
-the travelling pattern must not reach it. A draw that would
+stands anywhere on the corridor that allows it, or else 0-4 cm beyond the clearance on the patch's -y side
+(away from the fingers and the forearm), where the travelling pattern must not reach it. A draw that would
 put it on the patch or off the table leaves the context without a cup.
 """
 
@@ -97,7 +97,7 @@ class ContextSpec:
         patch_clearance: the least distance (m) between the cup's rim and the dirty patch.
         near_patch: place the cup anywhere on the corridor that keeps ``patch_clearance`` from both the patch and
             the sponge start (instead of 35-60 % of the way, which ``ArmarWipe-v2``'s clearance leaves too little
-            room for), or, where the corridor is too short, 0-4 cm beyond the clearance beside the patch.
+            room for), or, where the corridor is too short, 0-4 cm beyond the clearance on the patch's -y side.
     """
 
     def __init__(self, ranges: Mapping[str, tuple] | None = None,
@@ -215,9 +215,12 @@ class ContextSpec:
         return off_table or on_patch
 
     def _beside_patch(self, context: Context, draw: np.ndarray, reach: float) -> np.ndarray | None:
-        """A cup 0-4 cm beyond the clearance from the patch in a drawn direction, ``reach`` from the sponge start
-        (None where that is off the table or too close to the start)."""
-        direction = np.array([np.cos(2.0 * np.pi * draw[1]), np.sin(2.0 * np.pi * draw[1])])
+        """A cup 0-4 cm beyond the clearance from the patch, ``reach`` from the sponge start (None where that is off
+        the table or too close to the start), on the patch's -y side (table frame, within 45°): the hand's fingers
+        reach about 13 cm beyond the pad along +x at the cup's height and the forearm lies towards -x and +y, so
+        a cup there is hit by the arm however the pad wipes."""
+        angle = -0.5 * np.pi + 0.5 * np.pi * (draw[1] - 0.5)      # the -y side, +-45°: away from the forearm (-x, +y)
+        direction = np.array([np.cos(angle), np.sin(angle)])      # and from the fingers (+x), see the docstring
         wanted = self.obstacle_radius + self.patch_clearance + 0.04 * draw[0]
         for distance in np.arange(0.0, 0.6, 0.002):
             xy = context.patch_centre + distance * direction

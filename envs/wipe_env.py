@@ -37,7 +37,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
@@ -115,7 +115,7 @@ def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
             raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
         if not Path(dmp).is_file():
             raise FileNotFoundError(f"dmp: no such file {dmp}")
-        dmp = RhythmicDMP.load(dmp)
+        dmp = load_dmp(dmp)
     if dmp.n_dims != 3:
         raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
     t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)

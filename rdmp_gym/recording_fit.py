@@ -30,10 +30,11 @@ from scipy.interpolate import CubicSpline
 
 from .demonstrations import Demonstration
 from .dmp import SMOOTHNESS_REFERENCE, RhythmicDMP, _trajectory_design
+from .ending import minimum_jerk_inverse
 from .fitting import fit_trajectory, second_differences, smooth_derivatives
 from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
 from .segmentation import Segmentation
-from .stopping import StopSegmentation, _minimum_jerk_inverse, fit_stop
+from .stopping import StopSegmentation, fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
@@ -177,7 +178,7 @@ def _delayed(short: RhythmicDMP, full: Demonstration, rhythm_start: float, entry
 def _exit_time(ending, periodic_end: float, nu1_factor: float = 0.9, nu2_factor: float = 0.7) -> float:
     """The time (s) at which :func:`~rdmp_gym.stopping.fit_stop` placed the exit: the middle of the fade from the
     periodic to the stop family on the end of the periodic part."""
-    u_mid = 0.5 * (_minimum_jerk_inverse(1.0 - nu1_factor) + _minimum_jerk_inverse(1.0 - nu2_factor))
+    u_mid = 0.5 * (minimum_jerk_inverse(1.0 - nu1_factor) + minimum_jerk_inverse(1.0 - nu2_factor))
     return periodic_end - u_mid * ending.length
 
 
