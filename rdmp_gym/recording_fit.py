@@ -42,7 +42,8 @@ __all__ = ["RecordingFit", "fit_recording", "normalise_tempo", "recording_report
 
 logger = logging.getLogger(__name__)
 
-_ENTRY_PERIODS = 1.5        # the entry into the rhythm that the paper's transient encodes (periods before its start)
+_ENTRY_PERIODS = 2.0        # the entry into the rhythm that the paper's transient encodes (periods before its start;
+                            # 1.5 left its basis functions so close that a quick entry rang: 1.56x the clean peak)
 _VIA_SPACING = 0.5          # s: the longest time between the anchor's via points
 _PHASE_POINTS = 64          # samples per cycle when cycles are compared
 _SMOOTHING = 0.15           # s: Savitzky-Golay window of the recording's acceleration
