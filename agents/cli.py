@@ -305,9 +305,10 @@ def _fit_whole_recording(args: argparse.Namespace, out: Path) -> None:
     seg, report = result.segmentation, recording_report(demo, result)
     rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
     print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")
+    rest_error = "-" if report["rest_error"] is None else f"{1000 * report['rest_error']:.2f} mm"
     print(f"cycle error {1000 * report['cycle_error']:.2f} mm vs cycle-to-cycle variation "
           f"{1000 * report['cycle_variation']:.2f} mm (x{report['error_ratio']:.2f}); start error "
-          f"{1000 * report['start_error']:.2f} mm, rest error {1000 * report['rest_error']:.2f} mm; peak acceleration "
+          f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
           f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
           f"recording, x{report['acceleration_ratio']:.2f})")
     (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
