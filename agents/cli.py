@@ -1,4 +1,4 @@
-"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the README's main job).
+"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the job of ``make run``).
 
 Examples::
 

@@ -20,7 +20,7 @@ WIPE_V2_ID = "rdmp_gym/ArmarWipe-v2"
 
 #: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
 #: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
-#: validation contexts only (README, "Learning to wipe"): the context sets the pattern's amplitudes and the
+#: validation contexts only (see the docs' agents page): the context sets the pattern's amplitudes and the
 #: approach's lift (the rows of K), from the patch size and the cup's presence; every other weight is one
 #: shared refinement; the approach is explored over its whole range (only a lift near its full 6 cm clears
 #: the cup, so a small step never shows its worth).

@@ -20,7 +20,7 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
   a larger or travelling pattern that is as smooth costs nothing); it is
   spread over the steps in proportion to the squared jerk at each. Weight 0.25: the smooth
   core's wide basis and soft spring low-pass random weights, so a uniformly
-  random action is now 7-25x as jerky as the imitation (was 30-45x) while its amplitude can still buy
+  random action is 7-25x as jerky as the imitation while its amplitude can still buy
   coverage; at 0.25 it costs 0.49-0.80 and such an action scores at least 0.49 below its smooth twin
   with the same coverage (20 contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17
   against the cup's ~0.9;

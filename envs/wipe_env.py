@@ -133,7 +133,7 @@ class ArmarWipeEnv(gym.Env):
         dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
             imitation without fitting (overrides ``style``; excludes ``demonstration``).
         n_periodic, n_transient, fit_method: DMP fit settings (default the core's ``"trajectory"`` fit: the
-            smoothest imitation, half the jerk of ``"ridge"``; see the README).
+            smoothest imitation, half the jerk of ``"ridge"``).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
             :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``; v2 adds ``"sweep"``: the anchor travels

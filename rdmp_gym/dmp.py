@@ -78,7 +78,8 @@ PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "tr
                   "turn_height": 1e-3}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
 (LWR (11), a stiff spring, narrow basis functions, the bare mixture (5)); roll out with
-``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
+``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` fits the same basis by
+global least squares."""
 
 
 def start_blend_profiles(elapsed: np.ndarray, length: float) -> np.ndarray:
@@ -286,7 +287,7 @@ class RhythmicDMP:
                 ``"ridge"`` (global least squares on the forcing target (10)).
             segmentations: per demonstration; estimated with :func:`segment` when omitted.
             period: common period (s); the mean of the segmentations' periods when omitted.
-            alpha_z: transformation-system gain (default 5: a softer spring, see the README's trade-offs;
+            alpha_z: transformation-system gain (default 5: a softer spring, see the docs' design rationale;
                 25 in :data:`PAPER_SETTINGS`).
             mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
             mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
