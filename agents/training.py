@@ -252,7 +252,7 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     space = None
-    if config.agent in CONTEXTUAL:
+    if config.agent in CONTEXTUAL or float(config.options.get("length", 0.0)) > 0:
         seeds = streams["features"].integers(TRAIN_SEED_LIMIT, size=_FEATURE_CONTEXTS)
         space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, seeds, config.task.options()))
     learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights,

@@ -31,6 +31,7 @@ from .contextual import (
 from .contextual import policy_from_state as contextual_policy_from_state
 from .pi2 import PI2, PI2Config
 from .pibb import PIBB, PIBBConfig
+from .smooth import smooth_factor
 
 __all__ = [
     "BBRL",
@@ -82,16 +83,24 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         rng: the learner's random generator.
         options: fields of the learner's config dataclass (a misspelt name is a ``ValueError``).
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only).
-        space: action layout and context standardisation (the contextual learners only).
+        space: action layout and context standardisation (the contextual learners; PI² and PI^BB with
+            ``length > 0``, their smooth exploration).
     """
     if agent not in LEARNERS:
         raise ValueError(f"agent: expected one of {sorted(LEARNERS)}, got {agent!r}")
     cls, config_cls = LEARNERS[agent]
     config = from_options(config_cls, options, agent)
+    factor = None
+    if getattr(config, "length", 0.0) > 0 and cls in (PI2, PIBB):
+        if space is None:
+            raise ValueError(f"space: {agent} with length > 0 (smooth exploration) needs the action layout")
+        factor = smooth_factor(np.asarray(initial_mean).size, space.slices, space.n_dims, config.length)
     if cls is PI2:
         if time_weights is None:
             raise ValueError("time_weights: PI² needs the activation of each parameter per control step")
-        return PI2(initial_mean, rollouts, rng, time_weights, config)
+        return PI2(initial_mean, rollouts, rng, time_weights, config, factor)
+    if cls is PIBB:
+        return PIBB(initial_mean, rollouts, rng, config, factor)
     if cls.uses_context and space is None:
         raise ValueError(f"space: {agent} needs the action layout and context standardisation (SearchSpace)")
     if cls is ContextualSearch:

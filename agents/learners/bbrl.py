@@ -41,7 +41,7 @@ import torch
 from ..options import check_range
 from .base import EpisodeBatch, Learner
 from .contextual import SearchSpace
-from .smooth import SmoothNoise, block_layout, squash, unsquash
+from .smooth import smooth_factor, squash, unsquash
 
 __all__ = ["BBRL", "BBRLConfig", "bbrl_policy_actions"]
 
@@ -156,10 +156,8 @@ class BBRL(Learner):
         self.config = config or BBRLConfig()
         self.space = space
         self.center, self.scale = np.asarray(space.context_center), np.asarray(space.context_scale)
-        noise = SmoothNoise(self.n_params, block_layout(space.slices, space.n_dims), self.config.length)
-        correlation = np.eye(self.n_params)
-        for (part, _), factor in zip(noise.blocks, noise.factors, strict=True):
-            correlation[part, part] = factor @ factor.T
+        factor = smooth_factor(self.n_params, space.slices, space.n_dims, self.config.length)
+        correlation = factor @ factor.T
         correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.n_params)
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(unsquash(self._mean), self.center.size, self.config.hidden, correlation,
