@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from rdmp_gym import __version__
+from rdmp_gym import __version__, save_dmp
 
 from . import EXTRA_MODULES
 from .errors import WorkerError
@@ -271,9 +271,9 @@ def _command_fit(args: argparse.Namespace) -> None:
     out = Path(args.out)
     if not args.demo:
         demo = load_demonstration(args.style)
-        dmp = fit_dmp(demo, args.n_periodic, args.n_transient, args.method)
+        dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
         out.mkdir(parents=True, exist_ok=True)
-        dmp.save(out / "dmp.json")
+        save_dmp(dmp, out / "dmp.json")
         reproduction = dmp.rollout(demo.t)
         rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
         print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
@@ -298,15 +298,17 @@ def _fit_whole_recording(args: argparse.Namespace, out: Path) -> None:
     loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
     demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
     result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
-                           n_periodic=args.n_periodic, n_transient=args.n_transient, method=args.method)
+                           n_periodic=args.n_periodic, method=args.method,
+                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
     out.mkdir(parents=True, exist_ok=True)
-    result.dmp.save(out / "dmp.json")
+    save_dmp(result.dmp, out / "dmp.json")
     seg, report = result.segmentation, recording_report(demo, result)
     rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
     print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")
+    rest_error = "-" if report["rest_error"] is None else f"{1000 * report['rest_error']:.2f} mm"
     print(f"cycle error {1000 * report['cycle_error']:.2f} mm vs cycle-to-cycle variation "
           f"{1000 * report['cycle_variation']:.2f} mm (x{report['error_ratio']:.2f}); start error "
-          f"{1000 * report['start_error']:.2f} mm, rest error {1000 * report['rest_error']:.2f} mm; peak acceleration "
+          f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
           f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
           f"recording, x{report['acceleration_ratio']:.2f})")
     (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
@@ -435,7 +437,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="resample --demo onto an even grid at this rate in Hz; uneven time stamps are always "
                      "resampled, outliers removed first (default: 100 Hz)")
     fit.add_argument("--n-periodic", type=int, default=40, help="periodic basis functions")
-    fit.add_argument("--n-transient", type=int, default=40, help="transient basis functions")
+    fit.add_argument("--n-transient", type=int, default=None,
+                     help="transient basis functions (default: 40 for --style, 20 for the entry into the rhythm of a "
+                     "whole --demo recording)")
     fit.add_argument("--method", choices=("trajectory", "ridge", "lwr"), default="trajectory",
                      help="regression (trajectory: the rollout itself matches the samples)")
     fit.add_argument("--period", type=float, default=None, help="the rhythm's period in s (default: detected)")

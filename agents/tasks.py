@@ -12,7 +12,7 @@ import numpy as np
 from .imitation import load_demonstration
 
 __all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec", "episode_metrics",
-           "task_options"]
+           "run_episode", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
@@ -114,3 +114,11 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
             "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
             "valid": bool(info.get("valid", True)),
             "success": None if "is_success" not in info else bool(info["is_success"])}
+
+
+def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None
+                ) -> dict[str, Any]:
+    """One episode: reset with ``seed``, execute ``action [n]``; see :func:`episode_metrics`."""
+    env.reset(seed=int(seed), options=options)
+    _, reward, _, _, info = env.step(np.asarray(action, dtype=np.float32))
+    return episode_metrics(reward, info)

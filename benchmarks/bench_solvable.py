@@ -33,8 +33,8 @@ import cma
 import gymnasium as gym
 import numpy as np
 from output import SCRATCH, add_save_argument, results_dir
-from rdmp_gym.agents.evaluation import run_episode
 from rdmp_gym.agents.protocol import final_test_seeds, interval
+from rdmp_gym.agents.tasks import run_episode
 from rdmp_gym.envs import ENV_ID_V2
 from rdmp_gym.envs.context import CONTEXT_FIELDS
 
@@ -65,6 +65,14 @@ def compact_indices(env: gym.Env) -> dict[str, int]:
     found = {"amplitude_x": slices["amplitude"].start, "amplitude_y": slices["amplitude"].start + 1}
     found.update({name: slices[name].start for name in COMPACT[2:] if name in slices})
     return found
+
+
+def best_action(env: gym.Env, row: dict) -> np.ndarray:
+    """The full action ``[n]`` of a row's best compact action (every other dimension 0)."""
+    action = np.zeros(env.action_space.shape[0])
+    for name, index in compact_indices(env).items():
+        action[index] = row["best_action"][name]
+    return action
 
 
 def _metrics(env: gym.Env, seed: int, action: np.ndarray) -> dict:
@@ -153,9 +161,12 @@ def main() -> None:
     out.write_text(json.dumps({"settings": vars(args), "contexts": rows, "summary": summary}, indent=1))
     print(f"wrote {out}")
     if args.figure:
-        from solvable_figure import draw_largest_patch
+        from solvable_figure import draw_paths
 
-        print(f"wrote {draw_largest_patch(args.env_id, rows, results_dir(args.save) / f'{name}_path.png')}")
+        row = max(rows, key=lambda r: float(np.prod(r["patch_size"])))
+        env = gym.make(args.env_id)
+        figure = draw_paths(env, row, best_action(env, row), results_dir(args.save) / f"{name}_path.png")
+        print(f"wrote {figure}")
 
 
 if __name__ == "__main__":

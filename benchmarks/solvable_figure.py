@@ -1,5 +1,5 @@
-"""The sponge's path over the largest patch of a ``bench_solvable`` run: the imitation's loop in place against
-the best-return action's travelling pattern (drawn by ``bench_solvable.py --figure``)."""
+"""The sponge's path in one context of a ``bench_solvable`` run: the imitation's loop in place against the
+best-return action's travelling pattern (drawn by ``bench_solvable.py --figure`` on the largest patch)."""
 
 from __future__ import annotations
 
@@ -13,27 +13,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.patches import Circle, Rectangle
 
-__all__ = ["draw_largest_patch"]
+__all__ = ["draw_paths"]
 
 
-def _paths(env_id: str, row: dict) -> tuple[gym.Env, np.ndarray, np.ndarray]:
-    """The env reset to ``row``'s context, and the imitation's and the best action's sponge paths ``[T, 3]``."""
-    from bench_solvable import compact_indices
-
-    env = gym.make(env_id)
+def draw_paths(env: gym.Env, row: dict, action: np.ndarray, path: Path) -> Path:
+    """Draw the patch, the cup, the imitation's and ``action``'s sponge paths (table plane, only where the sponge
+    is within 1 cm of the table) in ``row``'s context (``env`` is reset to it); returns ``path`` (PNG)."""
     env.reset(seed=row["seed"])
     base = env.unwrapped
-    action = np.zeros(env.action_space.shape[0])
-    for name, index in compact_indices(env).items():
-        action[index] = row["best_action"][name]
-    return env, base.imitation_path(), base.rollout_path(base.action_to_params(action))
-
-
-def draw_largest_patch(env_id: str, rows: list[dict], path: Path) -> Path:
-    """Draw the patch, the cup and both paths (table plane, only where the sponge is within 1 cm of the table)
-    for the context with the largest patch; returns ``path`` (PNG)."""
-    row = max(rows, key=lambda r: float(np.prod(r["patch_size"])))
-    env, imitation, best = _paths(env_id, row)
+    imitation, best = base.imitation_path(), base.rollout_path(base.action_to_params(action))
     context = env.unwrapped.context
     figure, axis = plt.subplots(figsize=(6, 6))
     low = context.patch_centre - context.patch_size / 2
@@ -46,8 +34,8 @@ def draw_largest_patch(env_id: str, rows: list[dict], path: Path) -> Path:
         on = trace[:, 2] < 0.01
         xy = np.where(on[:, None], trace[:, :2], np.nan)
         axis.plot(xy[:, 0], xy[:, 1], color=colour, lw=1.0, label=f"{label}: sponge centre on the table")
-    result = row["best"]
-    axis.set_title(f"{env_id}, patch {row['patch_size'][0]:.2f} x {row['patch_size'][1]:.2f} m\n"
+    result, name = row["best"], env.spec.id if env.spec else "ArmarWipe"
+    axis.set_title(f"{name}, patch {row['patch_size'][0]:.2f} x {row['patch_size'][1]:.2f} m\n"
                    f"imitation coverage {row['imitation']['coverage']:.2f}, best return {result['return']:.2f} "
                    f"coverage {result['coverage']:.2f} ({'success' if result['success'] else 'no success'})",
                    fontsize=9)
@@ -58,5 +46,4 @@ def draw_largest_patch(env_id: str, rows: list[dict], path: Path) -> Path:
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
-    env.close()
     return path

@@ -18,8 +18,10 @@ that breaks either raises ``ValueError``. The cup keeps ``patch_clearance`` from
 
 The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
-the way (``ArmarWipe-v2``: 0-3 cm beyond the nearest point that keeps the clearance), within 1 cm of the
-line, where the imitation's approach comes down on it. A draw that would
+the way, within 1 cm of the line, where the imitation's approach comes down on it. ``ArmarWipe-v2`` keeps
+the clearance from the patch and from the sponge start (whose pad would otherwise start on the cup): the cup
+stands anywhere on the corridor that allows it, or else 0-4 cm beyond the clearance on the patch's -y side
+(away from the fingers and the forearm), where the travelling pattern must not reach it. A draw that would
 put it on the patch or off the table leaves the context without a cup.
 """
 
@@ -93,8 +95,9 @@ class ContextSpec:
         obstacle_probability: share of drawn contexts that get a cup (when it fits).
         obstacle_radius: the cup's radius (m).
         patch_clearance: the least distance (m) between the cup's rim and the dirty patch.
-        near_patch: place the cup in the corridor as close to the patch as ``patch_clearance`` allows (plus up to
-            3 cm) instead of 35-60 % of the way; ``ArmarWipe-v2``'s clearance leaves too little room otherwise.
+        near_patch: place the cup anywhere on the corridor that keeps ``patch_clearance`` from both the patch and
+            the sponge start (instead of 35-60 % of the way, which ``ArmarWipe-v2``'s clearance leaves too little
+            room for), or, where the corridor is too short, 0-4 cm beyond the clearance on the patch's -y side.
     """
 
     def __init__(self, ranges: Mapping[str, tuple] | None = None,
@@ -211,6 +214,22 @@ class ContextSpec:
         on_patch = bool(np.hypot(*gap) < r + self.patch_clearance)
         return off_table or on_patch
 
+    def _beside_patch(self, context: Context, draw: np.ndarray, reach: float) -> np.ndarray | None:
+        """A cup 0-4 cm beyond the clearance from the patch, ``reach`` from the sponge start (None where that is off
+        the table or too close to the start), on the patch's -y side (table frame, within 45°): the hand's fingers
+        reach about 13 cm beyond the pad along +x at the cup's height and the forearm lies towards -x and +y, so
+        a cup there is hit by the arm however the pad wipes."""
+        angle = -0.5 * np.pi + 0.5 * np.pi * (draw[1] - 0.5)      # the -y side, +-45°: away from the forearm (-x, +y)
+        direction = np.array([np.cos(angle), np.sin(angle)])      # and from the fingers (+x), see the docstring
+        wanted = self.obstacle_radius + self.patch_clearance + 0.04 * draw[0]
+        for distance in np.arange(0.0, 0.6, 0.002):
+            xy = context.patch_centre + distance * direction
+            gap = np.maximum(np.abs(xy - context.patch_centre) - context.patch_size / 2, 0.0)
+            if np.hypot(*gap) >= wanted:
+                far = np.linalg.norm(xy - context.sponge_start[:2]) >= reach
+                return xy if far and not self._misplaced(context, xy) else None
+        return None
+
     def _corridor_point(self, context: Context, draw: np.ndarray) -> np.ndarray | None:
         start, centre = context.sponge_start[:2], context.patch_centre
         line = centre - start
@@ -220,12 +239,14 @@ class ContextSpec:
         along = line / length
         across = np.array([-along[1], along[0]])
         side = (draw[1] - 0.5) * 0.02 * across
-        if self.near_patch:
-            fractions = np.arange(0.95, 0.0, -0.005)        # from the patch towards the start
-            clear = [f for f in fractions if not self._misplaced(context, start + f * line + side)]
+        if self.near_patch:        # anywhere on the corridor that keeps the clearance from the patch and the start
+            fractions = np.arange(0.0, 1.0, 0.005)
+            reach = self.obstacle_radius + self.patch_clearance
+            clear = [f for f in fractions if not self._misplaced(context, start + f * line + side)
+                     and np.linalg.norm(f * line + side) >= reach]
             if not clear:
-                return None
-            fraction = clear[0] - draw[0] * 0.03 / length
+                return self._beside_patch(context, draw, reach)
+            fraction = clear[0] + draw[0] * (clear[-1] - clear[0])
         else:
             fraction = 0.35 + 0.25 * draw[0]
         xy = start + fraction * line + side

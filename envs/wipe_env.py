@@ -1,4 +1,7 @@
-"""``rdmp_gym/ArmarWipe-v1``: episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+"""``rdmp_gym/ArmarWipe-v2`` (and v1): episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+
+What v2 changes (the travelling pattern, solvable contexts, the smoothness measure, executable success) is
+listed in :mod:`rdmp_gym.envs.versions`; ``version`` selects it.
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
@@ -34,7 +37,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
@@ -112,7 +115,7 @@ def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
             raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
         if not Path(dmp).is_file():
             raise FileNotFoundError(f"dmp: no such file {dmp}")
-        dmp = RhythmicDMP.load(dmp)
+        dmp = load_dmp(dmp)
     if dmp.n_dims != 3:
         raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
     t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
@@ -133,9 +136,11 @@ class ArmarWipeEnv(gym.Env):
             smoothest imitation, half the jerk of ``"ridge"``).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
-            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``).
+            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``; v2 adds ``"sweep"``: the anchor travels
+            over the patch, two action dimensions ``sweep_x``, ``sweep_y``, see :mod:`rdmp_gym.envs.coverage`).
         scales: per-group action scales (see :mod:`rdmp_gym.envs.action`; ``approach``: lift in m at +1).
-        n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
+        n_periods: periods of the pattern after the transient (default 4 in v1, 7 in v2); ``duration`` (s)
+            overrides it.
         control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
         timestep: physics step (s; default the model's 2 ms).
         target_force: normal force to hold while wiping (N) (controller and reward).
@@ -163,6 +168,8 @@ class ArmarWipeEnv(gym.Env):
             rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
+        version: the task version, 1 or 2 (:mod:`rdmp_gym.envs.versions`); ``gym.make`` of
+            ``rdmp_gym/ArmarWipe-v2`` sets 2.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}

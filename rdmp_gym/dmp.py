@@ -6,7 +6,6 @@ import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
@@ -22,6 +21,7 @@ from .basis import (
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
+from .ending import Ending, StopPlan, plan_stop
 from .fitting import (
     FIT_METHODS,
     fit_trajectory,
@@ -32,7 +32,6 @@ from .fitting import (
 )
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
-from .stopping import Ending, StopPlan, plan_stop
 from .sweep import Sweep
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
@@ -827,19 +826,6 @@ class RhythmicDMP:
         return np.concatenate(columns, axis=1)
 
     # ------------------------------------------------------------------ persistence
-    def save(self, path: str | Path) -> None:
-        """Write the DMP to a JSON file (format: :mod:`rdmp_gym.serialization`)."""
-        from .serialization import save_dmp
-
-        save_dmp(self, path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> RhythmicDMP:
-        """Read a DMP written by :meth:`save`."""
-        from .serialization import load_dmp
-
-        return load_dmp(path)
-
     def __repr__(self) -> str:
         return (f"RhythmicDMP(n_dims={self.n_dims}, period={self.period:.4g}, n_periodic={self.basis.n_periodic}, "
                 f"transient_sizes={self.basis.transient_sizes})")

@@ -7,7 +7,7 @@ the whole approach, which they do badly. Here the parts each get the mechanism m
 
 * the slow part found by :func:`rdmp_gym.rhythm.segment_rhythm` (approach, drift) is the anchor's discrete motion,
   a :class:`~rdmp_gym.sweep.Sweep` whose via points (every half second or period) are fitted to it by least
-  squares (before the entry into the rhythm, to the whole smoothed motion);
+  squares (before the rhythm starts to grow, to the whole smoothed motion);
 * the rhythm, relative to that moving anchor, is fitted by :meth:`RhythmicDMP.fit` from shortly before it starts
   to grow, so the paper's transient encodes only the entry into the rhythm; the canonical system then starts
   earlier on the same path, where no basis function is active yet (the forcing term is 0 there and the anchor's
@@ -30,10 +30,11 @@ from scipy.interpolate import CubicSpline
 
 from .demonstrations import Demonstration
 from .dmp import SMOOTHNESS_REFERENCE, RhythmicDMP, _trajectory_design
+from .ending import minimum_jerk_inverse
 from .fitting import fit_trajectory, second_differences, smooth_derivatives
 from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
 from .segmentation import Segmentation
-from .stopping import StopSegmentation, _minimum_jerk_inverse, fit_stop
+from .stopping import StopSegmentation, fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
@@ -41,10 +42,13 @@ __all__ = ["RecordingFit", "fit_recording", "normalise_tempo", "recording_report
 
 logger = logging.getLogger(__name__)
 
-_ENTRY_PERIODS = 1.5        # the entry into the rhythm that the paper's transient encodes (periods before its start)
+_ENTRY_PERIODS = 2.0        # the entry into the rhythm that the paper's transient encodes (periods before its start;
+                            # 1.5 left its basis functions so close that a quick entry rang: 1.56x the clean peak)
 _VIA_SPACING = 0.5          # s: the longest time between the anchor's via points
 _PHASE_POINTS = 64          # samples per cycle when cycles are compared
 _SMOOTHING = 0.15           # s: Savitzky-Golay window of the recording's acceleration
+_SMOOTHNESS = 1.0           # weight smoothness of the fits: a person's entry into the rhythm has corners that 0.3
+                            # (RhythmicDMP.fit's default) follows with up to 1.7x the recording's peak acceleration
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,7 +92,7 @@ def _fit_sweep(demo: Demonstration, seg: RhythmSegmentation, anchor: np.ndarray,
 def fit_recording(demo: Demonstration, *, period: float | None = None, start: float | None = None,
                   end: float | None = None, ending: bool | None = None, via_spacing: float | None = None,
                   n_periodic: int = 40, n_transient: int = 20, n_stop: int = 15, normalise: bool = True,
-                  **fit_kwargs) -> RecordingFit:
+                  smoothness: float = _SMOOTHNESS, **fit_kwargs) -> RecordingFit:
     """Fit a DMP to a whole recording: rest, approach, rhythm with a drifting working point, departure, rest.
 
     Args:
@@ -99,7 +103,8 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
         via_spacing: time between the anchor's via points (s; default one period, at most ``_VIA_SPACING``).
         n_periodic, n_transient, n_stop: basis functions of the rhythm, of its entry and of the stop.
         normalise: fit the recording with its cycles stretched to their mean period (:func:`normalise_tempo`).
-        fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ``smoothness``, ...).
+        smoothness: penalty on second differences of neighbouring weights (see :meth:`RhythmicDMP.fit`).
+        fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ...).
     """
     if not isinstance(demo, Demonstration):
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
@@ -116,7 +121,9 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     first_rest = t <= max(seg.onset, demo.dt)
     anchor = demo.Y[first_rest].mean(axis=0)
     entry = max(seg.rhythm_start - _ENTRY_PERIODS * seg.period, 0.0)
-    sweep = _fit_sweep(demo, seg, anchor, spacing, entry)
+    # the anchor follows the whole motion only until the rhythm starts to grow: a rhythm that grows slowly (for
+    # seconds before the encoded entry) would otherwise leave a step in its target and a jerk in the entry
+    sweep = _fit_sweep(demo, seg, anchor, spacing, min(entry, seg.entry))
 
     rows = (t >= entry - 0.5 * demo.dt) & (t <= seg.rhythm_end + 0.5 * demo.dt)
     relative = demo.Y[rows] - sweep.offsets(t[rows])
@@ -124,11 +131,11 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     entry_length = seg.rhythm_start - t[rows][0]
     short = RhythmicDMP.fit(rhythm, n_periodic=n_periodic, n_transient=n_transient,
                             segmentations=[Segmentation(seg.period, entry_length, anchor)], period=seg.period,
-                            **fit_kwargs)
+                            smoothness=smoothness, **fit_kwargs)
     full = Demonstration(t[t <= seg.rhythm_end + 0.5 * demo.dt],
                          (demo.Y - sweep.offsets(t))[t <= seg.rhythm_end + 0.5 * demo.dt], name=demo.name)
     dmp = _delayed(short, full, seg.rhythm_start, entry_length, substeps=int(fit_kwargs.get("substeps", 4)),
-                   smoothness=float(fit_kwargs.get("smoothness", 0.3)),
+                   smoothness=float(smoothness),
                    regularization=float(fit_kwargs.get("regularization") or 1e-4)).with_sweep(sweep)
 
     rest = seg.rest_time is not None
@@ -172,21 +179,28 @@ def _delayed(short: RhythmicDMP, full: Demonstration, rhythm_start: float, entry
 def _exit_time(ending, periodic_end: float, nu1_factor: float = 0.9, nu2_factor: float = 0.7) -> float:
     """The time (s) at which :func:`~rdmp_gym.stopping.fit_stop` placed the exit: the middle of the fade from the
     periodic to the stop family on the end of the periodic part."""
-    u_mid = 0.5 * (_minimum_jerk_inverse(1.0 - nu1_factor) + _minimum_jerk_inverse(1.0 - nu2_factor))
+    u_mid = 0.5 * (minimum_jerk_inverse(1.0 - nu1_factor) + minimum_jerk_inverse(1.0 - nu2_factor))
     return periodic_end - u_mid * ending.length
 
 
 def _cycle_cuts(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, end: float) -> np.ndarray:
-    """Indices ``[C]`` of the upward zero crossings (at least 0.6 periods apart) of the main direction of
-    ``rhythmic [L, d]`` between ``start`` and ``end`` (s): where its cycles begin."""
+    """Indices ``[C]`` where the cycles of ``rhythmic [L, d]`` between ``start`` and ``end`` (s) begin: crossings (at
+    least 0.6 periods apart) of a level by its main direction. Upward crossings of its mean, unless another level
+    or downward crossings (another phase) cut more whole cycles: a rhythm of 2.5 periods holds 2 whole cycles
+    from some phase only."""
     inside = np.flatnonzero((t >= start) & (t <= end))
     signal = rhythmic[inside] - rhythmic[inside].mean(axis=0)
     along = signal @ np.linalg.svd(signal, full_matrices=False)[2][0]
-    cuts: list[int] = []
-    for index in np.flatnonzero((along[:-1] < 0.0) & (along[1:] >= 0.0)):
-        if not cuts or t[inside[index]] - t[inside[cuts[-1]]] >= 0.6 * period:
-            cuts.append(int(index))
-    return inside[np.array(cuts, dtype=int)]
+    best = np.zeros(0, dtype=int)
+    for sign, level in itertools.product((1.0, -1.0), np.append(0.0, np.quantile(along, [0.3, 0.7, 0.15, 0.85]))):
+        shifted = sign * (along - level)
+        cuts: list[int] = []
+        for index in np.flatnonzero((shifted[:-1] < 0.0) & (shifted[1:] >= 0.0)):
+            if not cuts or t[inside[index]] - t[inside[cuts[-1]]] >= 0.6 * period:
+                cuts.append(int(index))
+        if len(cuts) > best.size:
+            best = np.array(cuts, dtype=int)
+    return inside[best]
 
 
 def _cycles(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, end: float) -> list[np.ndarray]:
@@ -226,7 +240,7 @@ def normalise_tempo(demo: Demonstration, seg: RhythmSegmentation) -> tuple[Demon
     return Demonstration(demo.t, samples, name=demo.name), original
 
 
-def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, float]:
+def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, float | None]:
     """How well ``result`` reproduces ``demo`` (m, m/s^2; times from ``demo.t[0]``).
 
     Keys: ``cycle_variation`` (RMS deviation of the recording's cycles from its mean cycle, relative to the slow
@@ -234,7 +248,7 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     ``cycle_error`` (RMS deviation of the recording's cycles from the reproduction's mean cycle, cut the same
     way), ``error_ratio`` (their ratio: 1 when the reproduction's cycle is the recording's mean cycle),
     ``rhythm_rmse`` (plain RMS position error over the rhythm, including the drift of the person's timing),
-    ``start_error`` (at the first sample), ``rest_error`` (mean over the final rest; NaN without one),
+    ``start_error`` (at the first sample), ``rest_error`` (mean over the final rest; ``None`` without one),
     ``peak_acceleration``, ``recording_peak_acceleration`` (Savitzky-Golay over ``_SMOOTHING`` s) and
     ``acceleration_ratio``.
     """
@@ -263,7 +277,7 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
             "rhythm_rmse": float(np.sqrt(np.mean(np.sum((reproduction - demo.Y)[rhythm] ** 2, axis=1)))),
             "start_error": float(np.linalg.norm(reproduction[0] - demo.Y[: max(int(0.1 / demo.dt), 1)].mean(0))),
             "rest_error": float(np.mean(np.linalg.norm((reproduction - demo.Y)[rest], axis=1))) if rest.any()
-            else float("nan"),
+            else None,
             "peak_acceleration": peak, "recording_peak_acceleration": recorded_peak,
             "acceleration_ratio": peak / max(recorded_peak, 1e-12)}
 

@@ -15,7 +15,7 @@ from rdmp_gym.envs.coverage import COVERING_FIGURE, covering_sweep, sweep_direct
 from rdmp_gym.envs.reward import Smoothness
 from rdmp_gym.envs.wipe_env import episode_success
 
-from rdmp_gym import Sweep
+from rdmp_gym import Sweep, save_dmp
 
 FAST = {"n_periods": 2, "control_rate": 50.0}       # a short, coarse episode for the API checks
 
@@ -165,7 +165,7 @@ def test_a_refined_dmp_with_its_sweep_is_the_imitation_of_a_new_env(env, tmp_pat
     action[_slices(env)["sweep_x"]] = 0.5
     theta = base.action_to_params(action)
     path = tmp_path / "dmp.json"
-    base.dmp.with_params(theta, base.groups).save(path)
+    save_dmp(base.dmp.with_params(theta, base.groups), path)
     reloaded = gym.make(ENV_ID_V2, dmp=str(path), **FAST)
     reloaded.reset(seed=3)
     np.testing.assert_allclose(reloaded.unwrapped.imitation_path(), base.rollout_path(theta), atol=1e-9)

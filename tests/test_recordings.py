@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rdmp_gym.recording_fit import fit_recording, recording_report
+from rdmp_gym.recording_fit import _cycle_cuts, fit_recording, recording_report
 from rdmp_gym.recordings import despike, realistic_recording, to_demonstration
 from rdmp_gym.rhythm import segment_rhythm
 from rdmp_gym.stopping import segment_ending
@@ -69,10 +69,11 @@ def test_fit_recording_meets_the_accuracy_and_smoothness_targets() -> None:
     assert report["acceleration_ratio"] < 1.5
 
 
-@pytest.mark.parametrize("approach", [(1.0,), (15.0,)])
+@pytest.mark.parametrize("approach", [(1.0,), (2.5,), (5.0,), (8.0,), (15.0,), (4.0, 4.0, 7.0)])
 def test_the_fit_stays_smooth_for_any_approach_length(approach) -> None:
-    """A 1 s and a 15 s approach (the slow part is the anchor's sweep, not a long transient): the reproduction's
-    peak acceleration stays within 1.5x the smoothed recording's, the start and the rest within 1 cm."""
+    """Approaches of 1 s to 15 s, one move or three (the slow part is the anchor's sweep, not a long transient): the
+    reproduction's peak acceleration stays within 1.5x the smoothed recording's, the start and the rest within
+    1 cm."""
     recording = realistic_recording("wiping", rng=np.random.default_rng(3), approach=approach, n_periods=6)
     demo = to_demonstration(recording.t, recording.Y)
     result = fit_recording(demo)
@@ -97,3 +98,24 @@ def test_bad_input_names_the_argument() -> None:
     flat = to_demonstration(np.arange(500) * 0.01, np.zeros((500, 3)))
     with pytest.raises(ValueError, match="rhythm"):
         segment_rhythm(flat)
+
+
+def test_cycles_are_cut_at_the_phase_that_holds_the_most_whole_cycles() -> None:
+    """2.4 periods that begin just after an upward crossing of the mean hold one whole cycle from there, two from
+    another phase: the cycle-to-cycle variation of a short rhythm can be measured."""
+    t = np.arange(0.05, 2.45, 0.01)
+    rhythmic = np.column_stack([np.sin(2.0 * np.pi * t), 0.5 * np.cos(2.0 * np.pi * t)])
+    cuts = _cycle_cuts(t, rhythmic, 1.0, t[0], t[-1])
+    assert cuts.size == 3
+    assert np.allclose(np.diff(t[cuts]), 1.0, atol=0.02)
+
+
+def test_report_without_a_final_rest_has_no_rest_error() -> None:
+    recording, demo = _recording("kitchen")
+    keep = demo.t - demo.t[0] < recording.truth.rhythm_end - 1.0
+    cut = to_demonstration(demo.t[keep], demo.Y[keep], outliers=False)
+    result = fit_recording(cut)
+    report = recording_report(cut, result)
+    assert result.segmentation.rest_time is None and result.dmp.ending is None
+    assert report["rest_error"] is None
+    assert report["error_ratio"] < 1.5 and report["acceleration_ratio"] < 1.5
