@@ -47,7 +47,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from output import add_save_argument, results_dir
+from field_report import write as write_field_report
+from output import SCRATCH, add_save_argument, results_dir
 from rdmp_gym.agents.assessment import trained_actions
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.protocol import (
@@ -89,6 +90,8 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
+    parser.add_argument("--fresh", action="store_true",
+                        help="ignore the runs cached by an earlier, interrupted call (default: reuse them)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
     parser.add_argument("--update-baselines", action="store_true",
                         help="re-evaluate the no-learning rows (imitation, coupling) into results/<name>.json, "
@@ -137,6 +140,26 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
             "test": scores.to_dict(), "test_means": scores.means()}
 
 
+def _cache_key(config: TrainConfig, test_seeds: np.ndarray) -> str:
+    """Everything a cached run must match to stand for ``config`` tested on ``test_seeds``."""
+    fields = {key: value for key, value in vars(config).items() if key != "workers"}
+    return json.dumps({**fields, "test_seeds": test_seeds.tolist()}, sort_keys=True, default=str)
+
+
+def _cached_run(config: TrainConfig, cache: Path, test_seeds: np.ndarray) -> dict | None:
+    path = cache / f"{config.agent}-{config.seed}.json"
+    if not path.is_file():
+        return None
+    saved = json.loads(path.read_text())
+    return saved["run"] if saved.get("key") == _cache_key(config, test_seeds) else None
+
+
+def _store_run(config: TrainConfig, cache: Path, test_seeds: np.ndarray, run: dict) -> None:
+    cache.mkdir(parents=True, exist_ok=True)
+    document = {"key": _cache_key(config, test_seeds), "run": run}
+    (cache / f"{config.agent}-{config.seed}.json").write_text(json.dumps(document))
+
+
 def _run_remote(config: TrainConfig, scratch: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
                 reference_jerk: np.ndarray) -> dict:
     """:func:`_run_job` inside a Ray task: its own one-worker test evaluator."""
@@ -162,6 +185,21 @@ def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: P
     finally:
         if owns:
             ray.shutdown()
+
+
+def _run_locally(configs: list[TrainConfig], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
+                 seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
+    """The runs one after the other; each finished run is cached, so an interrupted call resumes where it stopped."""
+    cache = SCRATCH / f"{args.name}-runs"
+    runs = []
+    with Evaluator(spec, args.workers) as tester:
+        for config in tqdm(configs, desc="runs", unit="run"):
+            run = None if args.fresh else _cached_run(config, cache, seeds)
+            if run is None:
+                run = _run_job(config, scratch, tester, seeds, observations, reference_jerk)
+                _store_run(config, cache, seeds, run)
+            runs.append(run)
+    return runs
 
 
 def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[str, dict], np.ndarray, np.ndarray]:
@@ -273,6 +311,7 @@ def main() -> None:
             path.write_text(json.dumps(document, indent=1) + "\n")
         _print(document["summary"], document["settings"])
         _plot(document["runs"], document["summary"], RESULTS / f"{args.name}.png", _title(document["settings"]))
+        write_field_report(document, RESULTS, args.name, _title(document["settings"]))
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
@@ -291,9 +330,7 @@ def main() -> None:
         if args.backend == "ray":
             runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
         else:
-            with Evaluator(spec, args.workers) as tester:
-                runs = [_run_job(config, scratch, tester, seeds, observations, reference)
-                        for config in tqdm(configs, desc="runs", unit="run")]
+            runs = _run_locally(configs, args, scratch, spec, seeds, observations, reference)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     rows = _summary(runs, baselines)
@@ -305,7 +342,8 @@ def main() -> None:
     document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
     _plot(runs, rows, RESULTS / f"{args.name}.png", _title(settings))
-    print(f"wrote {RESULTS / (args.name + '.json')} and {args.name}.png")
+    write_field_report(document, RESULTS, args.name, _title(settings))
+    print(f"wrote {RESULTS / (args.name + '.json')}, {args.name}.png and {args.name}_field.json/.png")
 
 
 if __name__ == "__main__":

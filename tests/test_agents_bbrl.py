@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
+from rdmp_gym.agents.learners.bbrl import sample_weights
 from rdmp_gym.agents.learners.smooth import squash
 
 torch.set_num_threads(1)
@@ -101,6 +102,8 @@ def test_bad_options_and_inputs_raise_clear_errors():
         _learner(epsilon=0.0)
     with pytest.raises(ValueError, match="rank"):
         _learner(rank=-1)
+    with pytest.raises(ValueError, match="credit"):
+        _learner(credit="stepwise")
     with pytest.raises(ValueError, match="space"):
         make_learner("bbrl", np.zeros(N), 10, np.random.default_rng(0))
     learner = _learner()
@@ -110,3 +113,18 @@ def test_bad_options_and_inputs_raise_clear_errors():
         learner.ask(np.zeros((10, 3)))
     with pytest.raises(RuntimeError, match="ask"):
         learner.tell(_batch(np.zeros((10, N)), np.zeros(10)))
+
+
+def test_per_step_credit_judges_a_weight_by_the_costs_from_when_it_acts():
+    """Sample 0 is the cheaper episode, sample 1 is cheaper from step 3 on: a dimension active only at step 0
+    prefers sample 0, one active only at step 3 prefers sample 1, one never active gets the episode weights."""
+    traces = np.array([[0.0, 0.0, 0.0, 1.5], [1.0, 1.0, 0.0, 0.0], [0.5, 0.5, 0.5, 0.5]])
+    costs = traces.sum(axis=1)
+    activation = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]])   # [T, n]
+    per_dimension, episode = sample_weights(costs, traces, np.zeros((3, 1)), activation, h=10.0, ridge=1.0)
+    np.testing.assert_allclose(per_dimension.sum(axis=1), 1.0)
+    assert per_dimension[0, 0] > 0.9 and per_dimension[1, 1] > 0.9
+    np.testing.assert_allclose(per_dimension[2], episode)
+    assert episode.argmax() == 0
+    only_episode, _ = sample_weights(costs, None, np.zeros((3, 1)), activation, h=10.0, ridge=1.0)
+    assert only_episode.shape == (1, 3)

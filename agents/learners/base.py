@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_weights"]
+__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_weights", "ridge_hat"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,13 @@ def cost_weights(costs: np.ndarray, h: float) -> np.ndarray:
     scaled = np.divide(costs - low, spread, out=np.zeros_like(costs, dtype=np.float64), where=spread > 0)
     weights = np.exp(-h * scaled)
     return weights / weights.sum(axis=-1, keepdims=True)
+
+
+def ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:
+    """``[N, N]`` hat matrix of a ridge regression on ``x [N, F+1]`` (the constant column unpenalised)."""
+    penalty = prior * np.eye(x.shape[1])
+    penalty[0, 0] = 1e-9
+    return x @ np.linalg.solve(x.T @ x + penalty, x.T)
 
 
 def check_state_like(value: Any, template: Any, path: str) -> None:

@@ -15,13 +15,18 @@ thousands (the conditional variances of a smooth block are tiny) and the trust r
 Exploration is therefore smooth in time from the first update on, and the low-rank part can learn which
 directions to explore together.
 
-One update, from the ``K`` rollouts of the last ``ask``:
+One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k(t))`` (``J`` the episode cost,
+``c(t)`` its per-control-step part):
 
-1. advantages ``A = R - V(s)``, ``V`` a ridge regression on the standardised context fitted to the returns of
-   the previous ``reuse`` batches (the current batch never scores itself), normalised to unit scale;
-2. ``epochs`` Adam steps on the importance-weighted objective ``-mean(exp(log p_new(u|s) - log p_old(u|s)) A)``
-   over the batch;
-3. the **trust region**: the mean KL divergence ``KL(p_old(.|s) || p_new(.|s))`` over the batch's contexts must
+1. **credit** (PI², Theodorou et al. 2010, per context): the cost-to-go ``S_k(t)`` minus a ridge regression of it on
+   the context gives per-step weights ``P_k(t) = exp(-h Â_k(t))`` (normalised over the samples); each action
+   dimension ``i`` gets ``d_ik = sum_t a_i(t) P_k(t) / sum_t a_i(t)`` from its activation ``a_i(t)`` over time (the
+   env's ``action_time_weights``), so a weight that acts early is judged by what happened from then on. Dimensions
+   that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights;
+2. **weighted maximum likelihood** (the M-step of MPO, Abdolmaleki et al. 2018): ``epochs`` Adam steps on
+   ``1/2 sum_ik d_ik ((u_ki - mu_i(s_k)) / sigma_i)^2 / n`` for the mean network and the episode-weighted
+   negative log-likelihood of the samples around the old means for ``sigma`` and ``U``;
+3. the **trust region**: the mean KL divergence ``KL(p_old(.|s) || p_new(.|s))`` over the samples' contexts must
    not exceed ``epsilon``; the step is shrunk towards the old parameters (halving its length, up to 20 times,
    else dropped) until it does. The bound holds by construction, not only on average as with a clipped ratio.
 
@@ -38,14 +43,16 @@ from typing import Any
 import numpy as np
 import torch
 
-from ..options import check_range
-from .base import EpisodeBatch, Learner
+from ..options import check_choice, check_range
+from .base import EpisodeBatch, Learner, cost_weights, ridge_hat
 from .contextual import SearchSpace
 from .smooth import smooth_factor, squash, unsquash
 
-__all__ = ["BBRL", "BBRLConfig", "bbrl_policy_actions"]
+__all__ = ["BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
 
 _DTYPE = torch.float64
+CREDITS = ("step", "episode")
+_BUFFER = ("contexts", "samples", "costs", "traces")
 
 
 @dataclass(frozen=True)
@@ -59,10 +66,12 @@ class BBRLConfig:
         rank: columns of the learned low-rank covariance factor ``U`` (0 = none).
         hidden: width of the two hidden layers of the mean network.
         epsilon: trust region: the largest mean KL divergence of one update.
+        h: eliteness of the sample weights ``exp(-h Â)`` (``Â`` the advantage scaled to [0, 1]).
+        credit: ``"step"`` (per-step credit from the cost trace, where the task gives one) or ``"episode"``.
         epochs: Adam steps per update.
         learning_rate: Adam's step size.
-        reuse: batches whose returns fit the value baseline.
-        value_ridge: ridge of the value baseline.
+        reuse: batches (this one and earlier ones) whose samples enter each update.
+        value_ridge: ridge of the context baselines of the cost (and cost-to-go).
         min_sigma: floor of each dimension's standard deviation.
     """
 
@@ -71,10 +80,12 @@ class BBRLConfig:
     rough: float = 0.1
     rank: int = 4
     hidden: int = 64
-    epsilon: float = 0.05
-    epochs: int = 30
-    learning_rate: float = 3e-3
-    reuse: int = 5
+    epsilon: float = 0.2
+    h: float = 10.0
+    credit: str = "step"
+    epochs: int = 10
+    learning_rate: float = 1e-2
+    reuse: int = 4
     value_ridge: float = 1.0
     min_sigma: float = 0.01
 
@@ -85,11 +96,37 @@ class BBRLConfig:
         check_range(self.rank, "rank", 0, None)
         check_range(self.hidden, "hidden", 1, None)
         check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
+        check_range(self.h, "h", 0.0, None, low_open=True)
+        check_choice(self.credit, "credit", CREDITS)
         check_range(self.epochs, "epochs", 1, None)
         check_range(self.learning_rate, "learning_rate", 0.0, None, low_open=True)
         check_range(self.reuse, "reuse", 1, None)
         check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
         check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+
+
+def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.ndarray,
+                   time_weights: np.ndarray | None, h: float, ridge: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dimension and episode-level weights of ``N`` samples (step 1 of the module docstring).
+
+    Args:
+        costs: ``[N]`` episode costs; traces: ``[N, T]`` their per-step parts, or None.
+        contexts: ``[N, o]`` standardised contexts (the baselines' regressors).
+        time_weights: ``[T, n]`` activation of each action dimension per control step, or None.
+        h: eliteness; ridge: ridge of the baselines.
+    Returns:
+        ``([n, N] or [1, N], [N])``: each row sums to 1 (``[1, N]``, the episode weights, without per-step credit).
+    """
+    hat = ridge_hat(np.c_[np.ones(len(costs)), contexts], ridge)
+    episode = cost_weights(costs - hat @ costs, h)
+    if traces is None or time_weights is None:
+        return episode[None], episode
+    terminal = costs - traces.sum(axis=1)
+    to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]           # [N, T]
+    per_step = cost_weights((to_go - hat @ to_go).T, h)                                 # [T, N]
+    norm = time_weights.sum(axis=0)                                                     # [n]
+    per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
+    return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
 
 
 class _Policy(torch.nn.Module):
@@ -162,10 +199,20 @@ class BBRL(Learner):
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(unsquash(self._mean), self.center.size, self.config.hidden, correlation,
                               self.config.sigma, self.config.rank)
+        self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         self._asked: tuple[np.ndarray, np.ndarray] | None = None      # (contexts [K, o], u [K, n])
-        self._history: list[tuple[np.ndarray, np.ndarray]] = []       # (standardised contexts, returns)
+        #: the samples of the last ``reuse`` batches: contexts [N, o], samples [N, n], costs [N], traces [N, T]
+        self._buffer: list[dict[str, np.ndarray]] = []
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
+
+    def _time_weights(self, space: SearchSpace) -> np.ndarray | None:
+        if space.time_weights is None:
+            return None
+        weights = np.asarray(space.time_weights, dtype=np.float64)
+        if weights.ndim != 2 or weights.shape[1] != self.n_params:
+            raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
+        return weights
 
     # ------------------------------------------------------------------ sampling
     def _features(self, observations: np.ndarray) -> np.ndarray:
@@ -201,43 +248,42 @@ class BBRL(Learner):
             return squash(self.policy.mean(torch.as_tensor(self._features(observations))).numpy())
 
     # ------------------------------------------------------------------ update
-    def _advantages(self, x: np.ndarray, returns: np.ndarray) -> np.ndarray:
-        """``[K]`` normalised advantages against the value baseline of the earlier batches."""
-        baseline = np.full(returns.size, returns.mean())
-        if self._history:
-            xs = np.concatenate([h[0] for h in self._history])
-            ys = np.concatenate([h[1] for h in self._history])
-            design = np.c_[np.ones(len(xs)), xs]
-            ridge = self.config.value_ridge * np.eye(design.shape[1])
-            ridge[0, 0] = 0.0
-            coef = np.linalg.solve(design.T @ design + ridge, design.T @ ys)
-            baseline = np.c_[np.ones(len(x)), x] @ coef
-        advantages = returns - baseline
-        spread = advantages.std()
-        return (advantages - advantages.mean()) / spread if spread > 1e-12 else np.zeros_like(advantages)
-
     def _update(self, batch: EpisodeBatch) -> None:
         if self._asked is None:
             raise RuntimeError("tell: call ask first")
         x, u = self._asked
-        advantages = self._advantages(x, batch.returns)
-        self._history = [*self._history, (x, batch.returns.copy())][-self.config.reuse:]
+        traces = np.asarray(batch.cost_traces, dtype=np.float64)
+        if self.time_weights is not None and traces.shape[1] != self.time_weights.shape[0]:
+            raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
+        self._buffer = [*self._buffer, {"contexts": x, "samples": u, "costs": batch.costs.copy(),
+                                        "traces": traces}][-self.config.reuse:]
+        data = {key: np.concatenate([b[key] for b in self._buffer]) for key in _BUFFER}
+        per_dimension, episode = sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights,
+                                                self.config.h, self.config.value_ridge)
         torch.manual_seed(int(self.rng.integers(2**31)))
-        contexts, samples, weights = (torch.as_tensor(a) for a in (x, u, advantages))
+        contexts, samples = torch.as_tensor(data["contexts"]), torch.as_tensor(data["samples"])
         old = [p.detach().clone() for p in self.policy.parameters()]
         with torch.no_grad():
             old_mean, old_chol = self.policy.mean(contexts), self._chol()
-            old_logp = _log_prob(samples, old_mean, old_chol)
-        optimizer = torch.optim.Adam(self.policy.parameters(), lr=self.config.learning_rate)
-        for _ in range(self.config.epochs):
-            optimizer.zero_grad()
-            ratio = torch.exp(_log_prob(samples, self.policy.mean(contexts), self._chol()) - old_logp)
-            loss = -torch.mean(ratio * weights)
-            loss.backward()
-            optimizer.step()
+        self._maximise_likelihood(contexts, samples, torch.as_tensor(per_dimension), torch.as_tensor(episode),
+                                  old_mean)
         self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol)
         self._mean = self.policy_actions(self.center[None])[0]
         self._asked = None
+
+    def _maximise_likelihood(self, contexts: torch.Tensor, samples: torch.Tensor, per_dimension: torch.Tensor,
+                             episode: torch.Tensor, old_mean: torch.Tensor) -> None:
+        """Step 2: Adam on the weighted mean regression ``[n or 1, N]`` weights and the covariance's weighted NLL."""
+        optimizer = torch.optim.Adam(self.policy.parameters(), lr=self.config.learning_rate)
+        for _ in range(self.config.epochs):
+            optimizer.zero_grad()
+            chol = self._chol()
+            scale = torch.sqrt(torch.sum(chol**2, dim=1)).detach()                       # [n] marginal sigmas
+            residual = ((samples - self.policy.mean(contexts)) / scale) ** 2             # [N, n]
+            mean_loss = 0.5 * torch.sum(per_dimension.T * residual) / samples.shape[1]
+            cov_loss = -torch.sum(episode * _log_prob(samples, old_mean, chol)) / samples.shape[1]
+            (mean_loss + cov_loss).backward()
+            optimizer.step()
 
     def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor) -> float:
         with torch.no_grad():
@@ -263,20 +309,20 @@ class BBRL(Learner):
 
     # ------------------------------------------------------------------ state
     def _extra_state(self) -> dict[str, Any]:
+        buffer = {f"buffer_{key}": [b[key].copy() for b in self._buffer] for key in _BUFFER}
         return {"parameters": {name: value.detach().numpy().copy() for name, value in self.policy.state_dict().items()},
-                "context_center": self.center.copy(), "context_scale": self.scale.copy(),
-                "history_contexts": [h[0].copy() for h in self._history],
-                "history_returns": [h[1].copy() for h in self._history], "min_sigma": float(self.config.min_sigma)}
+                "context_center": self.center.copy(), "context_scale": self.scale.copy(), **buffer,
+                "min_sigma": float(self.config.min_sigma)}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
         self.policy.load_state_dict(parameters)
-        contexts, returns = state["history_contexts"], state["history_returns"]
-        if len(contexts) != len(returns) or len(contexts) > self.config.reuse:
-            raise ValueError("state.history_contexts: expected as many batches as history_returns, at most reuse")
-        self._history = [(np.asarray(c, dtype=np.float64), np.asarray(r, dtype=np.float64))
-                         for c, r in zip(contexts, returns, strict=True)]
+        columns = [state[f"buffer_{key}"] for key in _BUFFER]
+        if len({len(c) for c in columns}) != 1 or len(columns[0]) > self.config.reuse:
+            raise ValueError("state.buffer_contexts: expected as many batches in every buffer field, at most reuse")
+        self._buffer = [{key: np.asarray(value, dtype=np.float64) for key, value in zip(_BUFFER, batch, strict=True)}
+                        for batch in zip(*columns, strict=True)]
         self._asked = None
 
 

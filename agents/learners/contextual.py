@@ -36,7 +36,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_weights
+from .base import EpisodeBatch, Learner, cost_weights, ridge_hat
 from .smooth import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
@@ -263,13 +263,6 @@ def context_features(observations: np.ndarray, center: np.ndarray, scale: np.nda
     return phi[:, used]
 
 
-def _ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:
-    """``[N, N]`` hat matrix of a ridge regression on ``x [N, F+1]`` (the constant column unpenalised)."""
-    penalty = prior * np.eye(x.shape[1])
-    penalty[0, 0] = 1e-9
-    return x @ np.linalg.solve(x.T @ x + penalty, x.T)
-
-
 def _reps_weights(returns: np.ndarray, features: np.ndarray, epsilon: float) -> np.ndarray:
     """``[N]`` contextual REPS weights of returns ``[N]`` with value features ``[N, F]`` (may be F = 0)."""
     spread = returns.std()
@@ -421,7 +414,7 @@ class ContextualSearch(Learner):
         """``[N]`` one weight per sample (REPS, or PI^BB over a ridge baseline; PI²'s episode level too)."""
         if self.config.weighting == "reps":
             return _reps_weights(-costs, x[:, 1:], self.config.epsilon)
-        advantage = costs - _ridge_hat(x, self.config.gain_prior) @ costs
+        advantage = costs - ridge_hat(x, self.config.gain_prior) @ costs
         return cost_weights(advantage, self.config.h)
 
     def _fit(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -450,7 +443,7 @@ class ContextualSearch(Learner):
             raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
         terminal = data["costs"] - traces.sum(axis=1)
         to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]        # [N, T]
-        advantage = to_go - _ridge_hat(data["x"], self.config.gain_prior) @ to_go
+        advantage = to_go - ridge_hat(data["x"], self.config.gain_prior) @ to_go
         per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
         norm = self.time_weights.sum(axis=0)                                              # [n]
         averaged = np.einsum("tn,tnf->nf", self.time_weights, per_step) / np.where(norm > 0, norm, 1.0)[:, None]

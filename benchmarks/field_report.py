@@ -1,0 +1,167 @@
+"""The learners' results as the field reports them (Agarwal et al., NeurIPS 2021), from a ``bench_agents`` document.
+
+- sample-efficiency curves: the IQM over seeds of the validation success rate against training episodes, with
+  95 % stratified-bootstrap bands, the imitation's test rate and the task's ceiling (the per-context search of
+  ``bench_solvable``) drawn on the same axes;
+- final scores: the IQM over seeds of the test success rate with its interval;
+- performance profiles: the fraction of (seed, test context) pairs whose coverage exceeds each threshold;
+- the probability that a run of the best learner succeeds on a test context where a run of another does not
+  (``P(X > Y)`` on per-context success, ties one half);
+- episodes until the validation success rate first reaches 0.5, 0.8 and 0.9 (median over the seeds that do).
+
+Writes ``<name>_field.json`` and ``<name>_field.png`` beside the document:
+
+    python benchmarks/field_report.py benchmarks/results/agents_v2.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from rdmp_gym.agents.field_metrics import (
+    curve_intervals,
+    performance_profile,
+    probability_of_improvement,
+    stratified_interval,
+)
+
+TARGETS = (0.5, 0.8, 0.9)
+THRESHOLDS = np.linspace(0.8, 1.0, 41)
+SOLVABLE = Path(__file__).resolve().parent / "results" / "solvable_v2.json"
+
+
+def _agents(runs: list[dict]) -> list[str]:
+    return list(dict.fromkeys(r["agent"] for r in runs))
+
+
+def _curves(group: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """``([P], [R, P])`` episodes and validation success of the runs of one agent (their common length)."""
+    length = min(len(r["curve"]) for r in group)
+    episodes = np.array([c["episodes"] for c in group[0]["curve"][:length]], dtype=float)
+    values = np.array([[c["eval_success"] for c in r["curve"][:length]] for r in group], dtype=float)
+    return episodes, values
+
+
+def episodes_to(curve: list[dict], target: float) -> int | None:
+    """Training episodes until the validation success rate first reaches ``target`` (None: never)."""
+    for record in curve:
+        if record.get("eval_success") is not None and record["eval_success"] >= target:
+            return int(record["episodes"])
+    return None
+
+
+def ceiling(test_seeds: list[int], env_id: str) -> dict | None:
+    """The share of the test contexts that the per-context search solved (``solvable_v2.json``), if it covers them."""
+    if not SOLVABLE.is_file():
+        return None
+    document = json.loads(SOLVABLE.read_text())
+    if document["settings"].get("env_id") != env_id:
+        return None
+    solved = {row["seed"]: row["solved"] for row in document["contexts"]}
+    if not all(seed in solved for seed in test_seeds):
+        return None
+    flags = np.array([solved[seed] for seed in test_seeds], dtype=float)
+    return {"success": float(flags.mean()), "contexts": len(flags)}
+
+
+def field_summary(document: dict) -> dict:
+    """Every number of the module docstring, per agent; ``best`` is the agent with the highest IQM test success."""
+    runs, agents = document["runs"], _agents(document["runs"])
+    result: dict = {"agents": {}, "thresholds": THRESHOLDS.tolist(),
+                    "ceiling": ceiling(document["settings"]["final_test_seeds"], document["settings"]["env_id"]),
+                    "imitation_success": float(np.mean(document["baselines"]["imitation"]["success"]))}
+    success = {agent: np.array([r["test"]["success"] for r in runs if r["agent"] == agent], dtype=float)
+               for agent in agents}
+    for agent in agents:
+        group = [r for r in runs if r["agent"] == agent]
+        episodes, values = _curves(group)
+        coverage = np.array([r["test"]["coverage"] for r in group], dtype=float)
+        reached = {str(t): [episodes_to(r["curve"], t) for r in group] for t in TARGETS}
+        result["agents"][agent] = {
+            "seeds": len(group),
+            "test_success": stratified_interval(success[agent].mean(axis=1, keepdims=True)).to_dict(),
+            "test_coverage": stratified_interval(coverage).to_dict(),
+            "curve_episodes": episodes.tolist(), "curve": curve_intervals(values).tolist(),
+            "coverage_profile": performance_profile(coverage, THRESHOLDS).tolist(),
+            "episodes_to": {t: {"reached": sum(e is not None for e in v),
+                                "median": float(np.median([e for e in v if e is not None])) if any(
+                                    e is not None for e in v) else None} for t, v in reached.items()}}
+    best = max(agents, key=lambda a: result["agents"][a]["test_success"]["estimate"])
+    result["best"] = best
+    result["improvement"] = {other: probability_of_improvement(success[best], success[other]).to_dict()
+                             for other in agents if other != best}
+    return result
+
+
+def plot(summary: dict, path: Path, title: str) -> None:
+    """The four panels: curves, final scores, coverage profiles, probability of improvement."""
+    agents = list(summary["agents"])
+    figure, axes = plt.subplots(1, 4, figsize=(20, 4.2))
+    for index, agent in enumerate(agents):
+        entry = summary["agents"][agent]
+        episodes, band = np.array(entry["curve_episodes"]), np.array(entry["curve"])
+        axes[0].plot(episodes, band[:, 0], color=f"C{index}", label=agent)
+        axes[0].fill_between(episodes, band[:, 1], band[:, 2], color=f"C{index}", alpha=0.15)
+        profile = np.array(entry["coverage_profile"])
+        axes[2].plot(summary["thresholds"], profile[:, 0], color=f"C{index}", label=agent)
+        axes[2].fill_between(summary["thresholds"], profile[:, 1], profile[:, 2], color=f"C{index}", alpha=0.15)
+    for axis in axes[:2]:
+        axis.axhline(summary["imitation_success"], color="0.5", ls="--", lw=1, label="imitation (test)")
+        if summary["ceiling"] is not None:
+            axis.axhline(summary["ceiling"]["success"], color="k", ls=":", lw=1, label="per-context search (ceiling)")
+    axes[0].set(title="validation success (IQM, 95 % stratified bootstrap)", xlabel="training episodes")
+    axes[0].legend(fontsize=7)
+    finals = [summary["agents"][a]["test_success"] for a in agents]
+    axes[1].bar(range(len(agents)), [f["estimate"] for f in finals], color=[f"C{i}" for i in range(len(agents))],
+                yerr=np.array([[f["estimate"] - f["low"], f["high"] - f["estimate"]] for f in finals]).T, capsize=3)
+    axes[1].set_xticks(range(len(agents)), agents, rotation=45, fontsize=8)
+    axes[1].set(title="test success of the final policy (IQM, 95 % CI)", ylim=(0, 1.05))
+    axes[2].set(title="coverage profile: P(coverage > t) over seeds x contexts", xlabel="t")
+    others = list(summary["improvement"])
+    entries = [summary["improvement"][o] for o in others]
+    axes[3].barh(range(len(others)), [e["estimate"] for e in entries], color="C0",
+                 xerr=np.array([[e["estimate"] - e["low"], e["high"] - e["estimate"]] for e in entries]).T, capsize=3)
+    axes[3].set_yticks(range(len(others)), others, fontsize=8)
+    axes[3].axvline(0.5, color="k", lw=0.8)
+    axes[3].set(title=f"P({summary['best']} > Y) on test success", xlim=(0, 1))
+    for axis in axes:
+        axis.grid(alpha=0.3)
+    figure.suptitle(title)
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+
+
+def write(document: dict, folder: Path, name: str, title: str) -> dict:
+    """Compute, save ``<name>_field.json`` and ``.png`` in ``folder``, return the summary."""
+    summary = field_summary(document)
+    (folder / f"{name}_field.json").write_text(json.dumps(summary, indent=1) + "\n")
+    plot(summary, folder / f"{name}_field.png", title)
+    return summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("document", type=Path, help="a bench_agents result (JSON)")
+    args = parser.parse_args()
+    document = json.loads(args.document.read_text())
+    settings = document["settings"]
+    summary = write(document, args.document.parent, args.document.stem,
+                    f"{settings['env_id']}: {settings['seeds']} seeds, {settings['test_contexts']} test contexts")
+    for agent, entry in summary["agents"].items():
+        reached = ", ".join(f"{t}: {v['median'] or '-'} ({v['reached']}/{entry['seeds']})"
+                            for t, v in entry["episodes_to"].items())
+        success = entry["test_success"]
+        print(f"{agent:>10}  test success {success['estimate']:.3f} [{success['low']:.3f}, {success['high']:.3f}]"
+              f"  episodes to validation success {reached}")
+
+
+if __name__ == "__main__":
+    main()
