@@ -72,7 +72,9 @@ METRICS = ("success", "coverage", "jerk_ratio", "returns")
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--agents", nargs="+",
-                        default=["creps", "cpibb", "cpi2", "pibb", "cmaes", "ppo", "amplitude", "random"])
+                        default=["creps", "cpibb", "cpi2", "pibb", "cmaes", "ppo", "amplitude", "random"],
+                        help="learners, or LABEL=LEARNER to run one learner under a second name with its own "
+                             "--option LABEL.KEY=VALUE settings")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")
     parser.add_argument("--budget", type=int, default=1000, help="training episodes per run")
     parser.add_argument("--rollouts", type=int, default=20, help="episodes per update")
@@ -107,8 +109,17 @@ def _value(text: str) -> object:
         return text
 
 
+def _labels(agents: list[str]) -> dict[str, str]:
+    """``{label: learner}`` from ``--agents`` items ``learner`` or ``label=learner`` (one learner, two settings)."""
+    pairs = [item.partition("=")[::2] if "=" in item else (item, item) for item in agents]
+    labels = dict(pairs)
+    if len(labels) != len(pairs):
+        raise SystemExit(f"--agents: every label must be unique, got {agents}")
+    return labels
+
+
 def _options(args: argparse.Namespace) -> dict[str, dict]:
-    options: dict[str, dict] = {agent: {} for agent in args.agents}
+    options: dict[str, dict] = {label: {} for label in _labels(args.agents)}
     for item in args.option:
         key, _, value = item.partition("=")
         agent, _, name = key.partition(".")
@@ -146,18 +157,16 @@ def _cache_key(config: TrainConfig, test_seeds: np.ndarray) -> str:
     return json.dumps({**fields, "test_seeds": test_seeds.tolist()}, sort_keys=True, default=str)
 
 
-def _cached_run(config: TrainConfig, cache: Path, test_seeds: np.ndarray) -> dict | None:
-    path = cache / f"{config.agent}-{config.seed}.json"
+def _cached_run(config: TrainConfig, path: Path, test_seeds: np.ndarray) -> dict | None:
     if not path.is_file():
         return None
     saved = json.loads(path.read_text())
     return saved["run"] if saved.get("key") == _cache_key(config, test_seeds) else None
 
 
-def _store_run(config: TrainConfig, cache: Path, test_seeds: np.ndarray, run: dict) -> None:
-    cache.mkdir(parents=True, exist_ok=True)
-    document = {"key": _cache_key(config, test_seeds), "run": run}
-    (cache / f"{config.agent}-{config.seed}.json").write_text(json.dumps(document))
+def _store_run(config: TrainConfig, path: Path, test_seeds: np.ndarray, run: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"key": _cache_key(config, test_seeds), "run": run}))
 
 
 def _run_remote(config: TrainConfig, scratch: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
@@ -187,17 +196,18 @@ def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: P
             ray.shutdown()
 
 
-def _run_locally(configs: list[TrainConfig], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
+def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
                  seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
     """The runs one after the other; each finished run is cached, so an interrupted call resumes where it stopped."""
     cache = SCRATCH / f"{args.name}-runs"
     runs = []
     with Evaluator(spec, args.workers) as tester:
-        for config in tqdm(configs, desc="runs", unit="run"):
-            run = None if args.fresh else _cached_run(config, cache, seeds)
+        for name, config in tqdm(list(zip(names, configs, strict=True)), desc="runs", unit="run"):
+            path = cache / f"{name}-{config.seed}.json"
+            run = None if args.fresh else _cached_run(config, path, seeds)
             if run is None:
                 run = _run_job(config, scratch, tester, seeds, observations, reference_jerk)
-                _store_run(config, cache, seeds, run)
+                _store_run(config, path, seeds, run)
             runs.append(run)
     return runs
 
@@ -322,15 +332,18 @@ def main() -> None:
     try:
         baselines, observations, reference = _baselines(spec, seeds, 1 if args.backend == "ray" else args.workers)
         workers = 1 if args.backend == "ray" else args.workers
-        configs = [TrainConfig(agent=agent, env_id=args.env_id, updates=args.budget // args.rollouts,
+        labels = _labels(args.agents)
+        configs = [TrainConfig(agent=learner, env_id=args.env_id, updates=args.budget // args.rollouts,
                                rollouts=args.rollouts, seed=seed, workers=workers, env_kwargs=env_kwargs,
-                               options=options.get(agent, {}), eval_episodes=args.val_contexts,
+                               options=options.get(label, {}), eval_episodes=args.val_contexts,
                                eval_every=args.eval_every, shared_context=False)
-                   for agent in args.agents for seed in range(args.seeds)]
+                   for label, learner in labels.items() for seed in range(args.seeds)]
+        names = [label for label in labels for _ in range(args.seeds)]
         if args.backend == "ray":
             runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
         else:
-            runs = _run_locally(configs, args, scratch, spec, seeds, observations, reference)
+            runs = _run_locally(configs, names, args, scratch, spec, seeds, observations, reference)
+        runs = [{**run, "agent": name} for name, run in zip(names, runs, strict=True)]
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     rows = _summary(runs, baselines)

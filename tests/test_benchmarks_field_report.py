@@ -1,0 +1,42 @@
+"""The field report of the learner benchmark: episodes to each validation target, the best learner, the ceiling."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from field_report import episodes_to, field_summary, write
+
+
+def _run(agent, seed, successes, rate):
+    curve = [{"episodes": 100 * i, "eval_success": s} for i, s in enumerate(successes)]
+    test = np.random.default_rng(seed).uniform(size=20) < rate
+    return {"agent": agent, "seed": seed, "curve": curve,
+            "test": {"success": test.tolist(), "coverage": (0.9 + 0.1 * test).tolist()}}
+
+
+def _document():
+    runs = [_run("good", s, [0.2, 0.6, 0.9, 0.95], 0.9) for s in range(4)]
+    runs += [_run("weak", s, [0.2, 0.3, 0.5, 0.5], 0.4) for s in range(4)]
+    return {"runs": runs, "baselines": {"imitation": {"success": [0.0, 1.0, 0.0, 0.0]}},
+            "settings": {"final_test_seeds": [1, 2], "env_id": "not-a-solved-env"}}
+
+
+def test_episodes_to_a_target_is_the_first_evaluation_that_reaches_it():
+    curve = [{"episodes": 0, "eval_success": 0.1}, {"episodes": 50, "eval_success": 0.8},
+             {"episodes": 100, "eval_success": None}, {"episodes": 150, "eval_success": 0.95}]
+    assert episodes_to(curve, 0.5) == 50 and episodes_to(curve, 0.9) == 150 and episodes_to(curve, 0.99) is None
+
+
+def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_target(tmp_path):
+    summary = write(_document(), tmp_path, "bench", "title")
+    good, weak = summary["agents"]["good"], summary["agents"]["weak"]
+    assert summary["best"] == "good" and summary["ceiling"] is None
+    assert good["episodes_to"]["0.9"] == {"reached": 4, "median": 200.0}
+    assert weak["episodes_to"]["0.9"]["reached"] == 0 and weak["episodes_to"]["0.5"]["median"] == 200.0
+    assert good["test_success"]["estimate"] > weak["test_success"]["estimate"]
+    assert summary["improvement"]["weak"]["estimate"] > 0.5
+    assert summary["imitation_success"] == 0.25
+    assert (tmp_path / "bench_field.json").is_file() and (tmp_path / "bench_field.png").stat().st_size > 10_000
+    assert field_summary(_document())["agents"]["good"]["curve"][-1][0] == 0.95
