@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from rdmp_gym.envs.reward import Smoothness
 from scipy import stats
 
 from rdmp_gym.smoothness import integrated_squared_jerk
@@ -86,11 +87,16 @@ def success(batch: EpisodeBatch) -> np.ndarray:
 
 
 def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] | None = None) -> float:
-    """Integrated squared jerk (m²/s⁵) of the path commanded by ``action [n]`` in the context of ``seed``."""
+    """The task's jerk measure of the path commanded by ``action [n]`` in the context of ``seed``: integrated
+    squared jerk (m²/s⁵), or per integrated squared speed (1/s⁴, size-independent) where the task's smoothness
+    term uses that (``task_version.speed_normalised_jerk``, ``ArmarWipe-v2``)."""
     env.reset(seed=int(seed), options=None if options is None else dict(options))
     base = env.unwrapped
     path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
     dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
+    version = getattr(base, "task_version", None)
+    if version is not None and version.speed_normalised_jerk:
+        return Smoothness.speed_normalised(path, dt)
     return integrated_squared_jerk(path, dt)
 
 
