@@ -13,6 +13,7 @@ from .dmp import DMPStepper, RhythmicDMP, TransientStart
 from .parameters import GROUPS, ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .serialization import load_dmp, save_dmp
+from .sweep import Sweep
 
 __version__ = "0.1.0"
 
@@ -27,6 +28,7 @@ __all__ = [
     "PeriodicDMP",
     "RhythmicDMP",
     "Segmentation",
+    "Sweep",
     "SyntheticTruth",
     "TransientStart",
     "load_dmp",

@@ -33,6 +33,7 @@ from .fitting import (
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .stopping import Ending, StopPlan, plan_stop
+from .sweep import Sweep
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
 
@@ -123,6 +124,18 @@ def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tu
     return anchor + forcing / (alpha_z * alpha_z / 4.0), np.zeros_like(anchor + forcing)
 
 
+def travel_input(sweep: Sweep, tau: np.ndarray, points: np.ndarray | None, omega: float, alpha_z: float
+                 ) -> np.ndarray:
+    """The anchor term that carries the pattern rigidly along ``sweep``: ``[T, d]`` (``[B, T, d]`` for ``points
+    [B, K, d]``) at unit-tempo times ``tau [T]``, ``g + g' / (beta_z Omega) + g'' / (alpha_z beta_z Omega^2)`` with
+    g the sweep's offset and ``Omega`` the unit-tempo angular velocity. With it in place of the anchor, ``y - g(t)``
+    obeys (4) exactly as without the sweep (the spring and damper act relative to the moving anchor), so the
+    pattern travels with no lag; at any tempo, since g' and Omega scale alike."""
+    beta_z = alpha_z / 4.0
+    return (sweep.offsets(tau, points) + sweep.offsets(tau, points, 1) / (beta_z * omega)
+            + sweep.offsets(tau, points, 2) / (alpha_z * beta_z * omega**2))
+
+
 @lru_cache(maxsize=64)
 def _transformation(omega: float, dt: float, alpha_z: float) -> TransformationSystem:
     return TransformationSystem(omega, dt, alpha_z)
@@ -202,11 +215,14 @@ class RhythmicDMP:
         amplitude: ``[d]`` factors that scale the movement about the anchor (forcing term and default
             start); ones by default. A learnable parameter group, like the weights.
         ending: the encoded end of the movement (:mod:`rdmp_gym.stopping`), or ``None``.
+        sweep: the anchor's travel (:class:`~rdmp_gym.sweep.Sweep`, offsets from ``anchor``), or ``None``: the
+            anchor stays where it is.
     """
 
     def __init__(self, canonical: CanonicalSystem, basis: BasisSet, weights: np.ndarray,
                  transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0,
-                 amplitude: np.ndarray | None = None, ending: Ending | None = None) -> None:
+                 amplitude: np.ndarray | None = None, ending: Ending | None = None, sweep: Sweep | None = None
+                 ) -> None:
         self.canonical = canonical
         self.basis = basis
         self.weights = np.ascontiguousarray(as_finite_array(weights, "weights", ndim=2))
@@ -223,9 +239,13 @@ class RhythmicDMP:
             raise ValueError(f"transients: expected {len(basis.transient_sizes)}, got {len(self.transients)}")
         if ending is not None and (not isinstance(ending, Ending) or ending.goal.size != self.anchor.size):
             raise ValueError(f"ending: expected an Ending with a goal of {self.anchor.size} values")
+        if sweep is not None and (not isinstance(sweep, Sweep) or sweep.n_dims != self.anchor.size):
+            raise ValueError(f"sweep: expected a Sweep with via points of {self.anchor.size} values")
         self.ending = ending
+        self.sweep = sweep
         self.layout = ParameterLayout(self.n_dims, basis.n_periodic, basis.transient_sizes,
-                                      0 if ending is None else ending.weights.size)
+                                      0 if ending is None else ending.weights.size,
+                                      0 if sweep is None else sweep.points.size)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -459,14 +479,15 @@ class RhythmicDMP:
     def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
                   amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
                   transform: np.ndarray | None, blend_length: np.ndarray | None = None,
-                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None, velocity: bool = True
-                  ) -> tuple[np.ndarray, np.ndarray | None]:
+                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None, velocity: bool = True,
+                  sweeps: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
         anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]`` (``None`` for the
         velocities unless ``velocity``). The forcing term is multiplied by ``M diag(amplitude)``. With
         ``blend_length [B]`` (s) the start is blended (``start_blend``): the result is the settled motion plus a
         quintic offset ``e(t)`` that starts at ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length``
-        on. A ``stop`` (with ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``."""
+        on. A ``stop`` (with ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``. ``sweeps
+        [B, K, d]``: via points of the anchor's travel along ``self.sweep``'s timing."""
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -482,9 +503,14 @@ class RhythmicDMP:
             y_settled, yd_settled = self._settled(canonical, weights, inits, anchors, amplitudes, transform)
             path = _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled, omega, self.alpha_z)
             path += anchors[:, None, :]
+        travel = 0.0 if sweeps is None else travel_input(self.sweep, elapsed * tempo, sweeps, self.canonical.omega,
+                                                         self.alpha_z)                            # [B, T, d]
+        if sweeps is not None:
+            path = path + travel if path.ndim == 3 else travel + anchors[:, None, :]
         if stop is not None:        # the anchor blends to the goal (after the start blend has ended)
             blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[None, :, None]
-            path = (path if path.ndim == 3 else path[:, None, :]) + blend * (stop.goal - anchors)[:, None, :]
+            path = (path if path.ndim == 3 else path[:, None, :]) + blend * (
+                (stop.goal - anchors)[:, None, :] - travel)
         system = _transformation(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
             u = system.input(path, forcing, out=forcing, scratch=path is not anchors)   # a blended path is ours
@@ -576,7 +602,8 @@ class RhythmicDMP:
         stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
         y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
                                self._blend_lengths(k, tempo, start_blend), stop,
-                               None if stop is None else self.ending.weights[None], return_velocity)
+                               None if stop is None else self.ending.weights[None], return_velocity,
+                               None if self.sweep is None else self.sweep.points[None])
         return (y[0], yd[0]) if return_velocity else y[0]
 
     def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, start: TransientStart,
@@ -604,7 +631,12 @@ class RhythmicDMP:
     def with_ending(self, ending: Ending | None) -> RhythmicDMP:
         """A copy of this DMP with another end of the movement (``None`` removes it)."""
         return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
-                           self.amplitude, ending)
+                           self.amplitude, ending, self.sweep)
+
+    def with_sweep(self, sweep: Sweep | None) -> RhythmicDMP:
+        """A copy of this DMP whose anchor travels along ``sweep`` (``None``: the anchor stays in place)."""
+        return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
+                           self.amplitude, self.ending, sweep)
 
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
                       transient: int | str = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
@@ -628,7 +660,7 @@ class RhythmicDMP:
         if thetas.shape[0] == 0:
             raise ValueError("thetas: expected at least one parameter vector (B >= 1), got shape "
                              f"{thetas.shape}")
-        weights, inits, anchors, amplitudes, stop_weights = self._decode(thetas, groups)
+        weights, inits, anchors, amplitudes, sweeps, stop_weights = self._decode(thetas, groups)
         batch = thetas.shape[0]
         if anchor is not None:
             if "anchor" in self.layout.resolve(groups):
@@ -641,7 +673,7 @@ class RhythmicDMP:
         if stop_at is None:
             self._stop_plan(None, exit_phase, goal, self.transients[0], tempo, anchors, amplitudes)
             return self._simulate(t, weights, inits, anchors, amplitudes, y0, yd0, tempo, None,
-                                  self._blend_lengths(k, tempo, start_blend), velocity=False)[0]
+                                  self._blend_lengths(k, tempo, start_blend), velocity=False, sweeps=sweeps)[0]
         result = np.empty((batch, check_time_grid(t, "t").size, self.n_dims))
         for index in np.unique(k):      # the exit time follows each transient's own phase
             rows = np.flatnonzero(k == index)
@@ -650,7 +682,8 @@ class RhythmicDMP:
                 amplitudes[rows])
             result[rows] = self._simulate(t, weights[rows], inits[rows], anchors[rows], amplitudes[rows], y0[rows],
                                           yd0[rows], tempo, None, self._blend_lengths(k[rows], tempo, start_blend),
-                                          stop, stop_weights[rows], velocity=False)[0]
+                                          stop, stop_weights[rows], velocity=False,
+                                          sweeps=None if sweeps is None else sweeps[rows])[0]
         return result
 
     def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,
@@ -698,6 +731,8 @@ class RhythmicDMP:
                 parts.append(self.anchor.copy())
             elif name == "stop":
                 parts.append(self.ending.weights.ravel())
+            elif name == "sweep":
+                parts.append(self.sweep.points.ravel())
             else:
                 parts.append(self.amplitude.copy())
         return np.concatenate(parts)
@@ -706,10 +741,11 @@ class RhythmicDMP:
         offset = self.basis.n_periodic + sum(self.basis.transient_sizes[:k])
         return slice(offset, offset + self.basis.transient_sizes[k])
 
-    def _decode(self, thetas: np.ndarray, groups: GroupSelection
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    def _decode(self, thetas: np.ndarray, groups: GroupSelection) -> tuple[
+            np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
         """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors and
-        amplitudes ``[B, d]``, stop weights ``[B, d, S]`` (``None`` without an ending)."""
+        amplitudes ``[B, d]``, the sweep's via points ``[B, V, d]`` (``None`` without a sweep), stop weights
+        ``[B, d, S]`` (``None`` without an ending)."""
         slices = self.layout.slices(groups)
         expected = self.layout.size(groups)
         if thetas.shape[-1] != expected:
@@ -721,6 +757,7 @@ class RhythmicDMP:
         anchors = np.repeat(self.anchor[None], batch, axis=0)
         amplitudes = np.repeat(self.amplitude[None], batch, axis=0)
         stop_weights = None if self.ending is None else np.repeat(self.ending.weights[None], batch, axis=0)
+        sweeps = None if self.sweep is None else np.repeat(self.sweep.points[None], batch, axis=0)
         for name, part in slices.items():
             values = thetas[:, part]
             if name == "periodic":
@@ -735,19 +772,22 @@ class RhythmicDMP:
                 anchors = values.copy()
             elif name == "stop":
                 stop_weights = values.reshape(batch, self.n_dims, -1)
+            elif name == "sweep":
+                sweeps = values.reshape(batch, -1, self.n_dims)
             else:
                 amplitudes = values.copy()
-        return weights, inits, anchors, amplitudes, stop_weights
+        return weights, inits, anchors, amplitudes, sweeps, stop_weights
 
     def with_params(self, theta: np.ndarray, groups: GroupSelection = None) -> RhythmicDMP:
         """A new DMP whose selected groups are replaced by ``theta [P]``."""
         theta = as_finite_array(theta, "theta", ndim=1)
-        weights, inits, anchors, amplitudes, stop_weights = self._decode(theta[None], groups)
+        weights, inits, anchors, amplitudes, sweeps, stop_weights = self._decode(theta[None], groups)
         transients = [replace(start, phi0=float(phi0), r0=float(r0))
                       for start, (phi0, r0) in zip(self.transients, inits[0], strict=True)]
         ending = None if self.ending is None else self.ending.with_weights(stop_weights[0])
+        sweep = None if self.sweep is None else self.sweep.with_points(sweeps[0])
         return RhythmicDMP(self.canonical, self.basis, weights[0], transients, anchors[0], self.alpha_z,
-                           amplitudes[0], ending)
+                           amplitudes[0], ending, sweep)
 
     def param_time_weights(self, t: np.ndarray, groups: GroupSelection = None, transient: int = 0,
                            stop_at: float | None = None) -> np.ndarray:
@@ -755,8 +795,8 @@ class RhythmicDMP:
 
         A weight's entry is its basis function's normalised activation along the path of transient
         ``transient`` (with the stop requested at ``stop_at``, if given); the initial condition of that transient,
-        the anchor and the amplitude act throughout (1); another transient's initial condition does not act (0),
-        nor do the stop weights without a stop.
+        the anchor, the amplitude and the sweep act throughout (1); another transient's initial condition does not
+        act (0), nor do the stop weights without a stop.
         """
         k = self._check_transient(transient)
         start = self.transients[k]
@@ -842,7 +882,9 @@ class DMPStepper:
             start = self.dmp.transients[self.transient]
             times = (index * self.BLOCK + np.arange(self.BLOCK)) * self.dt
             phi, r = self.canonical.state(times, start.phi0, start.r0)
-            anchor = self.anchor
+            travel = 0.0 if self.dmp.sweep is None else travel_input(
+                self.dmp.sweep, times * self.canonical.tempo, None, self.dmp.canonical.omega, self.dmp.alpha_z)
+            anchor = self.anchor + travel
             if self.start_offsets is not None:
                 anchor = anchor + _blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
                                                self.start_offsets[1][None], self.omega, self.dmp.alpha_z)[0]
@@ -852,7 +894,8 @@ class DMPStepper:
                 tau = (times - self.stop.exit_time) * self.canonical.tempo
                 forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, self.dmp.weights,
                                                   self.dmp.ending.weights)
-                anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - self.anchor)
+                away = self.stop.goal[0] - self.anchor - travel
+                anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * away
             self._block = self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing
             self._block_index = index
         return self._block[offset]

@@ -2,7 +2,8 @@
 
 Groups, in this order: ``periodic`` (``[d, N]`` weights), ``transient:k`` (``[d, M_k]`` weights of
 transient k), ``initial:k`` (``(phi0, r0)`` of transient k), ``anchor`` (``[d]``) and ``amplitude``
-(``[d]`` factors that scale the movement about the anchor, 1 = as demonstrated), and, for a DMP that
+(``[d]`` factors that scale the movement about the anchor, 1 = as demonstrated), for a DMP whose anchor
+travels, ``sweep`` (``[K, d]`` via points of the anchor's path, :mod:`rdmp_gym.sweep`), and, for a DMP that
 encodes the end of the movement, ``stop`` (``[d, S]`` stop weights, :mod:`rdmp_gym.stopping`). The short
 names ``transient`` and ``initial`` select every transient's group.
 """
@@ -13,7 +14,7 @@ from collections.abc import Iterable, Sequence
 
 __all__ = ["GROUPS", "ParameterLayout"]
 
-GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude", "stop")
+GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude", "sweep", "stop")
 
 
 class ParameterLayout:
@@ -24,14 +25,18 @@ class ParameterLayout:
         n_periodic: periodic basis functions N.
         transient_sizes: transient basis functions per transient ``(M_1, ..., M_K)``.
         stop_size: number of stop weights ``d * S`` (0: no ``stop`` group).
+        sweep_size: number of via-point coordinates ``K * d`` of the anchor's path (0: no ``sweep`` group).
     """
 
-    def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int], stop_size: int = 0) -> None:
+    def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int], stop_size: int = 0,
+                 sweep_size: int = 0) -> None:
         self.sizes: dict[str, int] = {"periodic": n_dims * n_periodic}
         self.sizes.update({f"transient:{k}": n_dims * m for k, m in enumerate(transient_sizes)})
         self.sizes.update({f"initial:{k}": 2 for k in range(len(transient_sizes))})
         self.sizes["anchor"] = n_dims
         self.sizes["amplitude"] = n_dims
+        if sweep_size:
+            self.sizes["sweep"] = int(sweep_size)
         if stop_size:
             self.sizes["stop"] = int(stop_size)
         self.n_transients = len(transient_sizes)

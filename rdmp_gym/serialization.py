@@ -13,6 +13,8 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
 * ``transients``: K objects ``{phi0, r0, length, entrance_phase, start [d], start_velocity [d]}``
 * ``stop`` (optional, absent for a DMP without an end of the movement): ``{exit_phase, length, blend_start,
   goal [d], centres [S, 2], widths [S], weights [d, S], fading {nu1, nu2, k, delta}}``
+* ``sweep`` (optional, absent for a DMP whose anchor stays in place): ``{times [K + 1], points [K, d]}``
+  (:class:`~rdmp_gym.sweep.Sweep`)
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from .basis import NORMALISATION_EPSILON, BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
 from .stopping import Ending, StopFading
+from .sweep import Sweep
 
 __all__ = ["FORMAT", "VERSION", "dmp_from_dict", "dmp_to_dict", "load_dmp", "save_dmp"]
 
@@ -60,6 +63,8 @@ def dmp_to_dict(dmp: RhythmicDMP) -> dict:
     }
     if dmp.ending is not None:
         data["stop"] = dmp.ending.to_dict()
+    if dmp.sweep is not None:
+        data["sweep"] = dmp.sweep.to_dict()
     return data
 
 
@@ -136,7 +141,7 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
         raise ValueError(f"dmp.version: unsupported format version {data.get('version')!r}; this library reads "
                          f"{VERSION}")
     top.only(("format", "version", "canonical", "transformation", "anchor", "amplitude", "basis", "weights",
-              "transients", "stop"))
+              "transients", "stop", "sweep"))
     canonical = _Reader(top.field("canonical"), "dmp.canonical")
     canonical.only(tuple(f.name for f in fields(CanonicalSystem)))
     defaults = {f.name: f.default for f in fields(CanonicalSystem) if f.name != "period"}
@@ -194,7 +199,20 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
                                          entry.number("length", positive=True), entry.number("entrance_phase"),
                                          entry.array("start", (d,)), entry.array("start_velocity", (d,))))
     ending = _read_stop(top.field("stop"), d) if "stop" in data else None
-    return RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude, ending)
+    sweep = _read_sweep(top.field("sweep"), d) if "sweep" in data else None
+    return RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude, ending, sweep)
+
+
+def _read_sweep(value: object, d: int) -> Sweep:
+    """The anchor's travel from its plain form; errors name the field ``dmp.sweep...``."""
+    entry = _Reader(value, "dmp.sweep")
+    entry.only(("times", "points"))
+    times = entry.array("times", (None,))
+    points = entry.array("points", (max(times.size - 1, 0), d))
+    try:
+        return Sweep(times, points)
+    except ValueError as error:
+        raise ValueError(f"dmp.sweep.{error}") from error
 
 
 def _read_stop(value: object, d: int) -> Ending:
