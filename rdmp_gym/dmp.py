@@ -46,6 +46,8 @@ TEMPO_RANGE = (1e-6, 1e6)
 
 GroupSelection = str | Iterable[str] | None
 _MIN_TRANSIENT = 0.05  # shortest transient that fit() encodes, as a fraction of the period
+HANDOVERS = ("after", "before")
+"""Where :meth:`RhythmicDMP.fit` puts the fade between the transient and the periodic family (``handover``)."""
 
 
 @dataclass(frozen=True)
@@ -76,10 +78,14 @@ SMOOTHNESS_REFERENCE = 40
 
 PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
                   "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25),
-                  "turn_height": 1e-3}
+                  "turn_height": 1e-3, "handover": "before"}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
-(LWR (11), a stiff spring, narrow basis functions, the bare mixture (5)); roll out with
-``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
+(LWR (11), a stiff spring, narrow basis functions, the bare mixture (5), the families' fade before T); roll out
+with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
+
+EARLIER_HANDOVER = {"handover": "before", "floor": 1e-2}
+"""Keywords of :meth:`RhythmicDMP.fit` that give the hand-over of the earlier defaults: the two families fade
+over the last ``t_f`` before T (the paper's placement), with the earlier floor of the mixture (5)."""
 
 
 def start_blend_profiles(elapsed: np.ndarray, length: float) -> np.ndarray:
@@ -275,7 +281,8 @@ class RhythmicDMP:
             delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
             smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.3,
             floor: float = SMOOTH_FLOOR, substeps: int = 4,
-            fading_fractions: tuple[float, float] = (0.5, 0.25), turn_height: float = 0.3) -> RhythmicDMP:
+            fading_fractions: tuple[float, float] = (0.5, 0.25), turn_height: float = 0.3,
+            handover: str = "after") -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         Args:
@@ -325,6 +332,8 @@ class RhythmicDMP:
         check_positive(alpha_z, "alpha_z")
         if method not in FIT_METHODS:
             raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
+        if handover not in HANDOVERS:
+            raise ValueError(f"handover: expected one of {HANDOVERS}, got {handover!r}")
         n_periodic = check_count(n_periodic, "n_periodic", 2)
         sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
                  else [check_count(m, "n_transient", 1) for m in n_transient])
@@ -357,10 +366,12 @@ class RhythmicDMP:
             raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
         fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
 
-        inits = [canonical.init_T(length, phase, mu1) for length, phase in zip(lengths, entrance, strict=True)]
-        paths = [transient_basis_along_path(canonical, phi0, r0, length - 0.5 * t_f, m,
-                                            transient_overlap, turn_height)
-                 for (phi0, r0), length, m in zip(inits, lengths, sizes, strict=True)]
+        late = t_f if handover == "after" else 0.0         # the canonical state reaches mu1 at T + late
+        inits = [canonical.init_T(length + late, phase + canonical.omega * late, mu1)
+                 for length, phase in zip(lengths, entrance, strict=True)]
+        spans = [length + late - 0.5 * t_f for length in lengths]        # the centres of the transient functions
+        paths = [transient_basis_along_path(canonical, phi0, r0, span, m, transient_overlap, turn_height)
+                 for (phi0, r0), span, m in zip(inits, spans, sizes, strict=True)]
         basis = BasisSet(
             periodic_centres=2.0 * np.pi * np.arange(n_periodic) / n_periodic,
             periodic_widths=np.full(n_periodic, periodic_width(n_periodic, periodic_overlap)),
@@ -368,8 +379,7 @@ class RhythmicDMP:
             transient_widths=np.concatenate([widths for _, widths in paths]),
             transient_sizes=tuple(sizes), fading=fading)
 
-        spacings = [common_period / n_periodic] + [(length - 0.5 * t_f) / max(m - 1, 1)
-                                                   for length, m in zip(lengths, sizes, strict=True)]
+        spacings = [common_period / n_periodic] + [span / max(m - 1, 1) for span, m in zip(spans, sizes, strict=True)]
         differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes), spacings,
                                          common_period / SMOOTHNESS_REFERENCE)
         responses, start_columns, samples = _trajectory_design(canonical, basis, demos, inits, lengths, anchor,

@@ -23,8 +23,9 @@ from numpy.polynomial import Polynomial
 from .demonstrations import Demonstration, SyntheticTruth
 from .validation import as_finite_array, check_positive, check_time_grid
 
-__all__ = ["JOINS", "SmoothTestSignal", "finite_derivatives", "integrated_squared_jerk", "motion_metrics",
-           "random_test_signal", "worst_window_error"]
+__all__ = ["JOINS", "SmoothTestSignal", "draw_test_demonstrations", "finite_derivatives", "integrated_squared_jerk",
+           "motion_metrics", "off_path_peak_ratio", "off_path_starts", "peak_acceleration", "random_test_signal",
+           "worst_window_error"]
 
 # C4 blend: 0 -> 1 on [0, 1] with derivatives 1..4 zero at both ends (the minimum-snap profile).
 _BLEND = Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
@@ -101,6 +102,31 @@ def worst_window_error(Ydd: np.ndarray, acceleration: np.ndarray, dt: float, win
     scale = float(np.sqrt(np.mean(np.sum(acceleration**2, axis=1))))
     worst = int(np.argmax(windowed))
     return float(windowed[worst] / scale), worst * dt
+
+
+def peak_acceleration(Y: np.ndarray, dt: float) -> np.ndarray:
+    """Largest acceleration norm (second differences) of paths ``Y [..., T, d]`` on an even grid, ``[...]``."""
+    return np.max(np.linalg.norm(np.diff(Y, 2, axis=-2), axis=-1), axis=-1) / dt**2
+
+
+def off_path_starts(dmp) -> np.ndarray:
+    """Canonical initial conditions ``[S, 2]`` (``phi0, r0``) off a fitted DMP's encoded paths: ``phi0`` at 8 phases
+    round the circle times ``r0`` at 4 radii from ``mu`` to 3x the largest encoded ``r0``, and midway between
+    neighbouring encoded initial conditions (when the DMP has several transients)."""
+    encoded = np.array([[start.phi0, start.r0] for start in dmp.transients])
+    grid = [(phi0, r0) for phi0 in np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+            for r0 in np.linspace(dmp.canonical.mu, 3.0 * encoded[:, 1].max(), 4)]
+    if len(encoded) > 1:
+        grid += [0.5 * (encoded[k] + encoded[(k + 1) % len(encoded)]) for k in range(len(encoded))]
+    return np.array(grid)
+
+
+def off_path_peak_ratio(dmp, demo_peak: float, duration: float = 6.0, dt: float = 1e-3) -> float:
+    """The largest peak acceleration of rollouts of transient 0 from :func:`off_path_starts` (smooth start from the
+    demonstrated start) over ``duration`` seconds, relative to ``demo_peak`` (m/s^2, the demonstration's)."""
+    t = np.arange(0.0, duration, dt)
+    paths = dmp.rollout_batch(off_path_starts(dmp), t, groups=("initial:0",), transient=0)
+    return float(peak_acceleration(paths, dt).max() / check_positive(demo_peak, "demo_peak"))
 
 
 @dataclass(frozen=True)
@@ -217,3 +243,16 @@ def random_test_signal(rng: np.random.Generator, period: float | None = None, ha
     start = np.array([distance * np.cos(angle), distance * np.sin(angle), rng.uniform(0.05, 0.12)])
     detour = rng.normal(0.0, 0.04, (2, 3)) * np.array([1.0, 1.0, 0.5]) * float(bump)
     return SmoothTestSignal(period, length, np.zeros(3), cos_coefficients, sin_coefficients, start, detour, join)
+
+
+def draw_test_demonstrations(rng: np.random.Generator, n: int, join: str = "blend"
+                             ) -> list[tuple[SmoothTestSignal, Demonstration]]:
+    """``n`` random signals (:func:`random_test_signal`) drawn in sequence from ``rng``, each with its noisy
+    demonstration: 100 Hz over the transient plus ``max(6 periods, 5 s)``, white noise of 0.3-0.5 mm. Under
+    ``join="quintic"`` every second signal (odd indices) has the bump in the approach, the others none."""
+    drawn = []
+    for index in range(n):
+        signal = random_test_signal(rng, join=join, bump=join == "blend" or index % 2 == 1)
+        duration = signal.transient_length + max(6 * signal.period, 5.0)
+        drawn.append((signal, signal.demonstration(duration, noise=rng.uniform(3e-4, 5e-4), rng=rng)))
+    return drawn
