@@ -5,11 +5,12 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 # .ci/constraints-cpu.txt pins torch to the small CPU build (the agents extra only bounds torch).
-PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray]"
+PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray,docs]"
 export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
+export NO_MKDOCS_2_WARNING ?= 1
 
-.PHONY: install run test wheel-check lint bench clean
+.PHONY: install run test docs wheel-check lint bench clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -29,9 +30,15 @@ RUN_FLAGS ?=
 run: install
 	$(BIN)/rdmp-gym main --out $(RUN_OUT) $(RUN_FLAGS) $$(test -f $(RUN_OUT)/train/config.json && echo --resume)
 
+# The docs build is strict: a broken link, a missing figure or a renamed function in the API reference fails it.
 test: install
 	$(BIN)/ruff check .
+	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
 	$(BIN)/python -m pytest -q
+
+# The documentation site (MkDocs + mkdocstrings) into site/; open site/index.html.
+docs: install
+	$(BIN)/mkdocs build --strict --site-dir site
 
 # The packaging check of CI: build the wheel, install it (not editable) in a fresh venv, use it.
 wheel-check:
@@ -47,4 +54,4 @@ bench: install
 	$(BIN)/python benchmarks/bench_memory.py $(BENCH_FLAGS)
 
 clean:
-	rm -rf $(VENV) runs figures
+	rm -rf $(VENV) runs figures site build

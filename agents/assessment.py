@@ -19,8 +19,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .evaluation import Evaluator
-from .learners import CONTEXTUAL
-from .learners.contextual import policy_from_state
+from .learners import CONTEXTUAL, policy_from_state
 from .options import check_choice
 from .plots import plot_policy_comparison
 from .protocol import PolicyScores, context_observations, evaluate_actions, final_test_seeds, interval, path_jerk

@@ -1,4 +1,4 @@
-"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the README's main job).
+"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the job of ``make run``).
 
 Examples::
 
@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from rdmp_gym import __version__
+from rdmp_gym import __version__, save_dmp
 
 from . import EXTRA_MODULES
 from .errors import WorkerError
@@ -267,20 +267,60 @@ def _command_evaluate(args: argparse.Namespace) -> None:
 
 def _command_fit(args: argparse.Namespace) -> None:
     from .imitation import fit_dmp, load_demonstration
-    from .plots import plot_fit
 
-    demo = load_demonstration(args.demo if args.demo else args.style, time_column=args.time_column, rate=args.rate)
-    dmp = fit_dmp(demo, args.n_periodic, args.n_transient, args.method)
     out = Path(args.out)
+    if not args.demo:
+        demo = load_demonstration(args.style)
+        dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
+        out.mkdir(parents=True, exist_ok=True)
+        save_dmp(dmp, out / "dmp.json")
+        reproduction = dmp.rollout(demo.t)
+        rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
+        print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
+        if args.plot:
+            from .plots import plot_fit
+
+            plot_fit(demo.t - demo.t[0], demo.Y, reproduction, out / "fit.png",
+                     title=f"{demo.name}: demonstration vs DMP")
+            print(f"wrote {out / 'fit.png'}")
+        return
+    _fit_whole_recording(args, out)
+
+
+def _fit_whole_recording(args: argparse.Namespace, out: Path) -> None:
+    """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP."""
+    from rdmp_gym import Demonstration
+    from rdmp_gym.recording_fit import fit_recording, recording_report
+    from rdmp_gym.recordings import despike
+
+    from .imitation import load_demonstration
+
+    loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
+    demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
+    result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
+                           n_periodic=args.n_periodic, method=args.method,
+                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
     out.mkdir(parents=True, exist_ok=True)
-    dmp.save(out / "dmp.json")
-    reproduction = dmp.rollout(demo.t)
-    rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
-    print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
+    save_dmp(result.dmp, out / "dmp.json")
+    seg, report = result.segmentation, recording_report(demo, result)
+    rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
+    print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")
+    rest_error = "-" if report["rest_error"] is None else f"{1000 * report['rest_error']:.2f} mm"
+    print(f"cycle error {1000 * report['cycle_error']:.2f} mm vs cycle-to-cycle variation "
+          f"{1000 * report['cycle_variation']:.2f} mm (x{report['error_ratio']:.2f}); start error "
+          f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
+          f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
+          f"recording, x{report['acceleration_ratio']:.2f})")
+    (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
+                                                 "rhythm_end": seg.rhythm_end, "rest_time": seg.rest_time,
+                                                 "stop_at": result.stop_at, **report}, indent=2) + "\n")
+    print(f"wrote {out / 'dmp.json'} and {out / 'report.json'}")
     if args.plot:
-        figure = out / "fit.png"
-        plot_fit(demo.t - demo.t[0], demo.Y, reproduction, figure, title=f"{demo.name}: demonstration vs DMP")
-        print(f"wrote {figure}")
+        from .plots import plot_recording_fit
+
+        plot_recording_fit(demo.t - demo.t[0], demo.Y, result.reproduce, out / "fit.png",
+                           title=f"{demo.name}: recording vs DMP")
+        print(f"wrote {out / 'fit.png'}")
 
 
 def _interval_text(summary: dict[str, Any], metric: str) -> str:
@@ -387,18 +427,30 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     commands = parser.add_subparsers(dest="command", required=True)
 
-    fit = commands.add_parser("fit", help="fit the rhythmic DMP to a demonstration (core install)",
+    fit = commands.add_parser("fit", help="fit the rhythmic DMP to a whole recording: rest, approach, rhythm, "
+                              "departure, rest (core install)",
                               formatter_class=_HelpFormatter)
     fit.add_argument("--style", type=int, default=1, help="built-in demonstration style 1-4")
     fit.add_argument("--demo", default="", help="a CSV/NPZ demonstration instead of --style (default: none)")
     fit.add_argument("--time-column", default="t", help="name of the CSV's time column (seconds)")
     fit.add_argument("--rate", type=float, default=None,
-                     help="resample the demonstration onto an even grid at this rate in Hz, for uneven time "
-                     "stamps (default: keep the samples, which must be evenly spaced)")
+                     help="resample --demo onto an even grid at this rate in Hz; uneven time stamps are always "
+                     "resampled, outliers removed first (default: 100 Hz)")
     fit.add_argument("--n-periodic", type=int, default=40, help="periodic basis functions")
-    fit.add_argument("--n-transient", type=int, default=40, help="transient basis functions")
-    fit.add_argument("--method", choices=("ridge", "lwr"), default="ridge", help="regression")
-    fit.add_argument("--plot", action="store_true", help="write fit.png (demonstration vs reproduction)")
+    fit.add_argument("--n-transient", type=int, default=None,
+                     help="transient basis functions (default: 40 for --style, 20 for the entry into the rhythm of a "
+                     "whole --demo recording)")
+    fit.add_argument("--method", choices=("trajectory", "ridge", "lwr"), default="trajectory",
+                     help="regression (trajectory: the rollout itself matches the samples)")
+    fit.add_argument("--period", type=float, default=None, help="the rhythm's period in s (default: detected)")
+    fit.add_argument("--start", type=float, default=None,
+                     help="time (s from the first sample) from which the rhythm runs at full size (default: detected)")
+    fit.add_argument("--end", type=float, default=None, help="time (s) at which the rhythm ends (default: detected)")
+    fit.add_argument("--ending", action=argparse.BooleanOptionalAction, default=None,
+                     help="fit the departure and the final rest as the DMP's stop (default: where the recording "
+                     "ends at rest)")
+    fit.add_argument("--plot", action="store_true",
+                     help="write fit.png (recording vs reproduction: position and acceleration)")
     fit.add_argument("--out", default="runs/fit", help="output directory")
     fit.set_defaults(handler=_command_fit)
 

@@ -28,12 +28,11 @@ from concurrent.futures.process import BrokenProcessPool
 from types import TracebackType
 from typing import Any, Protocol
 
-import gymnasium as gym
 import numpy as np
 
 from .errors import WorkerError
 from .learners.base import EpisodeBatch
-from .tasks import TaskSpec, episode_metrics
+from .tasks import TaskSpec, run_episode
 
 __all__ = ["BACKENDS", "WATCHDOG_PERIOD", "Evaluator", "WorkerError", "run_episode"]
 
@@ -44,14 +43,6 @@ WATCHDOG_PERIOD = 0.25
 """Seconds between a local worker's checks that the process that started it is alive."""
 
 _WORKER: dict[str, Any] = {}
-
-
-def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None
-                ) -> dict[str, Any]:
-    """One episode: reset with ``seed``, execute ``action [n]``; see :func:`episode_metrics`."""
-    env.reset(seed=int(seed), options=options)
-    _, reward, _, _, info = env.step(np.asarray(action, dtype=np.float32))
-    return episode_metrics(reward, info)
 
 
 def _watch_parent(parent: int) -> None:

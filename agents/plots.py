@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison"]
+__all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison", "plot_recording_fit"]
 
 
 def _column(records: Sequence[dict[str, Any]], key: str) -> np.ndarray:
@@ -62,6 +62,38 @@ def plot_fit(t: np.ndarray, demo: np.ndarray, reproduction: np.ndarray, path: st
     axes[0].legend(fontsize=8)
     rms = float(np.sqrt(np.mean(np.sum((demo - reproduction) ** 2, axis=1))))
     figure.suptitle(f"{title}  (RMS error {1000 * rms:.2f} mm)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+def plot_recording_fit(t: np.ndarray, recording: np.ndarray, reproduce, path: str | Path, title: str = "",
+                       labels: Sequence[str] = ("x", "y", "z")) -> None:
+    """A recording ``[L, d]`` at even times ``t [L]`` (from 0) against a reproduction (``reproduce(times) -> [T, d]``):
+    positions per dimension, and the acceleration's norm (the recording's Savitzky-Golay-smoothed over 0.15 s,
+    the reproduction's from a 1 kHz rollout)."""
+    from rdmp_gym.fitting import smooth_derivatives
+
+    dt = float(t[1] - t[0])
+    reproduction = reproduce(t)
+    fine = np.arange(0.0, t[-1], 1e-3)
+    acceleration = np.linalg.norm(np.diff(reproduce(fine), 2, axis=0), axis=1) / 1e-6
+    recorded = np.linalg.norm(smooth_derivatives(recording, dt, 0.15)[2], axis=1)
+    d = recording.shape[1]
+    figure, axes = plt.subplots(d + 1, 1, figsize=(11, 2.0 * (d + 1)), sharex=True)
+    for i in range(d):
+        axes[i].plot(t, recording[:, i], color="0.6", lw=2.5, label="recording")
+        axes[i].plot(t, reproduction[:, i], color="C3", lw=1.0, label="DMP")
+        axes[i].set_ylabel(f"{labels[i] if i < len(labels) else i} (m)")
+        axes[i].grid(alpha=0.3)
+    axes[-1].plot(t, recorded, color="0.6", lw=1.5, label="recording (smoothed)")
+    axes[-1].plot(fine[1:-1], acceleration, color="C3", lw=1.0, label="DMP")
+    axes[-1].set_ylabel("|acceleration| (m/s²)")
+    axes[-1].set_xlabel("t (s)")
+    axes[-1].grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[-1].legend(fontsize=8)
+    figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .tasks import TaskSpec
+from .tasks import TaskSpec, run_episode
 
 __all__ = ["EnvActor", "RayPool", "import_ray"]
 
@@ -39,9 +39,7 @@ class EnvActor:
         self.options = spec.options
 
     def episode(self, action: np.ndarray, seed: int) -> dict[str, Any]:
-        """One episode (see :func:`rdmp_gym.agents.evaluation.run_episode`)."""
-        from .evaluation import run_episode
-
+        """One episode (see :func:`rdmp_gym.agents.tasks.run_episode`)."""
         return run_episode(self.env, action, seed, self.options())
 
     def ping(self) -> int:
@@ -90,7 +88,7 @@ class RayPool:
         """Ordered results of one episode per ``(action [n], seed)``."""
         from ray.exceptions import RayActorError
 
-        from .evaluation import WorkerError
+        from .errors import WorkerError
 
         ray = import_ray()
         jobs = list(zip(actions, seeds, strict=True))

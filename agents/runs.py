@@ -13,7 +13,7 @@ Layout::
     checkpoint-<U>-*.zip   its SB3 models (PPO), read weights-only
     best_params.npy        [n] action of the best policy so far
     best_params.json       that action, its DMP parameters and its evaluation
-    dmp.json               the best policy's refined DMP (core format: gym.make(env_id, dmp=...), RhythmicDMP.load)
+    dmp.json               the best policy's refined DMP (core format: gym.make(env_id, dmp=...), rdmp_gym.load_dmp)
     learning_curve.png
     .lock                  held by the process that writes the run
 

@@ -11,18 +11,23 @@ import numpy as np
 
 from .imitation import load_demonstration
 
-__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "ResetOptions", "TaskSpec", "episode_metrics", "task_options"]
+__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec", "episode_metrics",
+           "run_episode", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
+#: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
+WIPE_V2_ID = "rdmp_gym/ArmarWipe-v2"
 
 #: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
 #: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
-#: validation contexts only (README, "Learning to wipe"): the context sets the pattern's amplitudes and the
+#: validation contexts only (see the docs' agents page): the context sets the pattern's amplitudes and the
 #: approach's lift (the rows of K), from the patch size and the cup's presence; every other weight is one
 #: shared refinement; the approach is explored over its whole range (only a lift near its full 6 cm clears
 #: the cup, so a small step never shows its worth).
 CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
     WIPE_ID: {"gain_groups": "amplitude,approach", "features": "patch_size,obstacle", "sigma_factors": "approach=3"},
+    WIPE_V2_ID: {"gain_groups": "amplitude,approach,sweep_x,sweep_y", "features": "patch_size,obstacle",
+                 "sigma_factors": "approach=3"},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
@@ -109,3 +114,11 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
             "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
             "valid": bool(info.get("valid", True)),
             "success": None if "is_success" not in info else bool(info["is_success"])}
+
+
+def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None
+                ) -> dict[str, Any]:
+    """One episode: reset with ``seed``, execute ``action [n]``; see :func:`episode_metrics`."""
+    env.reset(seed=int(seed), options=options)
+    _, reward, _, _, info = env.step(np.asarray(action, dtype=np.float32))
+    return episode_metrics(reward, info)

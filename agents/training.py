@@ -29,6 +29,8 @@ from typing import Any, Protocol
 import numpy as np
 from tqdm.auto import tqdm
 
+from rdmp_gym import save_dmp
+
 from .evaluation import Evaluator
 from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
 from .options import check_choice, check_range, from_options, to_options
@@ -250,7 +252,7 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     space = None
-    if config.agent in CONTEXTUAL:
+    if config.agent in CONTEXTUAL or float(config.options.get("length", 0.0)) > 0:
         seeds = streams["features"].integers(TRAIN_SEED_LIMIT, size=_FEATURE_CONTEXTS)
         space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, seeds, config.task.options()))
     learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights,
@@ -474,9 +476,9 @@ def _invalid_reasons(evaluator: Evaluator, config: TrainConfig, batch: EpisodeBa
 
 def _save_refined_dmp(env: Any, params: np.ndarray, path: Path) -> None:
     """Write the env's DMP with the refined ``params [P]`` (its action groups) as ``dmp.json`` (core format),
-    for ``gym.make(env_id, dmp=path)`` or ``RhythmicDMP.load``; envs without a DMP write nothing."""
+    for ``gym.make(env_id, dmp=path)`` or ``rdmp_gym.load_dmp``; envs without a DMP write nothing."""
     if hasattr(env, "dmp") and hasattr(env, "groups"):
-        env.dmp.with_params(params, env.groups).save(path)
+        save_dmp(env.dmp.with_params(params, env.groups), path)
 
 
 def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,

@@ -1,5 +1,5 @@
 """Benchmark of rdmp_gym/ArmarWipe-v1: episode cost vs bare MuJoCo stepping, the imitation's quality, the pad
-contact at 500 Hz, and the cheap strategies of issue 8 against the imitation.
+contact at 500 Hz, and the cheap strategies that tried to game the reward against the imitation.
 
 Measures, in one run on one model:
 
@@ -11,7 +11,7 @@ Measures, in one run on one model:
   the stored ArmarWipe-v0 trace (``results/env_force_v0.npz``), plotted to ``results/env_force.png``;
 - action 0 over ``--contexts`` seeded contexts (obstacle on, as in the benchmark task): reward, coverage,
   force, success rate, how often the cup is in the approach and how often the imitation disturbs it;
-- issue 8's items 1-8: each cheap strategy in the same context as the imitation.
+- the gaming probes 1-8: each cheap strategy in the same context as the imitation.
 
 Prints tables and writes ``benchmarks/results/env.json``.
 Run: ``MUJOCO_GL=egl nice -n 5 python benchmarks/bench_env.py`` (seeds 0..contexts-1; random actions from
@@ -42,7 +42,7 @@ import rdmp_gym  # noqa: F401  (registers the env)
 RESULTS = Path(__file__).resolve().parent / "results"
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
            "sponge_start": [-0.07, 0.22, 0.12], "obstacle": 0}
-# issue 8's "before" numbers (ArmarWipe-v0, from the issue text; item 4 re-measured, results/env_force_v0.npz)
+# the "before" numbers (ArmarWipe-v0, as reported against it; item 4 re-measured, results/env_force_v0.npz)
 BEFORE = {
     "1_offtable_patch": "patch (-0.15, 0) 0.12 m: 84 of 144 cells in the air, coverage 1.0, reward 1.148",
     "2_self_penetration": ("patch (-0.15, 0.20): forearm 56 mm inside the torso, sponge 37 mm inside the "
@@ -190,7 +190,7 @@ def imitation_quality(env, contexts: int) -> dict:
 
 
 def issue_items(env, contexts: int) -> dict:
-    """Issue 8's items 1-8, after: each cheap strategy next to the imitation in the same context."""
+    """The gaming probes 1-8, after: each cheap strategy next to the imitation in the same context."""
     u = env.unwrapped
     items: dict[str, dict] = {}
     try:
@@ -320,7 +320,7 @@ def main() -> None:
           f"{q['with_cup']['reward'].get('mean', float('nan')):.3f}; cup disturbed in "
           f"{q['cup_disturbed_share']} of cup contexts; success rate {q['success_rate']:.2f}; "
           f"valid {q['valid_fraction']:.2f}")
-    print("\nissue 8 items (reward, coverage):")
+    print("\ngaming probes (reward, coverage):")
     for item, entries in result["issue_8_after"].items():
         print(f"  {item}  [before: {BEFORE[item]}]")
         for name, value in entries.items():

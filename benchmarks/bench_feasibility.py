@@ -31,9 +31,8 @@ import cma
 import gymnasium as gym
 import numpy as np
 from output import add_save_argument, results_dir
-from rdmp_gym.agents.evaluation import run_episode
 from rdmp_gym.agents.protocol import final_test_seeds, interval
-from rdmp_gym.agents.tasks import WIPE_ID
+from rdmp_gym.agents.tasks import WIPE_ID, run_episode
 from rdmp_gym.envs.context import CONTEXT_FIELDS
 
 import rdmp_gym  # noqa: F401  (registers the env)

@@ -7,18 +7,18 @@ the true peak. References: the noiseless built-in styles at 1 kHz (derivatives b
 :class:`rdmp_gym.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
 (``trajectory`` fit, smooth start), the paper's settings (:data:`rdmp_gym.dmp.PAPER_SETTINGS`, LWR and ridge,
 rolled out from the demonstrated start as in the paper), and the classic periodic DMP.
-Targets (issue 7, defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
-position < 0.3 % / 0.8 %.
+Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
+position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
 The hand-over: signals whose start is a quintic from rest joined to the orbit at T with matching position,
 velocity and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump
 in the approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults and with the
-fade before T (``handover="before"``, the earlier default). Per signal: acceleration error over the transient
+fade before T (``handover="before"``, the paper's placement). Per signal: acceleration error over the transient
 and the periodic part, the worst 0.2 s window of acceleration error over the signal's RMS acceleration, jerk
 ratios, position errors, and the largest peak acceleration from canonical starts off the encoded path over the
 demonstration's peak. Targets: transient acceleration <= 10 %, periodic <= 5 %, window <= 20 %, jerk <= 1.5x,
 position < 0.8 % / 0.3 %, off-path peak <= 3x. The figure ``handover.png`` shows the acceleration about T on the
-signals the earlier default reproduced worst.
+signals the paper's placement reproduced worst.
 
 Prints the tables; writes benchmarks/results/fidelity.json and handover.png.
 
@@ -123,7 +123,7 @@ def handover_benchmark(seed: int, n_signals: int, folder) -> list[dict]:
 
 
 def draw_handover(traces: list, rows: list[dict], path) -> None:
-    """Acceleration about T, truth against each model, on the three signals the earlier default did worst."""
+    """Acceleration about T, truth against each model, on the three signals the paper's placement did worst."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -188,7 +188,7 @@ def main() -> None:
     defaults = [row for row in rows if row["model"] == "default"]
     verdict = {"styles": all(met(r) for r in defaults if r["case"].startswith("style")),
                "signals": [r["case"] for r in defaults if not r["case"].startswith("style") and not met(r)]}
-    print(f"issue-7 targets met by the defaults on the four styles: {verdict['styles']}; "
+    print(f"targets met by the defaults on the four styles: {verdict['styles']}; "
           f"own signals missing a target: {verdict['signals']}")
     handover = handover_benchmark(args.seed, args.handover_signals, RESULTS.parent)
     verdict["handover"] = {row["case"]: row["misses"] for row in handover if row["model"] == "default"}

@@ -1,4 +1,4 @@
-"""Force-profile learning (issue 13) in the MuJoCo wiping env: the force error period by period.
+"""Force-profile learning in the MuJoCo wiping env: the force error period by period.
 
 The imitation (action 0) wipes the default 12 cm patch for 10 periods on the nominal flat table and on 8 tables
 tilted by random roll and pitch in [-0.15, 0.15] rad (seed 0; the env's observation bounds; its sampling range

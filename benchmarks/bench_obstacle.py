@@ -1,4 +1,4 @@
-"""Obstacle avoidance coupling (issue 13) as the no-learning baseline on the core wiping scenario.
+"""Obstacle avoidance coupling as the no-learning baseline on the core wiping scenario.
 
 The style-1 wiping DMP (circle of radius 5 cm about the anchor, smooth periodic fit) runs for 8 s at
 500 Hz with a point obstacle in the table plane, at 4 angles on 3 radii (4.5, 5, 5.5 cm: inside, on and

@@ -1,4 +1,4 @@
-"""Following an external rhythm (issue 13): lock-in after a frequency step, adaptive vs fixed frequency.
+"""Following an external rhythm: lock-in after a frequency step, adaptive vs fixed frequency.
 
 A partner's hand (x of a 5 cm circle plus a 1 cm second harmonic and 1 mm noise, seeds 0..4) runs in phase
 with the style-1 wiping DMP (period 1.5 s), then its frequency steps by +-30 % at t = 10 s. The DMP follows

@@ -1,4 +1,4 @@
-"""The end of the movement (issue 13): how well one DMP reproduces a demonstrated stop.
+"""The end of the movement: how well one DMP reproduces a demonstrated stop.
 
 For the four wiping styles, demonstrations that end (approach, 3 periods, lift off, 1 s at rest; noise
 0.3 mm, 100 Hz; seeds 0..4) are segmented and fitted with ``fit_ending``; the stop is requested 1 s before

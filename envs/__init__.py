@@ -1,12 +1,12 @@
 """Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP on a simulated ARMAR-III.
 
-Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v1``, an episodic env: one
+Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v2`` (and v1), an episodic env: one
 ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``; no ``max_episode_steps``)::
 
     import gymnasium as gym
     import rdmp_gym  # registers the env
 
-    env = gym.make("rdmp_gym/ArmarWipe-v1", n_periods=4)      # obstacle=True by default
+    env = gym.make("rdmp_gym/ArmarWipe-v2")      # obstacle=True by default
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample() * 0)  # the imitation
 
@@ -36,7 +36,9 @@ __all__ = [
     "CONTEXT_FIELDS",
     "DEPRECATED_ENV_ID",
     "ENV_ID",
+    "ENV_ID_V2",
     "STEP_ID",
+    "STEP_ID_V2",
     "TERMS",
     "TRACKING_ID",
     "ArmarWipeEnv",
@@ -63,3 +65,14 @@ if TRACKING_ID not in gym.registry:
 STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
 if STEP_ID not in gym.registry:
     gym.register(id=STEP_ID, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv")
+#: The pattern travels across the patch (``sweep_x``, ``sweep_y``), every drawn context is solvable, smoothness
+#: does not charge a pattern for its size, and ``is_success`` needs an executable motion
+#: (:mod:`rdmp_gym.envs.versions`).
+ENV_ID_V2 = "rdmp_gym/ArmarWipe-v2"
+STEP_ID_V2 = "rdmp_gym/ArmarWipeStep-v2"
+if ENV_ID_V2 not in gym.registry:
+    gym.register(id=ENV_ID_V2, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv", kwargs={"obstacle": True,
+                                                                                       "version": 2})
+if STEP_ID_V2 not in gym.registry:
+    gym.register(id=STEP_ID_V2, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv",
+                 kwargs={"version": 2, "max_shift": (0.06, 0.06, 0.02)})

@@ -10,10 +10,12 @@
   ``r0 <= 0`` is an invalid parameter vector (penalised, not simulated);
 - ``amplitude`` (``[d]`` factors about the anchor, 1 in the imitation): ``frac`` itself, so the
   movement can grow or shrink by up to ``frac`` in each dimension (to fit a larger or smaller patch);
-- extra ``directions`` (the env's ``approach``, :mod:`rdmp_gym.envs.approach`): one action dimension each,
-  appended after the parameters, that moves theta along a fixed direction given per unit of its scale
-  (``approach``: metres of lift at ``a = +1``). ``to_action`` puts 0 there (every theta is reachable
-  through the parameters themselves).
+- extra ``directions`` (the env's ``approach``, :mod:`rdmp_gym.envs.approach`, and ``sweep_x``/``sweep_y``,
+  :mod:`rdmp_gym.envs.coverage`): one action dimension each, appended after the parameters, that moves theta
+  along a fixed direction given per unit of its scale (``approach``: metres of lift at ``a = +1``);
+- ``driven`` groups (the env's ``sweep``): in theta, but without action dimensions of their own; only the
+  directions move them. ``to_action`` finds the directions' values from a theta's driven part by least
+  squares and puts 0 in the other directions (every other theta is reachable through the parameters).
 
 The ``anchor`` group cannot be in the action: the anchor is the dirt patch centre from the context.
 """
@@ -32,8 +34,11 @@ __all__ = ["DEFAULT_SCALES", "ActionMap"]
 #: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
 #: 16 random actions), while coordinated actions still change the pattern's amplitude by ~20 %.
 #: ``approach``: 6 cm of lift at +1, which clears the corridor's 8 cm cup in the nominal context within
-#: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.approach`).
-DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06}
+#: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.approach`). ``sweep_x``/``sweep_y``: the
+#: covering rectangle's half-extent at +1 (m; :mod:`rdmp_gym.envs.coverage`): with the loop (5 cm radius) and
+#: the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
+DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06,
+                  "sweep_x": 0.06, "sweep_y": 0.06}
 
 
 class ActionMap:
@@ -44,12 +49,16 @@ class ActionMap:
         groups: parameter groups in the action (``periodic``, ``transient[:k]``, ``initial[:k]``, ``amplitude``).
         scales: ``{group: frac}`` overrides of :data:`DEFAULT_SCALES` (short or full group names).
         directions: ``{name: delta [P]}`` extra action dimensions (theta moves by ``scale * a * delta``).
+        driven: groups among ``groups`` that have no action dimensions of their own (only directions move them).
     """
 
     def __init__(self, dmp: RhythmicDMP, groups: Iterable[str] | str, scales: Mapping[str, float] | None = None,
-                 directions: Mapping[str, np.ndarray] | None = None):
+                 directions: Mapping[str, np.ndarray] | None = None, driven: Iterable[str] = ()):
         groups = (groups,) if isinstance(groups, str) else tuple(groups)
         names = dmp.layout.resolve(groups)
+        driven = tuple(driven)
+        if not set(driven) <= set(groups):
+            raise ValueError(f"driven: {sorted(set(driven) - set(groups))} are not among the groups {groups}")
         if "anchor" in names:
             raise ValueError("groups: 'anchor' cannot be in the action; the anchor is the patch centre "
                              "given by the context")
@@ -70,12 +79,14 @@ class ActionMap:
         d = dmp.n_dims
         for name, part in self.slices.items():
             short = name.split(":")[0]
-            frac = float(scales.get(name, scales.get(short, DEFAULT_SCALES[short])))
+            frac = float(scales.get(name, scales.get(short, DEFAULT_SCALES.get(short, 1.0))))
             if short == "initial":
                 self.scale[part] = [frac * np.pi, frac * self.theta0[part.start + 1]]
                 self.r0_index.append(part.start + 1)
             elif short == "amplitude":
                 self.scale[part] = frac
+            elif short in driven:
+                continue
             else:
                 w = self.theta0[part].reshape(d, -1)
                 spread = w.max(axis=1) - w.min(axis=1)
@@ -86,22 +97,54 @@ class ActionMap:
                                     * np.asarray(delta, dtype=np.float64) for name, delta in directions.items()]
                                    ).reshape(len(directions), self.theta0.size)
         self.direction_names = tuple(directions)
-        self.size = self.theta0.size + len(directions)
+        #: ``[P]``: whether a parameter has an action dimension of its own (False in the driven groups)
+        self.free = np.ones(self.theta0.size, dtype=bool)
+        for name in driven:
+            self.free[self.slices[name]] = False
+        self.n_free = int(self.free.sum())
+        self.size = self.n_free + len(directions)
+
+    def action_slices(self) -> dict[str, slice]:
+        """``{name: slice of the action}``: each free group's own dimensions, then each direction's one."""
+        slices, start = {}, 0
+        for name, part in self.slices.items():
+            if self.free[part].all():
+                slices[name] = slice(start, start + part.stop - part.start)
+                start += part.stop - part.start
+        for name in self.direction_names:
+            slices[name] = slice(start, start + 1)
+            start += 1
+        return slices
 
     def to_params(self, action: np.ndarray) -> np.ndarray:
-        """``theta [P]`` (float64) of an action ``[P + n_directions]``."""
+        """``theta [P]`` (float64) of an action ``[n_free + n_directions]``."""
         action = np.asarray(action, dtype=np.float64)
-        count = self.theta0.size
-        return self.theta0 + self.scale * action[:count] + action[count:] @ self.directions
+        theta = self.theta0 + action[self.n_free:] @ self.directions
+        theta[self.free] += self.scale[self.free] * action[:self.n_free]
+        return theta
 
     def to_action(self, theta: np.ndarray) -> np.ndarray:
-        """An action ``[P + n_directions]`` (float32, not clipped) that gives ``theta [P]`` (0 in the directions)."""
+        """An action ``[n_free + n_directions]`` (float32, not clipped) that gives ``theta [P]``: the directions
+        that move the driven groups by least squares, 0 in the others. ValueError if the driven part of
+        ``theta`` is not reachable by those directions."""
         theta = np.asarray(theta, dtype=np.float64)
         if theta.shape != self.theta0.shape:
             raise ValueError(f"theta: expected shape {self.theta0.shape}, got {theta.shape}")
         if not np.all(np.isfinite(theta)):
             raise ValueError("theta: contains NaN or infinite values")
-        return np.r_[(theta - self.theta0) / self.scale, np.zeros(len(self.directions))].astype(np.float32)
+        along = np.zeros(len(self.directions))
+        driven = ~self.free
+        if driven.any():
+            change = theta[driven] - self.theta0[driven]
+            basis = self.directions[:, driven]
+            moving = np.flatnonzero(np.any(basis != 0.0, axis=1))
+            along[moving] = np.linalg.lstsq(basis[moving].T, change, rcond=None)[0]
+            if not np.allclose(along @ basis, change, atol=1e-9 * (1.0 + np.abs(change).max())):
+                raise ValueError("theta: its driven groups (e.g. the sweep's via points) are not reachable by the "
+                                 f"action's directions {self.direction_names}")
+        change = theta[self.free] - self.theta0[self.free] - along @ self.directions[:, self.free]
+        free = change / self.scale[self.free]
+        return np.r_[free, along].astype(np.float32)
 
     def r0_violation(self, theta: np.ndarray) -> float:
         """How far the radii ``r0`` of ``theta`` are from positive, relative to the imitation ones (0 if valid)."""

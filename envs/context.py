@@ -13,11 +13,15 @@ The context is the observation of the episodic env: a float32 vector ``[13]``
 Each field has a *sampling* range (what ``reset`` draws from, well inside the reach) and wider
 *bounds* (the observation space; what ``reset(options=...)`` accepts). Whatever is drawn or given,
 the whole dirt patch lies on the table top, and a cup stands on the table, off the patch; a context
-that breaks either raises ``ValueError``.
+that breaks either raises ``ValueError``. The cup keeps ``patch_clearance`` from the patch (1 cm in
+``ArmarWipe-v1``; in ``ArmarWipe-v2`` the pad's half-diagonal plus 1 cm, so the pad can wipe the patch edge).
 
 The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
-the way, within 1 cm of the line, where the imitation's approach comes down on it. A draw that would
+the way, within 1 cm of the line, where the imitation's approach comes down on it. ``ArmarWipe-v2`` keeps
+the clearance from the patch and from the sponge start (whose pad would otherwise start on the cup): the cup
+stands anywhere on the corridor that allows it, or else 0-4 cm beyond the clearance on the patch's -y side
+(away from the fingers and the forearm), where the travelling pattern must not reach it. A draw that would
 put it on the patch or off the table leaves the context without a cup.
 """
 
@@ -49,7 +53,7 @@ _SAMPLE_HIGH = np.array([0.02, 0.05, 0.05, 0.03, 0.04, 0.22, 0.22, 0.00, 0.28, 0
 _BOUND_LOW = np.array([-0.06, -0.15, -0.15, -0.15, -0.20, 0.02, 0.02, -0.30, -0.30, 0.0, 0.0, -0.30, -0.45])
 _BOUND_HIGH = np.array([0.06, 0.15, 0.15, 0.15, 0.20, 0.30, 0.30, 0.20, 0.30, 0.25, 1.0, 0.40, 0.45])
 
-#: Clearance (m) kept between the cup's rim and the dirty patch when it is placed.
+#: Default clearance (m) kept between the cup's rim and the dirty patch (``ArmarWipe-v1``'s).
 PATCH_CLEARANCE = 0.01
 
 
@@ -90,11 +94,16 @@ class ContextSpec:
         obstacle: whether contexts may have a cup at all.
         obstacle_probability: share of drawn contexts that get a cup (when it fits).
         obstacle_radius: the cup's radius (m).
+        patch_clearance: the least distance (m) between the cup's rim and the dirty patch.
+        near_patch: place the cup anywhere on the corridor that keeps ``patch_clearance`` from both the patch and
+            the sponge start (instead of 35-60 % of the way, which ``ArmarWipe-v2``'s clearance leaves too little
+            room for), or, where the corridor is too short, 0-4 cm beyond the clearance on the patch's -y side.
     """
 
     def __init__(self, ranges: Mapping[str, tuple] | None = None,
                  table_extent: tuple[float, float, float, float] = (-0.14, 0.36, -0.45, 0.45),
-                 obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035):
+                 obstacle: bool = True, obstacle_probability: float = 0.75, obstacle_radius: float = 0.035,
+                 patch_clearance: float = PATCH_CLEARANCE, near_patch: bool = False):
         self.low = _SAMPLE_LOW.copy()
         self.high = _SAMPLE_HIGH.copy()
         self.bound_low = _BOUND_LOW.copy()
@@ -105,6 +114,10 @@ class ContextSpec:
             raise ValueError(f"obstacle_probability: expected a number in [0, 1], got {obstacle_probability!r}")
         self.obstacle_probability = float(obstacle_probability)
         self.obstacle_radius = float(obstacle_radius)
+        if not (np.isfinite(patch_clearance) and patch_clearance >= 0.0):
+            raise ValueError(f"patch_clearance: expected a number >= 0 (m), got {patch_clearance!r}")
+        self.patch_clearance = float(patch_clearance)
+        self.near_patch = bool(near_patch)
         for key, value in (ranges or {}).items():
             start, length = self._field(key, "context_ranges")
             if start >= _DRAWN:
@@ -198,8 +211,24 @@ class ContextSpec:
         r = self.obstacle_radius
         off_table = xy[0] - r < x_lo or xy[0] + r > x_hi or xy[1] - r < y_lo or xy[1] + r > y_hi
         gap = np.maximum(np.abs(xy - context.patch_centre) - context.patch_size / 2, 0.0)
-        on_patch = bool(np.hypot(*gap) < r + PATCH_CLEARANCE)
+        on_patch = bool(np.hypot(*gap) < r + self.patch_clearance)
         return off_table or on_patch
+
+    def _beside_patch(self, context: Context, draw: np.ndarray, reach: float) -> np.ndarray | None:
+        """A cup 0-4 cm beyond the clearance from the patch, ``reach`` from the sponge start (None where that is off
+        the table or too close to the start), on the patch's -y side (table frame, within 45°): the hand's fingers
+        reach about 13 cm beyond the pad along +x at the cup's height and the forearm lies towards -x and +y, so
+        a cup there is hit by the arm however the pad wipes."""
+        angle = -0.5 * np.pi + 0.5 * np.pi * (draw[1] - 0.5)      # the -y side, +-45°: away from the forearm (-x, +y)
+        direction = np.array([np.cos(angle), np.sin(angle)])      # and from the fingers (+x), see the docstring
+        wanted = self.obstacle_radius + self.patch_clearance + 0.04 * draw[0]
+        for distance in np.arange(0.0, 0.6, 0.002):
+            xy = context.patch_centre + distance * direction
+            gap = np.maximum(np.abs(xy - context.patch_centre) - context.patch_size / 2, 0.0)
+            if np.hypot(*gap) >= wanted:
+                far = np.linalg.norm(xy - context.sponge_start[:2]) >= reach
+                return xy if far and not self._misplaced(context, xy) else None
+        return None
 
     def _corridor_point(self, context: Context, draw: np.ndarray) -> np.ndarray | None:
         start, centre = context.sponge_start[:2], context.patch_centre
@@ -209,7 +238,18 @@ class ContextSpec:
             return None
         along = line / length
         across = np.array([-along[1], along[0]])
-        xy = start + (0.35 + 0.25 * draw[0]) * line + (draw[1] - 0.5) * 0.02 * across
+        side = (draw[1] - 0.5) * 0.02 * across
+        if self.near_patch:        # anywhere on the corridor that keeps the clearance from the patch and the start
+            fractions = np.arange(0.0, 1.0, 0.005)
+            reach = self.obstacle_radius + self.patch_clearance
+            clear = [f for f in fractions if not self._misplaced(context, start + f * line + side)
+                     and np.linalg.norm(f * line + side) >= reach]
+            if not clear:
+                return self._beside_patch(context, draw, reach)
+            fraction = clear[0] + draw[0] * (clear[-1] - clear[0])
+        else:
+            fraction = 0.35 + 0.25 * draw[0]
+        xy = start + fraction * line + side
         if self._misplaced(context, xy):
             return None
         return xy

@@ -24,7 +24,8 @@ the fixed point is zero error with a constant offset. Learning starts once the a
 whole period (the touchdown's transient is not periodic).
 
 The controller measures the wrist force; the contact force differs from it by the hand's and sponge's
-dynamics along the pattern, which the learning cannot see (see the README's measurements).
+dynamics along the pattern, which the learning cannot see (measured by
+``benchmarks/bench_force_learning.py``).
 """
 
 from __future__ import annotations

@@ -15,10 +15,12 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
 - ``impact``: ``-w`` x ``min(1, max(0, F_peak - F_imp) / F_imp)``, F_peak the peak normal force within
   0.2 s of the first contact (sampled at every physics step), charged at the step of the peak;
 - ``smoothness``: ``-w`` x ``ln(max(1, J / J_imitation))``, J the integrated squared jerk of the
-  commanded sponge path and J_imitation that of the imitation (action 0) in the same context; it is
-  spread over the steps in proportion to the squared jerk at each. Weight 0.25 (0.1 before the smooth
-  core of issue 7): the smooth core's wide basis and soft spring low-pass random weights, so a uniformly
-  random action is now 7-25x as jerky as the imitation (was 30-45x) while its amplitude can still buy
+  commanded sponge path and J_imitation that of the imitation (action 0) in the same context (in
+  ``ArmarWipe-v2`` both per unit of integrated squared speed, :meth:`Smoothness.speed_normalised`, so that
+  a larger or travelling pattern that is as smooth costs nothing); it is
+  spread over the steps in proportion to the squared jerk at each. Weight 0.25: the smooth
+  core's wide basis and soft spring low-pass random weights, so a uniformly
+  random action is 7-25x as jerky as the imitation while its amplitude can still buy
   coverage; at 0.25 it costs 0.49-0.80 and such an action scores at least 0.49 below its smooth twin
   with the same coverage (20 contexts), while the smooth 6 cm lift over a cup (2.0x) costs 0.17
   against the cup's ~0.9;
@@ -26,6 +28,8 @@ objective. Terms (weights in :class:`RewardWeights`, all dimensionless and O(1))
   acceleration (a_max = 10 rad/s², ARMAR-III's joint limit), charged at the step of the peak;
 - ``arm_collision``: ``-w`` x fraction of steps with a robot geom other than the sponge on the table;
 - ``self_collision``: ``-w`` x fraction of steps with the arm touching the robot's torso, head or platform;
+  in ``ArmarWipe-v2`` these two, ``joint_limit`` and ``joint_accel`` also cost ``RewardSettings.event_charge``
+  x ``w`` once they happen at all (``is_success`` forbids each);
 - ``obstacle``: ``-w/2`` x (``sqrt(min(1, steps touching the cup / 100))`` + ``sqrt(min(1, cup displacement /
   20 cm))``), each charged in the step in which it grows (touching it, pushing it further); the square
   roots make a brief touch or a small push cost much (1 step: 0.05 w, 2 cm: 0.16 w) while a learner that
@@ -100,6 +104,10 @@ class RewardSettings:
         max_joint_accel: commanded joint acceleration a_max above which the peak is charged (rad/s²).
         touch_steps: steps of touching the obstacle that cost the full obstacle-touch charge.
         obstacle_shift: obstacle displacement that costs the full obstacle-displacement charge (m).
+        event_charge: a fixed share of the weight that an arm collision, a self-collision, a joint at its limit
+            or a joint acceleration above ``max_joint_accel`` costs as soon as it happens once (at its first
+            step), on top of its graded cost (``ArmarWipe-v2``: 0.2, so that a brief graze, which ``is_success``
+            forbids, costs more than the coverage it buys; v1: 0).
     """
 
     target_force: float = 18.0
@@ -110,6 +118,7 @@ class RewardSettings:
     max_joint_accel: float = 10.0
     touch_steps: int = 100
     obstacle_shift: float = 0.2
+    event_charge: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -134,6 +143,21 @@ class Smoothness:
         jerk = np.diff(path, 3, axis=0) / dt**3
         sq = np.sum(jerk**2, axis=1)
         return np.r_[sq[:1], sq[:1], sq, sq[-1:]]
+
+    @staticmethod
+    def integrated_jerk(path: np.ndarray, dt: float) -> float:
+        """Integrated squared jerk of a path ``[T, d]`` (sum over its steps of :meth:`jerk_squared`)."""
+        return float(np.sum(Smoothness.jerk_squared(path, dt)))
+
+    @staticmethod
+    def speed_normalised(path: np.ndarray, dt: float) -> float:
+        """Integrated squared jerk per integrated squared speed of a path ``[T, d]`` (1/s⁴).
+
+        Scaling a path by any factor leaves it unchanged, and a slow travel of a fast pattern adds little
+        to either integral, so a larger or travelling pattern that is as smooth scores as the imitation; a
+        rough one (high-frequency content) scores its mean squared frequency⁴ higher."""
+        speed = float(np.sum(np.diff(path, axis=0) ** 2)) / dt**2
+        return Smoothness.integrated_jerk(path, dt) / max(speed, 1e-12)
 
     @staticmethod
     def peak_accel(q: np.ndarray, dt: float) -> np.ndarray:
@@ -190,19 +214,29 @@ def wipe_reward(trace: WipeTrace, periodic: np.ndarray, smooth: Smoothness, sett
         parts["smoothness"] = weights.smoothness * np.log(smooth.jerk_ratio) * smooth.jerk_sq / total_jerk
     peak = int(np.argmax(smooth.joint_accel))
     over = max(0.0, float(smooth.joint_accel[peak]) - settings.max_joint_accel) / settings.max_joint_accel
-    parts["joint_accel"][peak] = weights.joint_accel * min(1.0, over)
-    parts["arm_collision"] = weights.arm_collision * (trace.arm_contact & live) / count
-    parts["self_collision"] = weights.self_collision * (trace.self_contact & live) / count
+    parts["joint_accel"][peak] = weights.joint_accel * (min(1.0, over) + (settings.event_charge if over > 0 else 0))
+    charge = settings.event_charge
+    parts["arm_collision"] = weights.arm_collision * _with_event((trace.arm_contact & live) / count, charge)
+    parts["self_collision"] = weights.self_collision * _with_event((trace.self_contact & live) / count, charge)
     touching = np.sqrt(np.minimum(1.0, np.cumsum(trace.obstacle_contact & live) / settings.touch_steps))
     shifted = np.sqrt(np.minimum(1.0, trace.obstacle_shift / settings.obstacle_shift))
     parts["obstacle"] = 0.5 * weights.obstacle * (_growth(touching) + _growth(shifted))
-    parts["joint_limit"] = weights.joint_limit * (trace.at_limit & live) / count
+    parts["joint_limit"] = weights.joint_limit * _with_event((trace.at_limit & live) / count, charge)
     if trace.unstable:
         # The rest of the episode is lost: it counts as if the sponge lost contact from here on.
         lost = periodic & ~live
         parts["contact_loss"] = parts["contact_loss"] + weights.contact_loss * lost / n_per
         parts["unstable"][last] = weights.unstable
     return _terms(parts, traces)
+
+
+def _with_event(graded: np.ndarray, charge: float) -> np.ndarray:
+    """A graded per-step cost ``[T]`` plus ``charge`` at its first nonzero step (unchanged if it is all 0)."""
+    steps = np.flatnonzero(graded)
+    if charge and steps.size:
+        graded = graded.copy()
+        graded[steps[0]] += charge
+    return graded
 
 
 def invalid_reward(severity: float, count: int, weights: RewardWeights, traces: dict | None = None

@@ -51,6 +51,19 @@ from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
 __all__ = ["ArmarWipeStepEnv"]
 
+
+def _axis_shift(max_shift: Any) -> np.ndarray:
+    """``max_shift`` (a number or three) as ``[3]`` float64; ValueError unless finite and >= 0."""
+    if isinstance(max_shift, bool):
+        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}")
+    try:
+        shift = np.broadcast_to(np.asarray(max_shift, dtype=np.float64), (3,)).copy()
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}") from error
+    if not (np.all(np.isfinite(shift)) and np.all(shift >= 0.0)):
+        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}")
+    return shift
+
 _MAX_FORCE = 2000.0       # N: a larger wrist or contact force is a diverged simulation (as in simulate_wipe)
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 
@@ -59,7 +72,9 @@ class ArmarWipeStepEnv(gym.Env):
     """Step-based wiping; see the module docstring.
 
     Args:
-        max_shift: equilibrium shift (m) of the DMP for a full action, per axis.
+        max_shift: equilibrium shift (m) of the DMP for a full action: one number for all three axes or one per
+            axis (``ArmarWipeStep-v2``: 6 cm along the table, 2 cm in height, so that the policy can carry the
+            pattern across a large patch: the step-based form of the episodic env's sweep).
         ik_iterations: damped-least-squares iterations of the IK per control step, a fixed count from the IK's
             posture (as the episodic path IK solves its knots; a warm start drifts in the null space, and
             stopping at a tolerance after a varying count makes the joint targets jump between steps).
@@ -69,18 +84,18 @@ class ArmarWipeStepEnv(gym.Env):
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
 
-    def __init__(self, max_shift: float = 0.02, ik_iterations: int = 30, **kwargs: Any) -> None:
+    def __init__(self, max_shift: float | tuple[float, float, float] = 0.02, ik_iterations: int = 30,
+                 **kwargs: Any) -> None:
         super().__init__()
-        if isinstance(max_shift, bool) or not isinstance(max_shift, (int, float, np.number)) or not (
-                np.isfinite(max_shift) and max_shift >= 0.0):
-            raise ValueError(f"max_shift: expected a number >= 0 (m), got {max_shift!r}")
+        shift = _axis_shift(max_shift)
         if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")
         self.task = ArmarWipeEnv(**kwargs)
         self.render_mode = self.task.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.task.control_rate))}
         self.dmp = self.task.dmp
-        self.max_shift = float(max_shift)
+        #: ``[3]`` equilibrium shift (m) per axis at a full action
+        self.max_shift = shift
         self.coupling_scale = self.max_shift * self.dmp.alpha_z * self.dmp.alpha_z / 4.0   # alpha_z beta_z
         self.ik_iterations = int(ik_iterations)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
@@ -298,7 +313,7 @@ class ArmarWipeStepEnv(gym.Env):
             info.update(stats)
             info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
-                         "is_success": valid and not unstable and episode_success(stats)})
+                         "is_success": valid and not unstable and episode_success(stats, task.success_joint_accel)})
         return terms, info
 
     def _sponge_position(self) -> np.ndarray:

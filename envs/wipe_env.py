@@ -1,4 +1,7 @@
-"""``rdmp_gym/ArmarWipe-v1``: episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+"""``rdmp_gym/ArmarWipe-v2`` (and v1): episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+
+What v2 changes (the travelling pattern, solvable contexts, the smoothness measure, executable success) is
+listed in :mod:`rdmp_gym.envs.versions`; ``version`` selects it.
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
@@ -34,7 +37,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FIT_METHODS
 from rdmp_gym.validation import check_positive
@@ -44,12 +47,14 @@ from .approach import approach_direction, lift_profile
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .ik import BodyClearance, IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
 from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
+from .versions import TASK_VERSIONS, TaskVersion
 from .viewer import HumanViewer
 from .wiping import DirtField, WipeTrace, simulate_wipe
 
@@ -64,14 +69,23 @@ WORKSPACE_HIGH = np.array([0.35, 0.40, 0.30])
 SUCCESS_COVERAGE = 0.95
 SUCCESS_FORCE_IN_BAND = 0.9
 SUCCESS_OBSTACLE_SHIFT = 0.005
+#: The action groups when ``groups`` is not given (``ArmarWipe-v2`` adds ``"sweep"``).
+DEFAULT_GROUPS = ("periodic", "transient", "initial", "amplitude", "approach")
+#: The sweep's last via point (the patch centre) comes this long (s) before the end of the episode.
+SWEEP_END_MARGIN = 0.5
 
 
-def episode_success(stats: Mapping[str, Any]) -> bool:
+def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = None) -> bool:
     """Whether an episode's statistics (``ArmarWipeEnv``'s info) meet the ``is_success`` thresholds: coverage,
-    force in band, no arm or self-collision, the cup neither touched nor moved (validity is checked apart)."""
-    return bool(stats["coverage"] >= SUCCESS_COVERAGE and stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
-                and stats["arm_collision_fraction"] == 0.0 and stats["self_collision_fraction"] == 0.0
-                and stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
+    force in band, no arm or self-collision, the cup neither touched nor moved (validity is checked apart);
+    with ``max_joint_accel`` (rad/s²) also executable: the peak joint acceleration within it, no joint at its
+    limit."""
+    wiped = bool(stats["coverage"] >= SUCCESS_COVERAGE and stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
+                 and stats["arm_collision_fraction"] == 0.0 and stats["self_collision_fraction"] == 0.0
+                 and stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
+    if max_joint_accel is None:
+        return wiped
+    return wiped and stats["peak_joint_accel"] <= max_joint_accel and stats["joint_limit_fraction"] == 0.0
 
 
 @lru_cache(maxsize=16)
@@ -81,6 +95,19 @@ def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> Rh
                            n_transient=n_transient, method=method)
 
 
+def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> RhythmicDMP:
+    """``dmp`` with the covering sweep from the end of the transient to :data:`SWEEP_END_MARGIN` s before
+    ``end`` (a DMP that has a sweep keeps it: e.g. a refined ``dmp.json``, whose via points are its imitation)."""
+    if dmp.sweep is not None:
+        if dmp.sweep.n_points != len(COVERING_FIGURE):
+            raise ValueError(f"dmp: its sweep has {dmp.sweep.n_points} via points; the env's sweep action needs the "
+                             f"covering sweep's {len(COVERING_FIGURE)} (rdmp_gym.envs.coverage)")
+        return dmp
+    if end - SWEEP_END_MARGIN <= transient:
+        raise ValueError(f"duration: {end:.3g} s leaves no time for the sweep after the transient ({transient:.3g} s)")
+    return dmp.with_sweep(covering_sweep(transient, end - SWEEP_END_MARGIN, dmp.n_dims))
+
+
 def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
     """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against the workspace."""
     if not isinstance(dmp, RhythmicDMP):
@@ -88,7 +115,7 @@ def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
             raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
         if not Path(dmp).is_file():
             raise FileNotFoundError(f"dmp: no such file {dmp}")
-        dmp = RhythmicDMP.load(dmp)
+        dmp = load_dmp(dmp)
     if dmp.n_dims != 3:
         raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
     t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
@@ -106,12 +133,14 @@ class ArmarWipeEnv(gym.Env):
         dmp: a saved DMP (a ``dmp.json`` path, e.g. a run's refined DMP, or a ``RhythmicDMP``) used as the
             imitation without fitting (overrides ``style``; excludes ``demonstration``).
         n_periodic, n_transient, fit_method: DMP fit settings (default the core's ``"trajectory"`` fit: the
-            smoothest imitation, half the jerk of ``"ridge"``; see the README).
+            smoothest imitation, half the jerk of ``"ridge"``).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
-            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``).
+            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``; v2 adds ``"sweep"``: the anchor travels
+            over the patch, two action dimensions ``sweep_x``, ``sweep_y``, see :mod:`rdmp_gym.envs.coverage`).
         scales: per-group action scales (see :mod:`rdmp_gym.envs.action`; ``approach``: lift in m at +1).
-        n_periods: periods of the pattern after the transient; ``duration`` (s) overrides it.
+        n_periods: periods of the pattern after the transient (default 4 in v1, 7 in v2); ``duration`` (s)
+            overrides it.
         control_rate: control frequency (Hz); ``frame_skip`` (physics steps per control step) overrides it.
         timestep: physics step (s; default the model's 2 ms).
         target_force: normal force to hold while wiping (N) (controller and reward).
@@ -139,6 +168,8 @@ class ArmarWipeEnv(gym.Env):
             rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
+        version: the task version, 1 or 2 (:mod:`rdmp_gym.envs.versions`); ``gym.make`` of
+            ``rdmp_gym/ArmarWipe-v2`` sets 2.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
@@ -151,9 +182,9 @@ class ArmarWipeEnv(gym.Env):
         n_periodic: int = 40,
         n_transient: int = 40,
         fit_method: str = "trajectory",
-        groups: Iterable[str] | str = ("periodic", "transient", "initial", "amplitude", "approach"),
+        groups: Iterable[str] | str | None = None,
         scales: Mapping[str, float] | None = None,
-        n_periods: float = 4.0,
+        n_periods: float | None = None,
         duration: float | None = None,
         control_rate: float = 100.0,
         frame_skip: int | None = None,
@@ -181,8 +212,13 @@ class ArmarWipeEnv(gym.Env):
         camera: str | None = "front",
         record_frames: bool = False,
         frame_stride: int = 4,
+        version: int = 1,
     ):
         super().__init__()
+        if isinstance(version, bool) or version not in TASK_VERSIONS:
+            raise ValueError(f"version: expected one of {sorted(TASK_VERSIONS)}, got {version!r}")
+        #: what this task version changes (see :mod:`rdmp_gym.envs.versions`)
+        self.task_version: TaskVersion = TASK_VERSIONS[version]
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, "
                              f"got {render_mode!r}")
@@ -209,8 +245,11 @@ class ArmarWipeEnv(gym.Env):
             if isinstance(style, bool) or style not in (1, 2, 3, 4):
                 raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
             self.dmp = _fit_style(int(style), int(n_periodic), int(n_transient), str(fit_method))
+        if groups is None:
+            groups = DEFAULT_GROUPS + (("sweep",) if self.task_version.sweep else ())
         groups = (groups,) if isinstance(groups, str) else tuple(groups)
-        #: the DMP parameter groups in the action (the ``approach`` dimension, if any, comes after them)
+        #: the DMP parameter groups of theta (the ``approach`` and ``sweep_x``/``sweep_y`` dimensions come after
+        #: them in the action; the ``sweep`` via points have none of their own)
         self.groups = tuple(group for group in groups if group != "approach")
         self._approach = "approach" in groups
         # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
@@ -236,6 +275,7 @@ class ArmarWipeEnv(gym.Env):
         self.control_rate = 1.0 / self.dt
         transient = self.dmp.transients[0].length
         if duration is None:
+            n_periods = self.task_version.n_periods if n_periods is None else n_periods
             duration = transient + check_positive(n_periods, "n_periods") * self.dmp.period
         duration = check_positive(duration, "duration")
         self.n_steps = max(2, round(duration / self.dt))
@@ -245,9 +285,14 @@ class ArmarWipeEnv(gym.Env):
             raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
 
         directions = {}
+        if "sweep" in self.groups:
+            self.dmp = _with_covering_sweep(self.dmp, transient, self.times[-1])
         if self._approach:
             directions["approach"] = approach_direction(self.dmp, self.groups, self.times, height=1.0)
-        self.action_map = ActionMap(self.dmp, self.groups, scales, directions)
+        if "sweep" in self.groups:
+            directions.update(sweep_directions(self.dmp, self.groups))
+        self.action_map = ActionMap(self.dmp, self.groups, scales, directions, driven=("sweep",) if
+                                    "sweep" in self.groups else ())
 
         band = tuple(float(f) for f in force_band)
         if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
@@ -262,7 +307,8 @@ class ArmarWipeEnv(gym.Env):
         self.force_learning = (ForceProfileSettings() if force_learning is True
                                else force_learning or None)
         self.reward_settings = RewardSettings(target_force=target_force,
-                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1])
+                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1],
+                                              event_charge=self.task_version.event_charge)
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
         self.cell_size = check_positive(cell_size, "cell_size")
         self.limit_margin = float(limit_margin)
@@ -279,7 +325,9 @@ class ArmarWipeEnv(gym.Env):
         self.obstacle = bool(obstacle)
         self.context_spec = ContextSpec(context_ranges, table_extent=self.scene.table_extent, obstacle=self.obstacle,
                                         obstacle_probability=float(obstacle_probability),
-                                        obstacle_radius=self.scene.obstacle_radius)
+                                        obstacle_radius=self.scene.obstacle_radius,
+                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
+                                        near_patch=self.task_version.pad_clearance)
 
         kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS,
                                      bodies=("torso", "r_underarm_link"))
@@ -315,6 +363,11 @@ class ArmarWipeEnv(gym.Env):
         self._imitation_jerk: float | None = None
         self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
+    @property
+    def success_joint_accel(self) -> float | None:
+        """The peak joint acceleration (rad/s²) that ``is_success`` allows (None: not checked, v1)."""
+        return self.reward_settings.max_joint_accel if self.task_version.executable_success else None
+
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
         """DMP parameters ``theta [P]`` (float64, groups :attr:`groups`) of an action ``[n_action]`` (clipped to
@@ -328,10 +381,14 @@ class ArmarWipeEnv(gym.Env):
 
     def action_time_weights(self) -> np.ndarray:
         """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
-        weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)
+        weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)[:, self.action_map.free]
         if self._approach:                   # the approach dimension acts where it lifts the path
             lift = lift_profile(self.times, self.dmp.transients[0].length)
             weights = np.c_[weights, lift / lift.max()]
+        if "sweep" in self.groups:           # sweep_x, sweep_y act where they move the anchor
+            unit = np.c_[COVERING_FIGURE, np.zeros((len(COVERING_FIGURE), self.dmp.n_dims - 2))]
+            moved = np.abs(self.dmp.sweep.offsets(self.times, unit[None])[0, :, :2])
+            weights = np.c_[weights, moved / np.maximum(moved.max(axis=0), 1e-12)]
         return weights
 
     def _check_action(self, action: Any) -> np.ndarray:
@@ -466,11 +523,14 @@ class ArmarWipeEnv(gym.Env):
         return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
 
     def _smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
-        """Jerk of the commanded path relative to the imitation's in this context, and joint accelerations."""
+        """Jerk of the commanded path relative to the imitation's in this context (v2: per unit of squared speed,
+        :meth:`Smoothness.speed_normalised`), and joint accelerations."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
+        normalised = self.task_version.speed_normalised_jerk
+        measure = Smoothness.speed_normalised if normalised else Smoothness.integrated_jerk
         if self._imitation_jerk is None:
-            self._imitation_jerk = float(np.sum(Smoothness.jerk_squared(self.imitation_path(), self.dt)))
-        ratio = float(np.sum(jerk_sq)) / max(self._imitation_jerk, 1e-12)
+            self._imitation_jerk = measure(self.imitation_path(), self.dt)
+        ratio = measure(path, self.dt) / max(self._imitation_jerk, 1e-12)
         return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
 
     def _evaluate(self, theta: np.ndarray | None, path: np.ndarray | None = None) -> tuple[float, dict]:
@@ -570,7 +630,7 @@ class ArmarWipeEnv(gym.Env):
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool) -> tuple[float, dict]:
         reward = sum(terms.values())
-        success = valid and not unstable and episode_success(info)
+        success = valid and not unstable and episode_success(info, self.success_joint_accel)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
                      "unstable": unstable, "is_success": bool(success), "n_cells": len(self._cells_world)})
         return float(reward), info

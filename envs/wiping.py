@@ -293,7 +293,7 @@ def simulate_wipe(
     gain, target, max_rate = law.gain, law.target_force, law.max_rate
     min_offset, max_offset = law.min_offset, law.max_offset
     filtered, offset = adaptation.force, adaptation.offset
-    learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (issue 13's force_learning)
+    learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (force_learning)
     step = mujoco.mj_step
     measured = 0.0
     steps = count

@@ -294,7 +294,7 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
             a term with a ``reset`` method is reset first.
         smoothing: time constant (s) of a first-order low-pass on the coupling term (0: none, Hoffmann et
             al.'s term as is). The raw term switches on and off within a few centimetres and, against the stiff
-            spring of (4), makes sharp accelerations; 0.1 s cuts the squared jerk by about 10x (see README).
+            spring of (4), makes sharp accelerations; 0.1 s cuts the squared jerk by about 10x.
         stop_at: request the stop at this time (a DMP with an ending).
         start_kwargs: passed to :meth:`RhythmicDMP.start` (transient, y0, yd0, anchor, tempo, start_blend).
     Returns:

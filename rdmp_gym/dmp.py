@@ -6,7 +6,6 @@ import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
@@ -22,6 +21,7 @@ from .basis import (
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
+from .ending import Ending, StopPlan, plan_stop
 from .fitting import (
     FIT_METHODS,
     fit_trajectory,
@@ -32,7 +32,6 @@ from .fitting import (
 )
 from .parameters import ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
-from .stopping import Ending, StopPlan, plan_stop
 from .sweep import Sweep
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
@@ -81,11 +80,12 @@ PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "tr
                   "turn_height": 1e-3, "handover": "before"}
 """Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
 (LWR (11), a stiff spring, narrow basis functions, the bare mixture (5), the families' fade before T); roll out
-with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` is the earlier default."""
+with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` fits the same basis by
+global least squares."""
 
 EARLIER_HANDOVER = {"handover": "before", "floor": 1e-2}
-"""Keywords of :meth:`RhythmicDMP.fit` that give the hand-over of the earlier defaults: the two families fade
-over the last ``t_f`` before T (the paper's placement), with the earlier floor of the mixture (5)."""
+"""Keywords of :meth:`RhythmicDMP.fit` that give the hand-over placed as in the paper: the two families fade
+over the last ``t_f`` before T, with a mixture (5) floor of 1e-2."""
 
 
 def start_blend_profiles(elapsed: np.ndarray, length: float) -> np.ndarray:
@@ -294,7 +294,7 @@ class RhythmicDMP:
                 ``"ridge"`` (global least squares on the forcing target (10)).
             segmentations: per demonstration; estimated with :func:`segment` when omitted.
             period: common period (s); the mean of the segmentations' periods when omitted.
-            alpha_z: transformation-system gain (default 5: a softer spring, see the README's trade-offs;
+            alpha_z: transformation-system gain (default 5: a softer spring, see the docs' design rationale;
                 25 in :data:`PAPER_SETTINGS`).
             mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
             mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
@@ -836,19 +836,6 @@ class RhythmicDMP:
         return np.concatenate(columns, axis=1)
 
     # ------------------------------------------------------------------ persistence
-    def save(self, path: str | Path) -> None:
-        """Write the DMP to a JSON file (format: :mod:`rdmp_gym.serialization`)."""
-        from .serialization import save_dmp
-
-        save_dmp(self, path)
-
-    @classmethod
-    def load(cls, path: str | Path) -> RhythmicDMP:
-        """Read a DMP written by :meth:`save`."""
-        from .serialization import load_dmp
-
-        return load_dmp(path)
-
     def __repr__(self) -> str:
         return (f"RhythmicDMP(n_dims={self.n_dims}, period={self.period:.4g}, n_periodic={self.basis.n_periodic}, "
                 f"transient_sizes={self.basis.transient_sizes})")

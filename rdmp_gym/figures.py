@@ -102,7 +102,7 @@ def write_paper_figures(out_dir: str | Path, seed: int = 0) -> list[Path]:
 
 
 def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
-    """``beyond_stop.png``: start, wiping and stop from one DMP (issue 13), with its canonical path."""
+    """``beyond_stop.png``: start, wiping and stop from one DMP, with its canonical path."""
     demo = ending_demonstration(1, rng=seed)
     dmp = fit_ending(demo)
     t = np.arange(0.0, demo.t[-1] + 1.0, 1e-3)

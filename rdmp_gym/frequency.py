@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from .dmp import _blend_shift
-from .stopping import StopPlan
+from .ending import StopPlan
 from .validation import as_finite_array, check_positive
 
 __all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "follow_rhythm"]

@@ -29,7 +29,7 @@ import numpy as np
 from .basis import NORMALISATION_EPSILON, BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
-from .stopping import Ending, StopFading
+from .ending import Ending, StopFading
 from .sweep import Sweep
 
 __all__ = ["FORMAT", "VERSION", "dmp_from_dict", "dmp_to_dict", "load_dmp", "save_dmp"]

@@ -94,7 +94,7 @@ def worst_window_error(Ydd: np.ndarray, acceleration: np.ndarray, dt: float, win
     A localised fault (a spurious oscillation over a few tenths of a second) hides in an RMS over the whole
     transient; this does not.
     """
-    width = max(int(round(check_positive(window, "window") / dt)), 1)
+    width = max(round(check_positive(window, "window") / dt), 1)
     if Ydd.shape != acceleration.shape or Ydd.shape[0] < width:
         raise ValueError(f"Ydd: expected the reference's shape {acceleration.shape} and at least {width} samples")
     squared = np.concatenate([[0.0], np.cumsum(np.sum((Ydd - acceleration) ** 2, axis=1))])

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .basis import GATE_FLOOR, normalize
+from .basis import normalize
 from .canonical import CanonicalSystem
 from .demonstrations import (
     _DEFAULT_START,
@@ -44,172 +44,21 @@ from .demonstrations import (
     _time_grid,
     _vector3,
 )
+from .ending import Ending, StopFading, StopPlan, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
 from .fitting import forcing_target, smooth_derivatives
+from .rhythm import rest_start
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
 from .transformation import TransformationSystem
-from .validation import as_finite_array, check_positive
+from .validation import check_positive
 
 __all__ = ["Ending", "StopFading", "StopPlan", "StopSegmentation", "ending_demonstration", "exit_time", "fit_ending",
+           "fit_stop",
            "minimum_jerk", "plan_stop", "segment_ending"]
 
 logger = logging.getLogger(__name__)
 
 _HEAD_SHARES = (2.0 / 3.0, 0.75, 0.85)
 """Shares of the time to rest tried, in order, as the part of the demonstration that :func:`segment` sees."""
-
-
-def minimum_jerk(u: np.ndarray) -> np.ndarray:
-    """``s(u) = 10u^3 - 15u^4 + 6u^5`` on ``[0, 1]``, 0 before and 1 after (C2), any shape."""
-    u = np.clip(u, 0.0, 1.0)
-    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
-
-
-def _minimum_jerk_inverse(value: float) -> float:
-    """The ``u`` in [0, 1] with ``minimum_jerk(u) = value`` (bisection; ``s`` is monotonic)."""
-    low, high = 0.0, 1.0
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if minimum_jerk(np.array(mid)) < value else (low, mid)
-    return 0.5 * (low + high)
-
-
-@dataclass(frozen=True)
-class StopFading:
-    """The inner-side gates of the stop: ``g_s`` (periodic family) and ``a_s`` (stop family).
-
-    Args:
-        nu1: radius below which the periodic family fades (``g_s(nu1) = 1``, ``a_s(nu1) = delta``).
-        nu2: radius below which only the stop family is active (``< nu1``).
-        k: exponent of the fade.
-        delta: ``g_s(nu2) = a_s(nu1) = delta``.
-    """
-
-    nu1: float
-    nu2: float
-    k: int = 4
-    delta: float = 1e-3
-
-    def __post_init__(self) -> None:
-        check_positive(self.nu2, "nu2")
-        if not self.nu1 > self.nu2:
-            raise ValueError(f"nu1: must exceed nu2 = {self.nu2:g}, got {self.nu1!r}")
-        if not 0.0 < self.delta < 1.0:
-            raise ValueError(f"delta: must lie in (0, 1), got {self.delta!r}")
-
-    @property
-    def v_tilde(self) -> float:
-        return -np.log(self.delta) / (self.nu1 - self.nu2) ** self.k
-
-    def _fade(self, distance: np.ndarray) -> np.ndarray:
-        gate = np.exp(-self.v_tilde * distance**self.k)
-        return np.where(gate < GATE_FLOOR, 0.0, gate)
-
-    def periodic_gate(self, r: np.ndarray) -> np.ndarray:
-        """``g_s(r)``: 1 for r >= nu1, fading below; same shape as ``r``."""
-        return self._fade(np.maximum(self.nu1 - r, 0.0))
-
-    def stop_gate(self, r: np.ndarray) -> np.ndarray:
-        """``a_s(r)``: 1 for r <= nu2, fading above; same shape as ``r``."""
-        return self._fade(np.maximum(r - self.nu2, 0.0))
-
-
-@dataclass(frozen=True, eq=False)
-class Ending:
-    """The encoded end of the movement (the stop transient).
-
-    Attributes:
-        exit_phase: canonical phase at which the demonstrated stop leaves the cycle (rad, [0, 2 pi)).
-        length: ``T_s``, unit-tempo time from the exit until the canonical state rests at the origin (s).
-        blend_start: ``tau_1``, time after the exit at which the anchor starts to move to the goal (s).
-        goal: ``[d]`` the demonstrated rest position.
-        centres: ``[S, 2]`` phase-plane centres of the stop basis functions.
-        widths: ``[S]`` their widths.
-        weights: ``[d, S]`` their weights.
-        fading: the inner-side gates.
-    """
-
-    exit_phase: float
-    length: float
-    blend_start: float
-    goal: np.ndarray
-    centres: np.ndarray
-    widths: np.ndarray
-    weights: np.ndarray
-    fading: StopFading
-
-    def __post_init__(self) -> None:
-        check_positive(self.length, "length")
-        if not 0.0 <= float(self.blend_start) < float(self.length):
-            raise ValueError(f"blend_start: expected a value in [0, length={self.length}), got {self.blend_start!r}")
-        for name, ndim in (("goal", 1), ("centres", 2), ("widths", 1), ("weights", 2)):
-            object.__setattr__(self, name, as_finite_array(getattr(self, name), name, ndim=ndim))
-        n_stop = self.widths.size
-        if self.centres.shape != (n_stop, 2) or self.weights.shape != (self.goal.size, n_stop):
-            raise ValueError(f"weights: expected centres [{n_stop}, 2] and weights [{self.goal.size}, {n_stop}], "
-                             f"got {self.centres.shape} and {self.weights.shape}")
-        object.__setattr__(self, "exit_phase", float(np.mod(self.exit_phase, 2.0 * np.pi)))
-
-    @property
-    def n_basis(self) -> int:
-        return int(self.widths.size)
-
-    def radius_factor(self, tau: np.ndarray) -> np.ndarray:
-        """``1 - s(tau / T_s)``: 1 before the exit, 0 from ``T_s`` on; ``tau [T]`` unit-tempo time since the exit."""
-        return 1.0 - minimum_jerk(tau / self.length)
-
-    def anchor_blend(self, tau: np.ndarray) -> np.ndarray:
-        """Share ``[T]`` of the way from the anchor to the goal at unit-tempo time ``tau`` since the exit."""
-        return minimum_jerk((tau - self.blend_start) / (self.length - self.blend_start))
-
-    def activations(self, phi: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Raw stop activations ``[T, S]`` at (already rotated) phases ``phi [T]`` and stop radii ``r [T]``."""
-        q = self.centres
-        distance_sq = (r[:, None] ** 2 + np.sum(q**2, axis=1)
-                       - 2.0 * r[:, None] * (np.cos(phi)[:, None] * q[:, 0] + np.sin(phi)[:, None] * q[:, 1]))
-        return np.exp(-self.widths * np.maximum(distance_sq, 0.0)) * self.fading.stop_gate(r)[:, None]
-
-    def mixture(self, basis, phi: np.ndarray, r: np.ndarray, tau: np.ndarray, rotation: float) -> np.ndarray:
-        """Raw activations ``[T, D + S]`` of all three families along a path that exits at ``tau = 0``.
-
-        ``phi, r [T]`` are the unstopped canonical state, ``tau [T]`` unit-tempo time since the exit
-        (negative before it), ``rotation`` the phase offset of this exit from the demonstrated one.
-        Before the exit the result is the unstopped activations with zero stop columns (exactly).
-        """
-        stopping = tau >= 0.0
-        r_stop = np.where(stopping, r * self.radius_factor(tau), r)
-        raw = basis.activations(phi, r_stop)
-        raw[:, : basis.n_periodic] *= self.fading.periodic_gate(r_stop)[:, None]
-        stop = np.zeros((phi.size, self.n_basis))
-        if np.any(stopping):
-            stop[stopping] = self.activations(phi[stopping] - rotation, r_stop[stopping])
-        return np.concatenate([raw, stop], axis=1)
-
-    def forcing(self, basis, phi: np.ndarray, r: np.ndarray, tau: np.ndarray, rotation: float,
-                weights: np.ndarray, stop_weights: np.ndarray) -> np.ndarray:
-        """The forcing term (5) with the stop family: ``weights [..., d, D]``, ``stop_weights [..., d, S]``
-        -> ``[..., T, d]``."""
-        raw = self.mixture(basis, phi, r, tau, rotation)
-        full = np.concatenate([weights, stop_weights], axis=-1)
-        return (raw @ np.swapaxes(full, -1, -2)) / (raw.sum(axis=-1, keepdims=True) + basis.fading.floor)
-
-    def to_dict(self) -> dict:
-        """JSON-ready numbers (the optional ``stop`` field of a DMP file)."""
-        return {"exit_phase": self.exit_phase, "length": self.length, "blend_start": self.blend_start,
-                "goal": self.goal.tolist(), "centres": self.centres.tolist(), "widths": self.widths.tolist(),
-                "weights": self.weights.tolist(),
-                "fading": {"nu1": self.fading.nu1, "nu2": self.fading.nu2, "k": self.fading.k,
-                           "delta": self.fading.delta}}
-
-    def with_weights(self, weights: np.ndarray) -> Ending:
-        """The same ending with new stop weights ``[d, S]``."""
-        return Ending(self.exit_phase, self.length, self.blend_start, self.goal, self.centres, self.widths,
-                      weights, self.fading)
-
-
-def exit_time(request: float, phase0: float, omega: float, exit_phase: float) -> float:
-    """First time ``>= request`` at which the phase ``phase0 + omega t`` equals ``exit_phase`` mod 2 pi (s)."""
-    turns = np.ceil((phase0 + omega * request - exit_phase) / (2.0 * np.pi) - 1e-12)
-    return float((exit_phase + 2.0 * np.pi * turns - phase0) / omega)
 
 
 # ---------------------------------------------------------------------------------- demonstrations
@@ -255,7 +104,7 @@ class StopSegmentation:
         start: the segmentation of the start and periodic part (:func:`rdmp_gym.segment`).
         periodic_end: time from ``demo.t[0]`` of the last sample that fits the periodic pattern (s).
         rest_time: time from ``demo.t[0]`` from which the demonstration is at rest (s).
-        goal: ``[d]`` the rest position (mean over the last 0.2 s).
+        goal: ``[d]`` the rest position (mean over the rest).
     """
 
     start: Segmentation
@@ -264,13 +113,15 @@ class StopSegmentation:
     goal: np.ndarray
 
 
-def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tolerance: float = 5.0,
+def segment_ending(demo: Demonstration, *, period: float | None = None, rest_fraction: float = 0.05,
                    margin: float = 2.0, n_harmonics: int = 12) -> StopSegmentation:
     """Find the start transient, the periodic part, the stop and the rest in a demonstration that ends.
 
-    Rest: the goal is the mean of the last 0.2 s; the demonstration is at rest from the first sample
-    after which its smoothed position stays within ``rest_tolerance`` noise deviations of the goal (the
-    standard deviation of the samples over those last 0.2 s). Periodic part: :func:`rdmp_gym.segment` on
+    Rest: the demonstration is at rest from the first sample after which its speed (smoothed,
+    :func:`rdmp_gym.rhythm.motion_speed`) stays below ``rest_fraction`` of its typical speed while it moves (or
+    three times its speed in its quietest 0.5 s, where that is higher: sensor noise), for at least 0.2 s; the
+    goal is the mean position over the rest. Relative to the motion's own scale, so a slow drift at rest and
+    sensor noise pass. Periodic part: :func:`rdmp_gym.segment` on
     the samples up to two thirds of the rest time (so the stop does not enter it; 3/4 or 0.85 of it when
     that shows too little of the periodic part); the Fourier template of the periodic
     part is then extended to the rest, and the end of the periodic part is the change point of its
@@ -279,21 +130,16 @@ def segment_ending(demo: Demonstration, *, period: float | None = None, rest_tol
     """
     if not isinstance(demo, Demonstration):
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
-    rest_tolerance = check_positive(rest_tolerance, "rest_tolerance")
+    rest_fraction = check_positive(rest_fraction, "rest_fraction")
     t, dt = demo.t - demo.t[0], demo.dt
     tail = max(round(0.2 / dt), 5)
     if demo.n_samples < 10 * tail:
         raise ValueError(f"demo: too short ({demo.duration:.3g} s) to hold a start, periods and a stop")
-    goal = demo.Y[-tail:].mean(axis=0)
-    smooth, _, _ = smooth_derivatives(demo.Y, dt, 0.1)
-    floor = 1e-6 * np.ptp(demo.Y, axis=0) + 1e-12
-    noise = np.maximum(np.std(demo.Y[-tail:], axis=0), floor)
-    if np.any(noise > 3.0 * np.maximum(np.std(demo.Y[-tail:] - smooth[-tail:], axis=0), floor)):
-        raise ValueError("demo: does not come to rest (its last 0.2 s move more than noise)")
-    away = np.flatnonzero(np.any(np.abs(smooth - goal) > rest_tolerance * noise, axis=1))
-    if away.size == 0 or away[-1] >= t.size - tail:
-        raise ValueError("demo: does not come to rest (need at least 0.2 s at rest at the end)")
-    rest_index = int(away[-1]) + 1
+    rest_index = rest_start(demo, rest_fraction, min_rest=tail * dt)
+    if rest_index is None:
+        raise ValueError(f"demo: does not come to rest (its last {tail * dt:.2g} s move faster than "
+                         f"{rest_fraction:.0%} of its typical speed)")
+    goal = demo.Y[rest_index:].mean(axis=0)
     seg, head = None, 0
     for share in _HEAD_SHARES:       # the shortest head that shows the periodic part (less risk of the stop in it)
         head = round(share * rest_index)
@@ -367,14 +213,9 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     """
     from .dmp import RhythmicDMP
 
-    if int(n_stop) < 2:
-        raise ValueError(f"n_stop: expected at least 2, got {n_stop}")
-    if not 0.0 < nu2_factor < nu1_factor < 1.0:
-        raise ValueError(f"nu1_factor, nu2_factor: expected 0 < nu2_factor < nu1_factor < 1, "
-                         f"got {nu1_factor!r}, {nu2_factor!r}")
+    _check_stop_settings(n_stop, nu1_factor, nu2_factor)
     seg = segment_ending(demo) if segmentation is None else segmentation
-    dt = demo.dt
-    end_index = round(seg.periodic_end / dt)
+    end_index = round(seg.periodic_end / demo.dt)
     head = Demonstration(demo.t[: end_index + 1], demo.Y[: end_index + 1], name=demo.name)
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: give the StopSegmentation as segmentation=")
@@ -382,12 +223,37 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
                                         for name in ("delta", "smoothing", "regularization"))
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
+    method = fit_kwargs.get("method", defaults["method"].default)
+    return fit_stop(dmp, demo, seg, n_stop, nu1_factor=nu1_factor, nu2_factor=nu2_factor, stop_overlap=stop_overlap,
+                    rest_margin=rest_margin, delta=delta, regularization=regularization, method=method,
+                    substeps=int(fit_kwargs.get("substeps", defaults["substeps"].default)), smoothing=smoothing)
+
+
+def _check_stop_settings(n_stop: int, nu1_factor: float, nu2_factor: float) -> None:
+    if int(n_stop) < 2:
+        raise ValueError(f"n_stop: expected at least 2, got {n_stop}")
+    if not 0.0 < nu2_factor < nu1_factor < 1.0:
+        raise ValueError(f"nu1_factor, nu2_factor: expected 0 < nu2_factor < nu1_factor < 1, "
+                         f"got {nu1_factor!r}, {nu2_factor!r}")
+
+
+def fit_stop(dmp, demo: Demonstration, seg: StopSegmentation, n_stop: int = 15, *, nu1_factor: float = 0.9,
+             nu2_factor: float = 0.7, stop_overlap: float = 0.9, rest_margin: float = 0.15, delta: float = 1e-3,
+             regularization: float | None = None, method: str = "trajectory", substeps: int = 4,
+             smoothing: float = 0.15):
+    """``dmp`` (a fitted :class:`RhythmicDMP` that reproduces ``demo`` up to its stop) with a stop fitted to the rest
+    of ``demo``: the stop family's ``n_stop`` weights by one ridge regression, start and periodic weights held.
+    ``method="trajectory"`` matches the rollout's positions (and follows an anchor that travels with
+    ``dmp.sweep``); ``"lwr"``/``"ridge"`` match the forcing target (10) (a fixed anchor). Other arguments as in
+    :func:`fit_ending`. Returns a copy of ``dmp`` with ``ending`` set."""
+    _check_stop_settings(n_stop, nu1_factor, nu2_factor)
     if regularization is None:          # resolved per method, as in RhythmicDMP.fit
-        regularization = 1e-4 if fit_kwargs.get("method", defaults["method"].default) == "trajectory" else 1e-6
+        regularization = 1e-4 if method == "trajectory" else 1e-6
+    dt = demo.dt
     canonical, mu = dmp.canonical, dmp.canonical.mu
     fading = StopFading(nu1_factor * mu, nu2_factor * mu, delta=delta)
-    u1 = _minimum_jerk_inverse(1.0 - nu1_factor)
-    u2 = _minimum_jerk_inverse(1.0 - nu2_factor)
+    u1 = minimum_jerk_inverse(1.0 - nu1_factor)
+    u2 = minimum_jerk_inverse(1.0 - nu2_factor)
     # the fade window of the two families is centred on the detected end of the periodic part (which lags the
     # true one: a smooth departure stays within the noise for a while), and the canonical path reaches the
     # origin ``rest_margin`` of the stop duration after the detected rest (which leads the true one)
@@ -404,9 +270,7 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     ending = Ending(exit_phase, length, u1 * length, seg.goal, centres, widths,
                     np.zeros((dmp.n_dims, int(n_stop))), fading)
 
-    method = fit_kwargs.get("method", defaults["method"].default)
     if method == "trajectory":
-        substeps = int(fit_kwargs.get("substeps", defaults["substeps"].default))
         stop_weights = _trajectory_stop_weights(dmp.with_ending(ending), demo, exit_at, substeps, regularization)
     else:
         rows = slice(int(np.floor(exit_at / dt)), None)
@@ -450,30 +314,3 @@ def _trajectory_stop_weights(dmp, demo: Demonstration, exit_at: float, substeps:
     response = system.rollout(system.input(zeros, columns), zeros, zeros)[0][::substeps]  # [L, S]
     rows = slice(int(np.floor(exit_at / demo.dt)), None)
     return _ridge(response[rows], demo.Y[rows] - free[rows], regularization)
-
-
-@dataclass(frozen=True, eq=False)
-class StopPlan:
-    """One requested stop of a rollout.
-
-    Attributes:
-        exit_time: time after the start of the rollout at which the canonical system leaves the cycle (s).
-        rotation: phase of this exit minus the demonstrated exit phase (rad; 0 at the demonstrated phase).
-        goal: ``[B, d]`` where each movement comes to rest.
-    """
-
-    exit_time: float
-    rotation: float
-    goal: np.ndarray
-
-
-def plan_stop(ending: Ending, stop_at: float, phi0: float, omega: float, goal: np.ndarray,
-              exit_phase: float | None = None) -> StopPlan:
-    """The stop that a request at time ``stop_at`` (s after the start) leads to: the exit at the next
-    demonstrated exit phase (or at ``exit_phase``), on a phase ``phi0 + omega t`` (``omega`` with tempo)."""
-    stop_at = float(as_finite_array(stop_at, "stop_at", ndim=0))
-    if stop_at < 0.0:
-        raise ValueError(f"stop_at: expected a time >= 0, got {stop_at!r}")
-    target = ending.exit_phase if exit_phase is None else float(as_finite_array(exit_phase, "exit_phase", ndim=0))
-    when = exit_time(stop_at, phi0, omega, target)
-    return StopPlan(when, float(target - ending.exit_phase), goal)

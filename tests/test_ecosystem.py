@@ -17,7 +17,7 @@ from rdmp_gym.agents.tasks import TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs import ENV_ID, TRACKING_ID, RecordEpisodeVideo
 
-from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, save_dmp, wiping_demonstration
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = {"n_periodic": 12, "n_transient": 12, "duration": 3.0}
@@ -88,7 +88,7 @@ def test_a_saved_refined_dmp_replays_the_refined_episode_without_refitting(tmp_p
     _, reward, *_, info = env.step(action)
     base = env.unwrapped
     refined = base.dmp.with_params(base.action_to_params(action), base.groups)
-    refined.save(tmp_path / "dmp.json")
+    save_dmp(refined, tmp_path / "dmp.json")
 
     monkeypatch.setattr(RhythmicDMP, "fit", classmethod(lambda *a, **k: pytest.fail("refitted")))
     replay = gym.make(ENV_ID, dmp=str(tmp_path / "dmp.json"), n_periods=2)
@@ -111,7 +111,7 @@ def test_every_run_writes_the_refined_dmp_in_the_core_format(tmp_path):
     config = TrainConfig(agent="pi2", updates=2, rollouts=4, seed=0, env_id=TRACKING_ID,
                          env_kwargs={"n_periodic": 10, "n_transient": 10, "duration": 4.0}, start="perturbed")
     run = train(config, tmp_path / "run")
-    saved = RhythmicDMP.load(run.path / "dmp.json")
+    saved = load_dmp(run.path / "dmp.json")
     env = config.task.make().unwrapped
     best = json.loads((run.path / "best_params.json").read_text())
     assert np.allclose(saved.get_params(env.groups), best["params"], rtol=0, atol=1e-12)

@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rdmp_gym import PeriodicDMP, RhythmicDMP
+from rdmp_gym import PeriodicDMP, RhythmicDMP, load_dmp
 from rdmp_gym.demonstrations import Demonstration
 from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
 
@@ -252,7 +252,7 @@ def test_fuzz_cli_fit(tmp_path_factory, flags, capsys):
     code = _cli(argv)
     assert code in (0, 2), f"{argv} exited with {code}"
     if code == 0:
-        dmp = RhythmicDMP.load(out / "dmp.json")
+        dmp = load_dmp(out / "dmp.json")
         assert np.all(np.isfinite(dmp.get_params()))
     else:
         assert capsys.readouterr().err.strip()

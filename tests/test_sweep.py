@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rdmp_gym import RhythmicDMP, Sweep, load_dmp
+from rdmp_gym import RhythmicDMP, Sweep, load_dmp, save_dmp
 from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
 
 T_FINE = np.linspace(0.0, 6.0, 6001)
@@ -125,7 +125,7 @@ def test_parameters_batch_and_stepper_agree(dmp, travelling):
 
 
 def test_file_keeps_the_sweep(tmp_path, travelling):
-    travelling.save(tmp_path / "dmp.json")
+    save_dmp(travelling, tmp_path / "dmp.json")
     loaded = load_dmp(tmp_path / "dmp.json")
     np.testing.assert_array_equal(loaded.sweep.times, travelling.sweep.times)
     np.testing.assert_array_equal(loaded.sweep.points, travelling.sweep.points)

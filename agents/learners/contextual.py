@@ -169,11 +169,10 @@ class SearchSpace:
         observations ``[E, o]`` of its contexts (their mean and standard deviation standardise φ)."""
         base = env.unwrapped
         n = int(env.action_space.shape[0])
-        if hasattr(base, "dmp") and hasattr(base, "groups"):
+        if hasattr(base, "action_map"):       # the wiping envs: DMP groups, then e.g. ``approach``, ``sweep_x``
+            slices, n_dims = base.action_map.action_slices(), int(base.dmp.n_dims)
+        elif hasattr(base, "dmp") and hasattr(base, "groups"):
             slices, n_dims = dict(base.dmp.param_slices(base.groups)), int(base.dmp.n_dims)
-            first = sum(part.stop - part.start for part in slices.values())
-            for offset, name in enumerate(getattr(getattr(base, "action_map", None), "direction_names", ())):
-                slices[name] = slice(first + offset, first + offset + 1)     # e.g. ArmarWipe-v1's ``approach``
         else:
             slices, n_dims = {"all": slice(0, n)}, 1
         observations = np.asarray(observations, dtype=np.float64)

@@ -39,18 +39,22 @@ class PI2Config:
         h: eliteness of the cost weighting.
         decay: factor applied to sigma after every update (1 = no annealing).
         min_sigma: exploration floor.
+        length: correlation length of the exploration in neighbouring DMP weights (0 = independent noise, as in
+            the original PI²; > 0 needs the action layout, :func:`rdmp_gym.agents.learners.make_learner`'s ``space``).
     """
 
     sigma: float = 0.6
     h: float = 10.0
     decay: float = 0.95
     min_sigma: float = 0.02
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "pi2.sigma", 0.0, None, low_open=True)
         check_range(self.h, "pi2.h", 0.0, None, low_open=True)
         check_range(self.decay, "pi2.decay", 0.0, 1.0, low_open=True)
         check_range(self.min_sigma, "pi2.min_sigma", 0.0, self.sigma)
+        check_range(self.length, "pi2.length", 0.0, None)
 
 
 class PI2(Learner):
@@ -62,12 +66,14 @@ class PI2(Learner):
         rng: source of the exploration noise.
         time_weights: ``[T, n]`` activation of each action dimension at each control step, in [0, 1].
         config: the settings.
+        factor: ``[n, n]`` shape of the exploration noise (``sigma · factor ε``; default the identity), e.g.
+            :func:`~rdmp_gym.agents.learners.smooth.smooth_factor`.
     """
 
     name = "pi2"
 
     def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator,
-                 time_weights: np.ndarray, config: PI2Config | None = None) -> None:
+                 time_weights: np.ndarray, config: PI2Config | None = None, factor: np.ndarray | None = None) -> None:
         super().__init__(initial_mean, rollouts, rng)
         self.config = config or PI2Config()
         weights = np.asarray(time_weights, dtype=np.float64)
@@ -79,13 +85,16 @@ class PI2(Learner):
         self._step_weights = (steps - np.arange(steps, dtype=np.float64))[:, None] * weights  # [T, n]
         self._norm = self._step_weights.sum(axis=0)                                            # [n]
         self.sigma = self.config.sigma
+        self.factor = np.eye(self.n_params) if factor is None else np.asarray(factor, dtype=np.float64)
+        if self.factor.shape != (self.n_params, self.n_params):
+            raise ValueError(f"factor: expected shape ({self.n_params}, {self.n_params}), got {self.factor.shape}")
 
     @property
     def exploration(self) -> float:
         return float(self.sigma)
 
     def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
-        noise = self.sigma * self.rng.standard_normal((self.rollouts, self.n_params))
+        noise = self.sigma * self.rng.standard_normal((self.rollouts, self.n_params)) @ self.factor.T
         return np.clip(self._mean + noise, -1.0, 1.0)
 
     def _update(self, batch: EpisodeBatch) -> None:

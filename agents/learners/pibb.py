@@ -26,12 +26,14 @@ class PIBBConfig:
     """PI^BB settings.
 
     Attributes:
-        sigma: initial exploration standard deviation (``Sigma_0 = sigma² I``).
+        sigma: initial exploration standard deviation (``Sigma_0 = sigma² I``, or ``sigma² C`` with ``length``).
         h: eliteness of the cost weighting.
         covariance: ``"decay"`` or ``"adaptation"``.
         decay: standard-deviation factor per update (``"decay"`` mode).
         learning_rate: weight of the new estimate (``"adaptation"`` mode).
         min_sigma: floor of the standard deviation along every eigen-direction.
+        length: correlation length of the initial exploration in neighbouring DMP weights (0 = independent; > 0
+            needs the action layout, :func:`rdmp_gym.agents.learners.make_learner`'s ``space``).
     """
 
     sigma: float = 0.6
@@ -40,6 +42,7 @@ class PIBBConfig:
     decay: float = 0.95
     learning_rate: float = 0.5
     min_sigma: float = 0.02
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "pibb.sigma", 0.0, None, low_open=True)
@@ -48,6 +51,7 @@ class PIBBConfig:
         check_range(self.decay, "pibb.decay", 0.0, 1.0, low_open=True)
         check_range(self.learning_rate, "pibb.learning_rate", 0.0, 1.0, low_open=True)
         check_range(self.min_sigma, "pibb.min_sigma", 0.0, self.sigma)
+        check_range(self.length, "pibb.length", 0.0, None)
 
 
 class PIBB(Learner):
@@ -58,16 +62,21 @@ class PIBB(Learner):
         rollouts: samples per update ``K``.
         rng: source of the samples.
         config: the settings.
+        factor: ``[n, n]`` shape of the initial exploration (``Sigma_0 = sigma² factor factorᵀ``; default the
+            identity), e.g. :func:`~rdmp_gym.agents.learners.smooth.smooth_factor`.
     """
 
     name = "pibb"
 
     def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator,
-                 config: PIBBConfig | None = None) -> None:
+                 config: PIBBConfig | None = None, factor: np.ndarray | None = None) -> None:
         super().__init__(initial_mean, rollouts, rng)
         self.config = config or PIBBConfig()
-        self.covariance = self.config.sigma**2 * np.eye(self.n_params)   # [n, n]
-        self._factor = self.config.sigma * np.eye(self.n_params)
+        shape = np.eye(self.n_params) if factor is None else np.asarray(factor, dtype=np.float64)
+        if shape.shape != (self.n_params, self.n_params):
+            raise ValueError(f"factor: expected shape ({self.n_params}, {self.n_params}), got {shape.shape}")
+        self._factor = self.config.sigma * shape
+        self.covariance = self._factor @ self._factor.T                  # [n, n]
 
     @property
     def exploration(self) -> float:

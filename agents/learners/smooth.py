@@ -23,7 +23,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["KNEE", "SmoothNoise", "block_layout", "difference_matrix", "squash", "unsquash"]
+__all__ = ["KNEE", "SmoothNoise", "block_layout", "difference_matrix", "smooth_factor", "squash", "unsquash"]
 
 #: |u| below which :func:`squash` is the identity (the imitation's neighbourhood is searched unchanged)
 KNEE = 0.8
@@ -153,3 +153,14 @@ class SmoothNoise:
             block = actions[:, part]
             total += 0.5 * np.einsum("ki,ij,kj->k", block, cost, block)
         return total
+
+
+def smooth_factor(n: int, slices: Mapping[str, slice], n_dims: int, length: float) -> np.ndarray:
+    """``[n, n]`` a factor ``L`` of the smooth correlation ``C = L Lᵀ`` of an action (block-diagonal: each DoF's
+    weights correlated over about ``length`` neighbours, :class:`SmoothNoise`; the identity elsewhere and for
+    ``length = 0``). ``sigma · L ε`` with ``ε ~ N(0, I)`` is smooth exploration of mean standard deviation ~sigma."""
+    noise = SmoothNoise(n, block_layout(slices, n_dims), length)
+    factor = np.eye(n)
+    for (part, _), block in zip(noise.blocks, noise.factors, strict=True):
+        factor[part, part] = block
+    return factor

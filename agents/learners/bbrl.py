@@ -1,0 +1,295 @@
+"""``bbrl``: a neural contextual episodic learner with a trust region (deep black-box RL, Otto et al. 2022).
+
+The policy maps the raw context ``s`` (every field, standardised) to a Gaussian over the unbounded search vector
+``u`` (executed as ``squash(u)``, :mod:`.smooth`):
+
+    u ~ N(mu(s), Sigma),   mu(s) = u0 + sigma0 L MLP(s)   (the last layer starts at 0: the first policy is u0),
+    Sigma = D C D + U U^T,  D = diag(sigma),  C = (1 - rough) C_smooth + rough I,
+
+``C_smooth`` the correlation of neighbouring DMP weights (:mod:`.smooth`), the per-dimension scales ``sigma``
+and the low-rank factor ``U [n, r]`` learned, shared by all contexts; ``L`` is the Cholesky factor of ``C`` and
+``sigma0`` the initial ``sigma``, so the network works in whitened coordinates: an optimiser step of equal size
+in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
+well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
+thousands (the conditional variances of a smooth block are tiny) and the trust region would forbid it.
+Exploration is therefore smooth in time from the first update on, and the low-rank part can learn which
+directions to explore together.
+
+One update, from the ``K`` rollouts of the last ``ask``:
+
+1. advantages ``A = R - V(s)``, ``V`` a ridge regression on the standardised context fitted to the returns of
+   the previous ``reuse`` batches (the current batch never scores itself), normalised to unit scale;
+2. ``epochs`` Adam steps on the importance-weighted objective ``-mean(exp(log p_new(u|s) - log p_old(u|s)) A)``
+   over the batch;
+3. the **trust region**: the mean KL divergence ``KL(p_old(.|s) || p_new(.|s))`` over the batch's contexts must
+   not exceed ``epsilon``; the step is shrunk towards the old parameters (halving its length, up to 20 times,
+   else dropped) until it does. The bound holds by construction, not only on average as with a clipped ratio.
+
+No task-specific structure: no hand-picked groups, gains or features. Randomness comes only from the
+learner's numpy Generator (torch is seeded from it per update), so resuming from a checkpoint is exact.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import torch
+
+from ..options import check_range
+from .base import EpisodeBatch, Learner
+from .contextual import SearchSpace
+from .smooth import smooth_factor, squash, unsquash
+
+__all__ = ["BBRL", "BBRLConfig", "bbrl_policy_actions"]
+
+_DTYPE = torch.float64
+
+
+@dataclass(frozen=True)
+class BBRLConfig:
+    """Settings of :class:`BBRL`.
+
+    Attributes:
+        sigma: initial per-dimension standard deviation of the exploration (action units).
+        length: correlation length of the exploration in neighbouring weights (0 = independent).
+        rough: share of independent (not smooth) exploration in the correlation.
+        rank: columns of the learned low-rank covariance factor ``U`` (0 = none).
+        hidden: width of the two hidden layers of the mean network.
+        epsilon: trust region: the largest mean KL divergence of one update.
+        epochs: Adam steps per update.
+        learning_rate: Adam's step size.
+        reuse: batches whose returns fit the value baseline.
+        value_ridge: ridge of the value baseline.
+        min_sigma: floor of each dimension's standard deviation.
+    """
+
+    sigma: float = 0.3
+    length: float = 5.0
+    rough: float = 0.1
+    rank: int = 4
+    hidden: int = 64
+    epsilon: float = 0.05
+    epochs: int = 30
+    learning_rate: float = 3e-3
+    reuse: int = 5
+    value_ridge: float = 1.0
+    min_sigma: float = 0.01
+
+    def __post_init__(self) -> None:
+        check_range(self.sigma, "sigma", 0.0, None, low_open=True)
+        check_range(self.length, "length", 0.0, None)
+        check_range(self.rough, "rough", 0.0, 1.0, low_open=True)
+        check_range(self.rank, "rank", 0, None)
+        check_range(self.hidden, "hidden", 1, None)
+        check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
+        check_range(self.epochs, "epochs", 1, None)
+        check_range(self.learning_rate, "learning_rate", 0.0, None, low_open=True)
+        check_range(self.reuse, "reuse", 1, None)
+        check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
+        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+
+
+class _Policy(torch.nn.Module):
+    """``mu(s) = u0 + MLP(s)`` and ``Sigma = D C D + U U^T`` (see the module docstring)."""
+
+    def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: float,
+                 rank: int) -> None:
+        super().__init__()
+        n = u0.size
+        self.net = torch.nn.Sequential(torch.nn.Linear(n_context, hidden), torch.nn.Tanh(),
+                                       torch.nn.Linear(hidden, hidden), torch.nn.Tanh(), torch.nn.Linear(hidden, n))
+        torch.nn.init.zeros_(self.net[-1].weight)
+        torch.nn.init.zeros_(self.net[-1].bias)
+        self.register_buffer("u0", torch.as_tensor(u0))
+        self.register_buffer("correlation", torch.as_tensor(correlation))
+        self.register_buffer("shape", sigma * torch.linalg.cholesky(torch.as_tensor(correlation)))
+        self.log_sigma = torch.nn.Parameter(torch.full((n,), float(np.log(sigma)), dtype=_DTYPE))
+        self.low_rank = torch.nn.Parameter(torch.zeros(n, rank, dtype=_DTYPE))
+        self.to(_DTYPE)
+
+    def mean(self, contexts: torch.Tensor) -> torch.Tensor:
+        """``[K, n]`` means for standardised contexts ``[K, o]``."""
+        return self.u0 + self.net(contexts) @ self.shape.T
+
+    def covariance(self, min_sigma: float) -> torch.Tensor:
+        """``[n, n]`` the shared covariance."""
+        sigma = torch.clamp(torch.exp(self.log_sigma), min=min_sigma)
+        return sigma[:, None] * self.correlation * sigma[None, :] + self.low_rank @ self.low_rank.T
+
+
+def _log_prob(u: torch.Tensor, mean: torch.Tensor, chol: torch.Tensor) -> torch.Tensor:
+    """``[K]`` Gaussian log densities of ``u [K, n]`` (up to the constant) under means ``[K, n]``, ``chol`` of Sigma."""
+    white = torch.linalg.solve_triangular(chol, (u - mean).T, upper=False)
+    return -0.5 * torch.sum(white**2, dim=0) - torch.sum(torch.log(torch.diagonal(chol)))
+
+
+def gaussian_kl(mean_old: torch.Tensor, chol_old: torch.Tensor, mean_new: torch.Tensor,
+                chol_new: torch.Tensor) -> torch.Tensor:
+    """``[K]`` ``KL(N(mean_old, Sigma_old) || N(mean_new, Sigma_new))`` per row of the means ``[K, n]``."""
+    n = mean_old.shape[1]
+    trace = torch.sum(torch.linalg.solve_triangular(chol_new, chol_old, upper=False) ** 2)
+    white = torch.linalg.solve_triangular(chol_new, (mean_new - mean_old).T, upper=False)
+    log_det = 2.0 * (torch.sum(torch.log(torch.diagonal(chol_new))) - torch.sum(torch.log(torch.diagonal(chol_old))))
+    return 0.5 * (trace + torch.sum(white**2, dim=0) - n + log_det)
+
+
+class BBRL(Learner):
+    """The neural contextual learner of the module docstring.
+
+    Args:
+        initial_mean: ``[n]`` start action (``squash(u0)``; 0 = the imitation).
+        rollouts: episodes per update ``K``.
+        rng: the only source of randomness.
+        space: the action layout (for the smooth correlation) and the context standardisation.
+        config: :class:`BBRLConfig`.
+    """
+
+    name = "bbrl"
+    uses_context = True
+
+    def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, space: SearchSpace,
+                 config: BBRLConfig | None = None) -> None:
+        super().__init__(initial_mean, rollouts, rng)
+        self.config = config or BBRLConfig()
+        self.space = space
+        self.center, self.scale = np.asarray(space.context_center), np.asarray(space.context_scale)
+        factor = smooth_factor(self.n_params, space.slices, space.n_dims, self.config.length)
+        correlation = factor @ factor.T
+        correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.n_params)
+        torch.manual_seed(int(rng.integers(2**31)))
+        self.policy = _Policy(unsquash(self._mean), self.center.size, self.config.hidden, correlation,
+                              self.config.sigma, self.config.rank)
+        self._asked: tuple[np.ndarray, np.ndarray] | None = None      # (contexts [K, o], u [K, n])
+        self._history: list[tuple[np.ndarray, np.ndarray]] = []       # (standardised contexts, returns)
+        #: the mean KL divergence of the last update (after the trust region)
+        self.last_kl = 0.0
+
+    # ------------------------------------------------------------------ sampling
+    def _features(self, observations: np.ndarray) -> np.ndarray:
+        obs = np.asarray(observations, dtype=np.float64)
+        if obs.ndim != 2 or obs.shape[1] != self.center.size:
+            raise ValueError(f"observations: expected shape [K, {self.center.size}], got {obs.shape}")
+        safe = np.where(self.scale > 0, self.scale, 1.0)
+        return np.where(self.scale > 0, (obs - self.center) / safe, 0.0)
+
+    def _chol(self) -> torch.Tensor:
+        return torch.linalg.cholesky(self.policy.covariance(self.config.min_sigma))
+
+    @property
+    def exploration(self) -> float:
+        with torch.no_grad():
+            return float(torch.mean(torch.sqrt(torch.diagonal(self.policy.covariance(self.config.min_sigma)))))
+
+    def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
+        if observations is None:
+            raise ValueError("observations: bbrl is contextual; ask needs the rollouts' contexts [K, o]")
+        x = self._features(observations)
+        if x.shape[0] != self.rollouts:
+            raise ValueError(f"observations: expected {self.rollouts} rows, got {x.shape[0]}")
+        with torch.no_grad():
+            mean = self.policy.mean(torch.as_tensor(x)).numpy()
+            chol = self._chol().numpy()
+        u = mean + self.rng.standard_normal((self.rollouts, self.n_params)) @ chol.T
+        self._asked = (x, u)
+        return squash(u)
+
+    def policy_actions(self, observations: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return squash(self.policy.mean(torch.as_tensor(self._features(observations))).numpy())
+
+    # ------------------------------------------------------------------ update
+    def _advantages(self, x: np.ndarray, returns: np.ndarray) -> np.ndarray:
+        """``[K]`` normalised advantages against the value baseline of the earlier batches."""
+        baseline = np.full(returns.size, returns.mean())
+        if self._history:
+            xs = np.concatenate([h[0] for h in self._history])
+            ys = np.concatenate([h[1] for h in self._history])
+            design = np.c_[np.ones(len(xs)), xs]
+            ridge = self.config.value_ridge * np.eye(design.shape[1])
+            ridge[0, 0] = 0.0
+            coef = np.linalg.solve(design.T @ design + ridge, design.T @ ys)
+            baseline = np.c_[np.ones(len(x)), x] @ coef
+        advantages = returns - baseline
+        spread = advantages.std()
+        return (advantages - advantages.mean()) / spread if spread > 1e-12 else np.zeros_like(advantages)
+
+    def _update(self, batch: EpisodeBatch) -> None:
+        if self._asked is None:
+            raise RuntimeError("tell: call ask first")
+        x, u = self._asked
+        advantages = self._advantages(x, batch.returns)
+        self._history = [*self._history, (x, batch.returns.copy())][-self.config.reuse:]
+        torch.manual_seed(int(self.rng.integers(2**31)))
+        contexts, samples, weights = (torch.as_tensor(a) for a in (x, u, advantages))
+        old = [p.detach().clone() for p in self.policy.parameters()]
+        with torch.no_grad():
+            old_mean, old_chol = self.policy.mean(contexts), self._chol()
+            old_logp = _log_prob(samples, old_mean, old_chol)
+        optimizer = torch.optim.Adam(self.policy.parameters(), lr=self.config.learning_rate)
+        for _ in range(self.config.epochs):
+            optimizer.zero_grad()
+            ratio = torch.exp(_log_prob(samples, self.policy.mean(contexts), self._chol()) - old_logp)
+            loss = -torch.mean(ratio * weights)
+            loss.backward()
+            optimizer.step()
+        self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol)
+        self._mean = self.policy_actions(self.center[None])[0]
+        self._asked = None
+
+    def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor) -> float:
+        with torch.no_grad():
+            return float(torch.mean(gaussian_kl(old_mean, old_chol, self.policy.mean(contexts), self._chol())))
+
+    def _enforce_trust_region(self, old: list[torch.Tensor], contexts: torch.Tensor, old_mean: torch.Tensor,
+                              old_chol: torch.Tensor) -> float:
+        """Shrink the step until the mean KL is within ``epsilon`` (or drop it); returns the final mean KL."""
+        new = [p.detach().clone() for p in self.policy.parameters()]
+        fraction = 1.0
+        for _ in range(20):
+            kl = self._kl(contexts, old_mean, old_chol)
+            if np.isfinite(kl) and kl <= self.config.epsilon:
+                return kl
+            fraction *= 0.5
+            with torch.no_grad():
+                for param, start, end in zip(self.policy.parameters(), old, new, strict=True):
+                    param.copy_(start + fraction * (end - start))
+        with torch.no_grad():
+            for param, start in zip(self.policy.parameters(), old, strict=True):
+                param.copy_(start)
+        return 0.0
+
+    # ------------------------------------------------------------------ state
+    def _extra_state(self) -> dict[str, Any]:
+        return {"parameters": {name: value.detach().numpy().copy() for name, value in self.policy.state_dict().items()},
+                "context_center": self.center.copy(), "context_scale": self.scale.copy(),
+                "history_contexts": [h[0].copy() for h in self._history],
+                "history_returns": [h[1].copy() for h in self._history], "min_sigma": float(self.config.min_sigma)}
+
+    def _load_extra_state(self, state: dict[str, Any]) -> None:
+        parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
+                      for name, value in state["parameters"].items()}
+        self.policy.load_state_dict(parameters)
+        contexts, returns = state["history_contexts"], state["history_returns"]
+        if len(contexts) != len(returns) or len(contexts) > self.config.reuse:
+            raise ValueError("state.history_contexts: expected as many batches as history_returns, at most reuse")
+        self._history = [(np.asarray(c, dtype=np.float64), np.asarray(r, dtype=np.float64))
+                         for c, r in zip(contexts, returns, strict=True)]
+        self._asked = None
+
+
+def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> np.ndarray:
+    """``[E, n]`` the policy actions of a :class:`BBRL` state (``state_dict()``) for observations ``[E, o]``,
+    without rebuilding the learner (the mean network evaluated in numpy)."""
+    params = {name: np.asarray(value, dtype=np.float64) for name, value in state["parameters"].items()}
+    center = np.asarray(state["context_center"], dtype=np.float64)
+    scale = np.asarray(state["context_scale"], dtype=np.float64)
+    obs = np.asarray(observations, dtype=np.float64)
+    if obs.ndim != 2 or obs.shape[1] != center.size:
+        raise ValueError(f"observations: expected shape [E, {center.size}], got {obs.shape}")
+    x = np.where(scale > 0, (obs - center) / np.where(scale > 0, scale, 1.0), 0.0)
+    hidden = np.tanh(x @ params["net.0.weight"].T + params["net.0.bias"])
+    hidden = np.tanh(hidden @ params["net.2.weight"].T + params["net.2.bias"])
+    return squash(params["u0"] + (hidden @ params["net.4.weight"].T + params["net.4.bias"]) @ params["shape"].T)

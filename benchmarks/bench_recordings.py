@@ -1,0 +1,157 @@
+"""Whole-recording fits: segmentation against the truth, cycle error against the recording's own cycle-to-cycle
+variation, start and rest error, peak acceleration ratio, and whether ``rdmp-gym fit --demo`` succeeds.
+
+By default on the realistic recordings of :mod:`rdmp_gym.recordings` (3 kinds x ``--seeds`` seeds), against the
+generator's truth; with ``--data PATH`` also on the user's own recordings (CSV files ``t,x,y,z`` under PATH, or the
+12-column pose files ``*.txt`` of homogeneous transforms that some datasets ship, read at ``--data-rate`` Hz),
+against hand labels where a file ``NAME.labels.json`` beside ``NAME.csv`` gives ``{"rhythm_start": s,
+"rhythm_end": s}`` (s from the first time stamp). Third-party data is read, never copied: the user's rows go to
+``runs/benchmarks/recordings_user.json`` (untracked), the generated ones to ``recordings.json``. Targets: error
+ratio <= 1.5, start and rest error <= 1 cm, acceleration ratio <= 1.5.
+
+    python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--save]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from output import add_save_argument, results_dir
+from rdmp_gym.agents.cli import main as cli_main
+
+from rdmp_gym.fitting import smooth_derivatives
+from rdmp_gym.recording_fit import fit_recording, recording_report
+from rdmp_gym.recordings import RECORDING_KINDS, realistic_recording, to_demonstration
+
+
+def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:
+    """One table row; ``truth``: known or labelled ``period``, ``start``, ``end``, ``rest`` (s, any of them);
+    ``clean``: the noise-free recording (a Demonstration), where known."""
+    row = {"recording": name, "duration": round(demo.duration, 2)}
+    try:
+        result = fit_recording(demo)
+        seg = result.segmentation
+        row.update(period=seg.period, start=seg.rhythm_start, end=seg.rhythm_end, rest=seg.rest_time,
+                   **recording_report(demo, result))
+    except ValueError as error:
+        row["error"] = str(error)
+    for key, value in (truth or {}).items():
+        row[f"true_{key}"] = value
+        if row.get(key) is not None and value is not None:      # detected minus true (s)
+            row[f"{key}_offset"] = row[key] - value
+    if clean is not None and "peak_acceleration" in row:    # the noise-free signal's peak, beside the recording's
+        peak = float(np.max(np.linalg.norm(smooth_derivatives(clean.Y, clean.dt, 0.15)[2], axis=1)))
+        row.update(clean_peak_acceleration=peak, clean_acceleration_ratio=row["peak_acceleration"] / peak)
+    with tempfile.TemporaryDirectory() as folder:
+        row["cli"] = cli_main(["fit", "--demo", str(csv_path), "--out", folder]) == 0
+    return row
+
+
+def _pose_file(path: Path, rate: float):
+    """A 12-column pose file (rows of a 3x4 transform, row-major) as (t, positions [L, 3])."""
+    data = np.loadtxt(path)
+    return np.arange(data.shape[0]) / rate, data[:, [3, 7, 11]]
+
+
+def _user_recordings(folder: Path, rate: float):
+    """``(path, t [L], Y [L, 3], labels or None)`` for every recording under ``folder``."""
+    for path in sorted(folder.rglob("*")):
+        if path.suffix.lower() == ".csv":
+            data = np.genfromtxt(path, delimiter=",", names=True)
+            names = data.dtype.names
+            t, Y = np.asarray(data[names[0]]), np.column_stack([data[n] for n in names[1:4]])
+        elif path.suffix.lower() == ".txt":
+            t, Y = _pose_file(path, rate)
+        else:
+            continue
+        labels = path.with_suffix(".labels.json")
+        yield path, t, Y, (_labels(labels) if labels.exists() else None)
+
+
+def _labels(path: Path) -> dict:
+    """Hand labels ``{"start": s, "end": s}`` from a ``{"rhythm_start": s, "rhythm_end": s}`` file."""
+    labels = json.loads(path.read_text())
+    return {"start": float(labels["rhythm_start"]), "end": float(labels["rhythm_end"])}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=3, help="seeds per kind of generated recording")
+    parser.add_argument("--data", type=Path, default=None, help="a folder of the user's recordings (opt-in)")
+    parser.add_argument("--data-rate", type=float, default=100.0, help="sampling rate of pose files without time")
+    add_save_argument(parser)
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for kind in RECORDING_KINDS:
+            for seed in range(args.seeds):
+                recording = realistic_recording(kind, rng=np.random.default_rng(seed))
+                csv_path = Path(folder) / f"{kind}-{seed}.csv"
+                recording.to_csv(csv_path)
+                demo = to_demonstration(recording.t, recording.Y, name=f"{kind} {seed}")
+                clean = to_demonstration(recording.t, recording.truth.clean, outliers=False)
+                truth = recording.truth
+                rows.append(_row(f"{kind} {seed}", demo, {"period": truth.period, "start": truth.rhythm_start,
+                                                          "end": truth.rhythm_end, "rest": truth.rest_time},
+                                 csv_path, clean))
+                _print(rows[-1])
+        _summary("generated", rows)
+        user = []
+        if args.data is not None:
+            for path, t, Y, labels in _user_recordings(args.data, args.data_rate):
+                csv_path = Path(folder) / f"{path.stem}.csv"
+                np.savetxt(csv_path, np.column_stack([t, Y]), delimiter=",", header="t,x,y,z", comments="")
+                name = str(path.relative_to(args.data))
+                user.append(_row(name, to_demonstration(t, Y, name=path.stem), labels, csv_path))
+                _print(user[-1])
+            _summary("yours", user)
+    out = results_dir(args.save) / "recordings.json"
+    out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
+    print(f"wrote {out}")
+    if user:
+        out = results_dir(False) / "recordings_user.json"
+        out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
+        print(f"wrote {out}")
+    return 0
+
+
+def _summary(title: str, rows: list[dict]) -> None:
+    """How many rows meet each target, and the worst figure."""
+    fitted = [row for row in rows if "error" not in row]
+    print(f"{title}: {len(fitted)} of {len(rows)} fitted, CLI ok on {sum(row['cli'] for row in rows)}")
+    for key, limit in (("error_ratio", 1.5), ("start_error", 0.01), ("rest_error", 0.01),
+                       ("acceleration_ratio", 1.5)):
+        values = [row[key] for row in fitted if row.get(key) is not None]
+        if values:
+            print(f"  {key}: {sum(v <= limit for v in values)} of {len(values)} <= {limit:g} (worst {max(values):.4g})")
+    for key in ("start_offset", "end_offset", "rest_offset"):
+        values = [abs(row[key]) for row in fitted if key in row]
+        if values:
+            print(f"  |{key}|: max {max(values):.2f} s, median {np.median(values):.2f} s")
+
+
+def _print(row: dict) -> None:
+    if "error" in row:
+        print(f"{row['recording']:>24}: FAILED ({row['error']}); CLI {'ok' if row['cli'] else 'failed'}")
+        return
+    truth = " ".join(f"{key[5:]} {row[key]:.2f}" for key in ("true_period", "true_start", "true_end", "true_rest")
+                     if row.get(key) is not None)
+    truth = f" (true: {truth})" if truth else ""
+    rest, rest_error = ("-" if row[key] is None else f"{scale * row[key]:.{digits}f}{unit}"
+                        for key, scale, digits, unit in (("rest", 1, 2, ""), ("rest_error", 1000, 1, " mm")))
+    print(f"{row['recording']:>24}: period {row['period']:.3f} s, rhythm {row['start']:.2f}-{row['end']:.2f} s, "
+          f"rest {rest}{truth} | cycle error {1000 * row['cycle_error']:.2f} mm / variation "
+          f"{1000 * row['cycle_variation']:.2f} mm = {row['error_ratio']:.2f} | "
+          f"start {1000 * row['start_error']:.1f} mm rest {rest_error} | "
+          f"accel ratio {row['acceleration_ratio']:.2f}"
+          + (f" (clean {row['clean_acceleration_ratio']:.2f})" if "clean_acceleration_ratio" in row else "") + " | "
+          f"CLI {'ok' if row['cli'] else 'failed'}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+"""What changes between the versions of the wiping task (``ArmarWipe-v1``, ``ArmarWipe-v2`` and their step twins).
+
+=====================  ===========================  =====================================================
+                        v1                           v2
+=====================  ===========================  =====================================================
+pattern                 loops in place at the patch  travels across the patch: ``sweep_x``, ``sweep_y``
+                        centre                       action dimensions (:mod:`rdmp_gym.envs.coverage`)
+periods                 4 after the transient        7 after the transient (wear needs the time)
+cup clearance           1 cm from the patch          the pad's half-diagonal + 1 cm (7.1 cm for the 7 x 10
+                                                     cm pad): the pad can wipe the patch edge past the cup
+smoothness              jerk / the imitation's       jerk per unit of squared speed / the imitation's: a
+                                                     larger or travelling pattern that is as smooth costs
+                                                     nothing
+``is_success``          coverage, force, collisions, also executable: peak joint acceleration within
+                        cup                          ARMAR-III's limit, no joint at its limit
+collisions, limits      charged per step             also a fixed 0.2 x weight once they happen at all, so
+                                                     a graze costs more than the coverage it buys
+=====================  ===========================  =====================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["TASK_VERSIONS", "TaskVersion"]
+
+#: Cup-rim clearance (m) beyond the pad's half-diagonal in v2.
+CUP_MARGIN = 0.01
+
+
+@dataclass(frozen=True)
+class TaskVersion:
+    """The settings that differ between task versions.
+
+    Attributes:
+        version: 1 or 2.
+        n_periods: default periods of the pattern after the transient.
+        sweep: the anchor travels along the covering sweep (action dimensions ``sweep_x``, ``sweep_y``).
+        pad_clearance: the cup keeps the pad's half-diagonal plus :data:`CUP_MARGIN` from the patch (else 1 cm).
+        speed_normalised_jerk: smoothness compares jerk per unit of squared speed (else plain jerk).
+        executable_success: ``is_success`` also needs the peak joint acceleration within the limit and no
+            joint at its limit.
+        event_charge: what a collision, a joint at its limit or a joint acceleration above the limit costs as soon
+            as it happens (a share of its weight, :class:`rdmp_gym.envs.reward.RewardSettings`).
+    """
+
+    version: int
+    n_periods: float
+    sweep: bool
+    pad_clearance: bool
+    speed_normalised_jerk: bool
+    executable_success: bool
+    event_charge: float
+
+    def patch_clearance(self, sponge_half: np.ndarray) -> float:
+        """Clearance (m) between the cup's rim and the patch for a sponge box of half sizes ``[3]`` (face: 1, 2)."""
+        if not self.pad_clearance:
+            return 0.01
+        return float(np.hypot(sponge_half[1], sponge_half[2])) + CUP_MARGIN
+
+
+TASK_VERSIONS = {
+    1: TaskVersion(1, n_periods=4.0, sweep=False, pad_clearance=False, speed_normalised_jerk=False,
+                   executable_success=False, event_charge=0.0),
+    2: TaskVersion(2, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
+                   executable_success=True, event_charge=0.2),
+}

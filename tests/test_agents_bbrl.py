@@ -1,0 +1,112 @@
+"""``bbrl``, the neural contextual learner: the trust region holds, the covariance stays positive definite,
+resume is exact, bad options are clear errors, and it learns a contextual problem that the random-return
+control does not (MuJoCo-free toys; the wiping task is in the benchmarks)."""
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np
+import pytest
+import torch
+from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
+from rdmp_gym.agents.learners.smooth import squash
+
+torch.set_num_threads(1)
+N = 12
+GAINS = np.random.default_rng(5).uniform(-0.5, 0.5, (N, 2))
+
+
+def _space():
+    return SearchSpace({"periodic": slice(0, N - 2), "amplitude": slice(N - 2, N)}, 2, np.zeros(2), np.ones(2))
+
+
+def _target(contexts):
+    return 0.2 + contexts @ GAINS.T
+
+
+def _batch(actions, returns):
+    k = len(returns)
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
+                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+
+
+def _run(learner, updates, seed=0, random_returns=False):
+    """Learn ``max -|a - target(s)|²`` over ``s ~ U[-1, 1]²``; the held-out loss before and after, and the KLs."""
+    rng = np.random.default_rng(100 + seed)
+    held_out = rng.uniform(-1, 1, (50, 2))
+
+    def loss():
+        return np.mean(np.sum((learner.policy_actions(held_out) - _target(held_out)) ** 2, axis=1))
+
+    before, kls = loss(), []
+    for _ in range(updates):
+        contexts = rng.uniform(-1, 1, (10, 2))
+        actions = learner.ask(contexts)
+        returns = -np.sum((actions - _target(contexts)) ** 2, axis=1)
+        learner.tell(_batch(actions, rng.standard_normal(10) if random_returns else returns))
+        kls.append(learner.last_kl)
+    return before, loss(), np.array(kls)
+
+
+def _learner(seed=0, **options):
+    return make_learner("bbrl", np.zeros(N), 10, np.random.default_rng(seed), options, space=_space())
+
+
+def test_learns_a_contextual_quadratic_and_the_random_return_control_does_not():
+    """The toy's optimum is not smooth in the weights, so the exploration is independent here (length 0)."""
+    before, after, _ = _run(_learner(length=0.0, epsilon=0.2), 40)
+    control_before, control_after, _ = _run(_learner(length=0.0, epsilon=0.2), 40, random_returns=True)
+    assert after < 0.4 * before
+    assert control_after > 0.8 * control_before
+
+
+@pytest.mark.parametrize("epsilon", [0.01, 0.2])
+def test_every_update_stays_within_the_trust_region(epsilon):
+    """With a learning rate far too large for the bound, each update is shrunk to it, and still moves."""
+    _, _, kls = _run(_learner(epsilon=epsilon, learning_rate=0.1), 8)
+    assert np.all(kls <= epsilon + 1e-9)
+    assert np.mean(kls > 0.2 * epsilon) > 0.5
+
+
+def test_the_covariance_stays_positive_definite_and_smooth():
+    learner = _learner(rank=3)
+    _run(learner, 10)
+    with torch.no_grad():
+        covariance = learner.policy.covariance(learner.config.min_sigma).numpy()
+    assert np.linalg.eigvalsh(covariance).min() > 0
+    samples = learner.rng.standard_normal((2000, N)) @ np.linalg.cholesky(covariance).T
+    weights = samples[:, :5]                                    # one DoF's periodic weights: neighbours correlate
+    assert np.corrcoef(weights[:, 0], weights[:, 1])[0, 1] > 0.5
+
+
+def test_resume_is_exact_and_the_state_gives_the_policy():
+    learner = _learner()
+    _run(learner, 3)
+    state = learner.state_dict()
+    twin = _learner(seed=99)
+    twin.load_state_dict(state)
+    contexts = np.random.default_rng(7).uniform(-1, 1, (10, 2))
+    np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
+    returns = -np.arange(10.0)
+    for agent in (learner, twin):
+        agent.tell(_batch(squash(np.zeros((10, N))), returns))
+    np.testing.assert_array_equal(twin.policy_actions(contexts), learner.policy_actions(contexts))
+    np.testing.assert_allclose(policy_from_state(learner.state_dict(), contexts), learner.policy_actions(contexts),
+                               atol=1e-12)
+
+
+def test_bad_options_and_inputs_raise_clear_errors():
+    with pytest.raises(ValueError, match="epsilon"):
+        _learner(epsilon=0.0)
+    with pytest.raises(ValueError, match="rank"):
+        _learner(rank=-1)
+    with pytest.raises(ValueError, match="space"):
+        make_learner("bbrl", np.zeros(N), 10, np.random.default_rng(0))
+    learner = _learner()
+    with pytest.raises(ValueError, match="observations"):
+        learner.ask(None)
+    with pytest.raises(ValueError, match="observations"):
+        learner.ask(np.zeros((10, 3)))
+    with pytest.raises(RuntimeError, match="ask"):
+        learner.tell(_batch(np.zeros((10, N)), np.zeros(10)))

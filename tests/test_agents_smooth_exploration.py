@@ -1,0 +1,43 @@
+"""Smooth exploration for PI² and PI^BB (``length`` > 0): the explored weights are correlated along the movement,
+so exploring does not make the paths jagged (MuJoCo-free)."""
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np
+import pytest
+from rdmp_gym.agents.learners import SearchSpace, make_learner
+
+N, WEIGHTS = 42, 20            # 2 DoF x 20 periodic weights, then 2 amplitude factors
+
+
+def _space():
+    return SearchSpace({"periodic": slice(0, 2 * WEIGHTS), "amplitude": slice(2 * WEIGHTS, N)}, 2, np.zeros(1),
+                       np.ones(1))
+
+
+def _roughness(actions):
+    """Mean squared circular second difference of the first DoF's periodic weights, per unit variance."""
+    block = actions[:, :WEIGHTS]
+    second = np.roll(block, -1, axis=1) - 2 * block + np.roll(block, 1, axis=1)
+    return float(np.mean(second**2) / np.mean(block**2))
+
+
+@pytest.mark.parametrize("agent", ["pi2", "pibb"])
+def test_smooth_exploration_is_far_smoother_than_independent_noise(agent):
+    weights = np.ones((5, N))
+    rough, smooth = ([make_learner(agent, np.zeros(N), 200, np.random.default_rng(0),
+                                   {"sigma": 0.2, "length": length}, time_weights=weights, space=_space()).ask()
+                      for length in (0.0, 5.0)])
+    assert _roughness(smooth) < 0.1 * _roughness(rough)
+    assert 0.5 * 0.2 < np.std(smooth[:, :2 * WEIGHTS]) < 1.5 * 0.2        # about the same size
+    assert np.std(smooth[:, 2 * WEIGHTS:]) == pytest.approx(0.2, rel=0.3)  # single factors stay independent
+
+
+def test_smooth_exploration_needs_the_layout():
+    with pytest.raises(ValueError, match="space"):
+        make_learner("pibb", np.zeros(N), 10, np.random.default_rng(0), {"length": 5.0})
+    with pytest.raises(ValueError, match="length"):
+        make_learner("pi2", np.zeros(N), 10, np.random.default_rng(0), {"length": -1.0},
+                     time_weights=np.ones((5, N)), space=_space())
