@@ -30,12 +30,8 @@ __all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", 
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5) by default; keeps it finite off every support."""
 
-SMOOTH_FLOOR = 0.3
-"""The floor the fit uses: the mixture fades to 0 wherever the activations sum to much less than 0.3 (on the
-encoded paths they sum to about 2). A path that enters the encoded spiral from outside (a canonical start off
-the encoded path) sees its activations rise by decades within a few tenths of a second; the larger the floor,
-the later in that rise (where it is slower) the forcing term fades in: 1e-2 gave peaks of up to 5.6x the
-demonstration's acceleration there, 0.3 gives 3.3x, with the same fidelity on the encoded paths."""
+SMOOTH_FLOOR = 1e-2
+"""The floor the fit uses: the mixture fades to 0 wherever the activations sum to much less than 1 %."""
 
 FORCING_BLOCK = 1 << 15
 """Time samples per block in :meth:`BasisSet.forcing` (bounds the ``[T, D]`` activations held at once)."""
