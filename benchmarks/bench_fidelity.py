@@ -136,7 +136,7 @@ def draw_handover(traces: list, rows: list[dict], path) -> None:
     for axis, (name, signal, accelerations, truth) in zip(axes[:, 0], worst, strict=True):
         t = np.arange(truth.shape[0]) * DT
         shown = (t > signal.transient_length - 1.0) & (t < signal.transient_length + 0.6)
-        dim = int(np.argmax(np.sum((accelerations["fade before T"] - truth)[shown] ** 2, axis=0)))
+        dim = int(np.argmax(np.sum((accelerations["default"] - truth)[shown] ** 2, axis=0)))
         axis.plot(t[shown], truth[shown, dim], color="black", lw=2.0, label="true")
         for model, acceleration in accelerations.items():
             axis.plot(t[shown], acceleration[shown, dim], lw=1.0, label=model)
