@@ -23,9 +23,9 @@ from numpy.polynomial import Polynomial
 from .demonstrations import Demonstration, SyntheticTruth
 from .validation import as_finite_array, check_positive, check_time_grid
 
-__all__ = ["JOINS", "SmoothTestSignal", "draw_test_demonstrations", "finite_derivatives", "integrated_squared_jerk",
-           "motion_metrics", "off_path_peak_ratio", "off_path_starts", "peak_acceleration", "random_test_signal",
-           "worst_window_error"]
+__all__ = ["HANDOVER_TARGETS", "JOINS", "SmoothTestSignal", "draw_test_demonstrations", "finite_derivatives",
+           "handover_figures", "handover_misses", "integrated_squared_jerk", "motion_metrics", "off_path_peak_ratio",
+           "off_path_starts", "peak_acceleration", "random_test_signal", "worst_window_error"]
 
 # C4 blend: 0 -> 1 on [0, 1] with derivatives 1..4 zero at both ends (the minimum-snap profile).
 _BLEND = Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
@@ -127,6 +127,36 @@ def off_path_peak_ratio(dmp, demo_peak: float, duration: float = 6.0, dt: float 
     t = np.arange(0.0, duration, dt)
     paths = dmp.rollout_batch(off_path_starts(dmp), t, groups=("initial:0",), transient=0)
     return float(peak_acceleration(paths, dt).max() / check_positive(demo_peak, "demo_peak"))
+
+
+HANDOVER_TARGETS = {"transient acceleration": 0.10, "periodic acceleration": 0.05, "worst window": 0.20,
+                    "jerk": 1.5, "transient position": 0.008, "periodic position": 0.003, "off-path peak": 3.0}
+"""What a fit of a :class:`SmoothTestSignal` must reach (:func:`handover_figures`): acceleration errors over the
+transient and the periodic part and in the worst 0.2 s window, the jerk ratio (the larger of the two parts), the
+position errors, and the peak acceleration from canonical starts off the encoded path (x the signal's)."""
+
+
+def handover_figures(signal: SmoothTestSignal, dmp, duration: float, dt: float = 1e-3) -> dict[str, float]:
+    """The figures of :data:`HANDOVER_TARGETS` of ``dmp`` (fitted to a demonstration of ``signal``), rolled out
+    over ``duration`` seconds on a grid of ``dt``; also ``worst window from`` (s after T, the window's start)."""
+    t = np.arange(0.0, duration + 1e-9, dt)
+    position, _, acceleration, jerk = signal.derivatives(t)
+    Y = dmp.rollout(t)
+    _, Ydd, Yddd = finite_derivatives(Y, dt)
+    transient = t < signal.transient_length
+    approach = motion_metrics(Y, (position, acceleration, jerk), dt, transient, Ydd, Yddd)
+    periodic = motion_metrics(Y, (position, acceleration, jerk), dt, ~transient, Ydd, Yddd)
+    window, at = worst_window_error(Ydd, acceleration, dt)
+    return {"transient acceleration": approach["acceleration"], "periodic acceleration": periodic["acceleration"],
+            "worst window": window, "worst window from": at - signal.transient_length,
+            "jerk": max(approach["jerk_ratio"], periodic["jerk_ratio"]), "transient jerk": approach["jerk_ratio"],
+            "transient position": approach["position"], "periodic position": periodic["position"],
+            "off-path peak": off_path_peak_ratio(dmp, float(peak_acceleration(position, dt)))}
+
+
+def handover_misses(figures: dict[str, float]) -> list[str]:
+    """The names of the :data:`HANDOVER_TARGETS` that ``figures`` (of :func:`handover_figures`) miss."""
+    return [name for name, target in HANDOVER_TARGETS.items() if figures[name] > target]
 
 
 @dataclass(frozen=True)
