@@ -312,20 +312,8 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
                      transient_widths=np.concatenate([widths for _, widths in paths]),
                      transient_sizes=tuple(sizes), fading=fading)
     differences = _penalty(basis, times, lengths, common_period, prior)
-    responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
-                                                          substeps)
-    if method == "trajectory":
-        weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
-    else:
-        activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
-                                                                 smoothing)
-        weights = fit_weights(activations, targets, method, regularization, smoothness, differences, floor)
-        # the smoothed start, and the start velocity that best explains the samples under the smooth start (a
-        # derivative estimate at the first noisy sample is off by up to 0.1 m/s)
-        starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
-                                       rcond=None)[0][0])
-                  for y0, response, columns, sample in zip(smoothed_starts, responses, start_columns, samples,
-                                                           strict=True)]
+    weights, starts = _regression(method, demos, canonical, basis, inits, lengths, anchor, alpha_z, substeps,
+                                  smoothing, smoothness, regularization, differences)
     transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
                   for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
     logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
@@ -407,6 +395,28 @@ def _penalty(basis: BasisSet, times: list[np.ndarray], lengths: list[float], per
     shares = np.concatenate([1.0 - start_blend_profiles(t, length)[0, 0] for t, length in zip(times, lengths,
                                                                                               strict=True)])
     return relative_to_pattern(differences, n_periodic, pattern, shares)
+
+
+def _regression(method: str, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
+                lengths: list[float], anchor: np.ndarray, alpha_z: float, substeps: int, smoothing: float,
+                smoothness: float, regularization: float, differences: np.ndarray) -> tuple[np.ndarray, list]:
+    """Weights ``[D, d]`` and per demonstration the start ``(y0 [d], yd0 [d])``, by ``method``: the trajectory fit
+    (:func:`fit_trajectory`), or ``lwr``/``ridge`` on the forcing target (10) (:func:`fit_weights`) with the smoothed
+    start and the start velocity that best explains the samples under the smooth start (a derivative estimate at
+    the first noisy sample is off by up to 0.1 m/s)."""
+    responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
+                                                          substeps)
+    if method == "trajectory":
+        weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
+        return weights, list(starts)
+    activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
+                                                             smoothing)
+    weights = fit_weights(activations, targets, method, regularization, smoothness, differences, basis.fading.floor)
+    starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
+                                   rcond=None)[0][0])
+              for y0, response, columns, sample in zip(smoothed_starts, responses, start_columns, samples,
+                                                       strict=True)]
+    return weights, starts
 
 
 def _forcing_targets(demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
