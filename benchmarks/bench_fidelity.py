@@ -5,12 +5,28 @@ Per part (transient / periodic): position RMSE over the signal's largest range, 
 the RMS of the true acceleration, integrated squared jerk over the true signal's, peak acceleration over
 the true peak. References: the noiseless built-in styles at 1 kHz (derivatives by central differences) and
 :class:`rdmp_gym.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
-(``trajectory`` fit, smooth start), the paper's settings (:data:`rdmp_gym.dmp.PAPER_SETTINGS`, LWR and ridge,
-rolled out from the demonstrated start as in the paper), and the classic periodic DMP.
+(``trajectory`` fit, smooth start), :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the environments' fit), the paper's
+settings (:data:`rdmp_gym.fitting.PAPER_SETTINGS`, LWR and ridge, rolled out from the demonstrated start as in the
+paper), and the classic periodic DMP.
 Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
 position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
-    python benchmarks/bench_fidelity.py [--seed 0] [--signals 6]
+The hand-over: signals whose start is a quintic from rest joined to the orbit at T with matching position,
+velocity and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump
+in the approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults (the families
+fade over the ``t_f`` after T, the first transient centre one spacing before the start, the smoothness penalty
+relative to the pattern) and with :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments
+fit). Per signal (:func:`rdmp_gym.smoothness.handover_figures`): acceleration error over the transient and the
+periodic part, the worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it
+starts, relative to T), jerk ratios, position errors, and the largest peak acceleration from canonical starts off
+the encoded path over the demonstration's peak; targets in :data:`rdmp_gym.smoothness.HANDOVER_TARGETS`
+(transient acceleration <= 10 %, periodic <= 5 %, window <= 20 %, jerk <= 1.5x, position < 0.8 % / 0.3 %,
+off-path peak <= 3x). The figure ``handover.png`` shows the acceleration about T on the three signals that the
+fade before T reproduces worst.
+
+Prints the tables; writes benchmarks/results/fidelity.json and handover.png.
+
+    python benchmarks/bench_fidelity.py [--seed 0] [--signals 6] [--handover-signals 12]
 """
 
 from __future__ import annotations
@@ -22,12 +38,20 @@ import numpy as np
 from output import add_save_argument, results_dir
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, segment, wiping_demonstration
-from rdmp_gym.dmp import PAPER_SETTINGS
-from rdmp_gym.smoothness import finite_derivatives, motion_metrics, random_test_signal
+from rdmp_gym.fitting import FADE_BEFORE_T, PAPER_SETTINGS
+from rdmp_gym.smoothness import (
+    draw_test_demonstrations,
+    finite_derivatives,
+    handover_figures,
+    handover_misses,
+    motion_metrics,
+    random_test_signal,
+)
 
 DT = 1e-3
-MODELS = {"default": ({}, True), "paper lwr": (PAPER_SETTINGS, False),
+MODELS = {"default": ({}, True), "fade before T": (FADE_BEFORE_T, True), "paper lwr": (PAPER_SETTINGS, False),
           "paper ridge": ({**PAPER_SETTINGS, "method": "ridge"}, False)}
+HANDOVER_MODELS = {"fade before T": FADE_BEFORE_T, "default": {}}
 
 
 def cases(seed: int, n_signals: int):
@@ -49,10 +73,74 @@ def cases(seed: int, n_signals: int):
         yield name, demo, t, (position, acceleration, jerk), signal.transient_length
 
 
+def handover_benchmark(seed: int, n_signals: int, folder) -> list[dict]:
+    """Fit each hand-over signal with each of ``HANDOVER_MODELS``, print the table, draw ``handover.png``."""
+    rows, traces = [], []
+    for index, (signal, demo) in enumerate(draw_test_demonstrations(np.random.default_rng(seed), n_signals,
+                                                                     "quintic")):
+        name = (f"join {index} (p {signal.period:.2f} s, {signal.cos_coefficients.shape[0]} harm., "
+                f"T {signal.transient_length:.2f} s{', bump' if np.any(signal.detour) else ''})")
+        t = np.arange(0.0, demo.duration + 1e-9, DT)
+        _, _, acceleration, _ = signal.derivatives(t)
+        accelerations = {}
+        for model, settings in HANDOVER_MODELS.items():
+            dmp = RhythmicDMP.fit(demo, **settings)
+            figures = handover_figures(signal, dmp, demo.duration, DT)
+            rows.append({"case": name, "model": model, **figures, "misses": handover_misses(figures)})
+            accelerations[model] = finite_derivatives(dmp.rollout(t), DT)[1]
+        traces.append((name, signal, accelerations, acceleration))
+    print(f"\n{'hand-over case':<44} {'model':<14} {'acc % tr/per':>13} {'window % (from T)':>18} "
+          f"{'jerk x tr/all':>14} {'pos % tr/per':>13} {'off-path x':>10}  misses")
+    for row in rows:
+        print(f"{row['case']:<44} {row['model']:<14} {100 * row['transient acceleration']:6.1f}/"
+              f"{100 * row['periodic acceleration']:5.1f} {100 * row['worst window']:8.1f} "
+              f"({row['worst window from']:+.2f} s) "
+              f"{row['transient jerk']:7.2f}/{row['jerk']:5.2f} {100 * row['transient position']:6.2f}/"
+              f"{100 * row['periodic position']:5.3f} {row['off-path peak']:10.2f}  {', '.join(row['misses']) or '-'}")
+    for model in HANDOVER_MODELS:
+        mine = [row for row in rows if row["model"] == model]
+        print(f"{model}: transient acceleration {100 * min(r['transient acceleration'] for r in mine):.1f}-"
+              f"{100 * max(r['transient acceleration'] for r in mine):.1f} % (median "
+              f"{100 * np.median([r['transient acceleration'] for r in mine]):.1f} %), worst window up to "
+              f"{100 * max(r['worst window'] for r in mine):.1f} %, every target met on "
+              f"{sum(not r['misses'] for r in mine)} of {len(mine)}")
+    draw_handover(traces, rows, folder / "handover.png")
+    return rows
+
+
+def draw_handover(traces: list, rows: list[dict], path) -> None:
+    """Acceleration about T, truth against each model, on the three signals the fade before T does worst."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    before = {row["case"]: row["transient acceleration"] for row in rows if row["model"] == "fade before T"}
+    worst = sorted(traces, key=lambda trace: -before[trace[0]])[:3]
+    figure, axes = plt.subplots(len(worst), 1, figsize=(9, 2.8 * len(worst)), squeeze=False)
+    for axis, (name, signal, accelerations, truth) in zip(axes[:, 0], worst, strict=True):
+        t = np.arange(truth.shape[0]) * DT
+        shown = (t > signal.transient_length - 1.0) & (t < signal.transient_length + 0.6)
+        dim = int(np.argmax(np.sum((accelerations["fade before T"] - truth)[shown] ** 2, axis=0)))
+        axis.plot(t[shown], truth[shown, dim], color="black", lw=2.0, label="true")
+        for model, acceleration in accelerations.items():
+            axis.plot(t[shown], acceleration[shown, dim], lw=1.0, label=model)
+        axis.axvline(signal.transient_length, color="grey", ls="--", lw=0.8)
+        axis.set_title(f"{name}, dimension {dim}", fontsize=9)
+        axis.set_ylabel("acceleration (m/s²)")
+    axes[0, 0].legend(fontsize=8)
+    axes[-1, 0].set_xlabel("time (s); dashed: T, where the start joins the orbit")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    print(f"wrote {path}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--signals", type=int, default=6)
+    parser.add_argument("--handover-signals", type=int, default=12)
     add_save_argument(parser)
     args = parser.parse_args()
     RESULTS = results_dir(args.save) / "fidelity.json"
@@ -88,7 +176,12 @@ def main() -> None:
                "signals": [r["case"] for r in defaults if not r["case"].startswith("style") and not met(r)]}
     print(f"targets met by the defaults on the four styles: {verdict['styles']}; "
           f"own signals missing a target: {verdict['signals']}")
-    RESULTS.write_text(json.dumps({"seed": args.seed, "rows": rows, "targets": verdict}, indent=1))
+    handover = handover_benchmark(args.seed, args.handover_signals, RESULTS.parent)
+    verdict["handover"] = {row["case"]: row["misses"] for row in handover if row["model"] == "default"}
+    print(f"hand-over signals missing a target (defaults): "
+          f"{ {case: misses for case, misses in verdict['handover'].items() if misses} }")
+    RESULTS.write_text(json.dumps({"seed": args.seed, "rows": rows, "handover": handover, "targets": verdict},
+                                  indent=1))
     print(f"wrote {RESULTS}")
 
 

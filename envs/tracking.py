@@ -22,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
+from rdmp_gym.fitting import FADE_BEFORE_T
 
 __all__ = ["TRACKING_ID", "TrackingEnv"]
 
@@ -65,7 +66,7 @@ class TrackingEnv(gym.Env):
         if self.demo.duration < duration or self.demo.n_dims != 3:
             raise ValueError(f"demonstration: expected 3 dimensions and at least {duration} s, "
                              f"got {self.demo.n_dims} and {self.demo.duration:.3g} s")
-        self.dmp = RhythmicDMP.fit(self.demo, n_periodic, n_transient)
+        self.dmp = RhythmicDMP.fit(self.demo, n_periodic, n_transient, **FADE_BEFORE_T)     # as published
         self.groups = tuple(groups)
         self.theta_imitation = self.dmp.get_params(self.groups)
         self.scales = self._scales(weight_scale, phase_scale, radius_scale)

@@ -39,7 +39,7 @@ import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
-from rdmp_gym.fitting import FIT_METHODS
+from rdmp_gym.fitting import FADE_BEFORE_T, FIT_METHODS
 from rdmp_gym.validation import check_positive
 
 from .action import ActionMap
@@ -90,9 +90,10 @@ def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = No
 
 @lru_cache(maxsize=16)
 def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> RhythmicDMP:
-    """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s)."""
+    """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s), fitted with the settings
+    the tasks were published with (:data:`rdmp_gym.fitting.FADE_BEFORE_T`), whatever the library's defaults."""
     return RhythmicDMP.fit(wiping_demonstration(style=style, rng=0), n_periodic=n_periodic,
-                           n_transient=n_transient, method=method)
+                           n_transient=n_transient, method=method, **FADE_BEFORE_T)
 
 
 def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> RhythmicDMP:
@@ -240,7 +241,7 @@ class ArmarWipeEnv(gym.Env):
                                  f"got {demonstration.n_dims}")
             demonstration.check_frame(WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="demonstration")
             self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
-                                       method=fit_method)
+                                       method=fit_method, **FADE_BEFORE_T)
         else:
             if isinstance(style, bool) or style not in (1, 2, 3, 4):
                 raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")

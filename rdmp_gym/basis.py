@@ -12,7 +12,7 @@ far-away basis function happens to be least small (or becomes 0/0). We divide by
 instead (``Fading.floor``): on the encoded paths the activations sum to about 1 and the floor changes
 nothing the fit does not absorb; where they sum to much less than the floor the forcing term fades
 smoothly to zero. The default of :class:`Fading` (1e-10) is the old, nearly bare mixture kept for saved
-DMPs; :meth:`RhythmicDMP.fit` uses ``SMOOTH_FLOOR``.
+DMPs; :meth:`RhythmicDMP.fit` uses a larger one (:data:`rdmp_gym.fitting.HANDOVER_FLOOR`).
 """
 
 from __future__ import annotations
@@ -22,16 +22,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from .canonical import CanonicalSystem
-from .validation import check_positive
+from .validation import check_nonnegative, check_positive
 
 __all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path",
-           "von_mises"]
+           "transient_times", "von_mises"]
 
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5) by default; keeps it finite off every support."""
 
 SMOOTH_FLOOR = 1e-2
-"""The floor the fit uses: the mixture fades to 0 wherever the activations sum to much less than 1 %."""
+"""A floor that fades the mixture to 0 wherever the activations sum to much less than 1 %."""
 
 FORCING_BLOCK = 1 << 15
 """Time samples per block in :meth:`BasisSet.forcing` (bounds the ``[T, D]`` activations held at once)."""
@@ -104,14 +104,30 @@ def periodic_width(n_periodic: int, overlap: float = 0.5) -> float:
     return float(np.log(1.0 / overlap) / (1.0 - np.cos(np.pi / n_periodic)))
 
 
+def transient_times(span: float, n_basis: int, lead: float = 0.0) -> np.ndarray:
+    """Times ``[M]`` (s from the start of the path) of ``n_basis`` transient centres: evenly spaced, the last at
+    ``span`` and the first ``lead`` spacings before the start (at most ``n_basis - 2``: one centre stays after it).
+
+    A centre before the start makes the mixture (5) two-sided there: with the first centre at the start, the
+    normalised mixture is flat on its outer side and cannot follow the slope of the forcing term the start needs
+    (the fit then rings at the basis spacing over the first tenth of a second).
+    """
+    if n_basis == 1:
+        return np.array([0.0])
+    lead = min(check_nonnegative(lead, "transient_lead"), n_basis - 2.0)
+    spacing = span / (n_basis - 1.0 - lead)
+    return spacing * (np.arange(n_basis) - lead)
+
+
 def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: float, span: float,
-                               n_basis: int, overlap: float = 0.5, delta: float = 1e-3
+                               n_basis: int, overlap: float = 0.5, delta: float = 1e-3, lead: float = 0.0
                                ) -> tuple[np.ndarray, np.ndarray]:
     """Centres and widths of ``n_basis`` transient basis functions on the path from ``(phi0, r0)``.
 
-    Centres sit on the canonical path at times spaced uniformly in ``[0, span]``. Each width makes a
-    basis function cross its neighbours at height ``overlap`` (midway to them), but is narrowed where
-    needed so that its value on the next turn of the spiral (one period later) stays below ``delta``.
+    Centres sit on the canonical path at the times of :func:`transient_times` (evenly spaced up to ``span``, the
+    first ``lead`` spacings before the start). Each width makes a basis function cross its neighbours at height
+    ``overlap`` (midway to them), but is narrowed where needed so that its value on the next turn of the spiral
+    (one period later) stays below ``delta``.
 
     Returns:
         ``(centres [M, 2], widths [M])``.
@@ -120,7 +136,7 @@ def transient_basis_along_path(canonical: CanonicalSystem, phi0: float, r0: floa
         raise ValueError(f"n_transient: expected at least 1 basis function, got {n_basis}")
     if not 0.0 < overlap < 1.0:
         raise ValueError(f"transient_overlap: must lie in (0, 1), got {overlap!r}")
-    times = np.linspace(0.0, span, n_basis) if n_basis > 1 else np.array([0.0])
+    times = transient_times(span, n_basis, lead)
     phi, r = canonical.state(times, phi0, r0)
     centres = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
     if n_basis > 1:

@@ -1,40 +1,28 @@
-"""The rhythmic DMP with transients (Ernesti et al. 2012): fit, rollout, step, parameters."""
+"""The rhythmic DMP with transients (Ernesti et al. 2012): rollout, step, parameters.
+
+The formulation (basis functions, fades, mixture) is in :mod:`rdmp_gym.basis`, the fit in :mod:`rdmp_gym.fitting`.
+"""
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, replace
-from functools import lru_cache
+from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
-from .basis import (
-    NORMALISATION_EPSILON,
-    SMOOTH_FLOOR,
-    BasisSet,
-    Fading,
-    normalize,
-    periodic_width,
-    transient_basis_along_path,
-)
+from .basis import BasisSet, normalize
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
 from .ending import Ending, StopPlan, plan_stop
-from .fitting import (
-    FIT_METHODS,
-    fit_trajectory,
-    fit_weights,
-    forcing_target,
-    second_differences,
-    smooth_derivatives,
-)
+from .fitting import PAPER_SETTINGS, fit_rhythmic
 from .parameters import ParameterLayout
-from .segmentation import Segmentation, phase_shift, segment
+from .start import TransientStart, settled_state, start_blend_profiles
 from .sweep import Sweep
-from .transformation import TransformationSystem
-from .validation import as_finite_array, check_count, check_nonnegative, check_positive, check_time_grid
+from .transformation import cached_system
+from .validation import as_finite_array, check_positive, check_time_grid
 
 __all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "TransientStart", "start_blend_profiles"]
 
@@ -44,59 +32,6 @@ logger = logging.getLogger(__name__)
 TEMPO_RANGE = (1e-6, 1e6)
 
 GroupSelection = str | Iterable[str] | None
-_MIN_TRANSIENT = 0.05  # shortest transient that fit() encodes, as a fraction of the period
-
-
-@dataclass(frozen=True)
-class TransientStart:
-    """One encoded transient: where the canonical system starts and where the demonstration started.
-
-    Attributes:
-        phi0, r0: initial condition of the canonical system, ``init_T(entrance_phase, mu1)``.
-        length: transient length T_k of the demonstration (s).
-        entrance_phase: phase at which the transient enters the periodic pattern (rad).
-        start: ``[d]`` start position of the demonstration (fitted with the weights by ``trajectory``; the
-            smoothed first sample otherwise).
-        start_velocity: ``[d]`` its start velocity (fitted under the smooth-start model: a derivative
-            estimate at the first noisy sample is off by up to 0.1 m/s).
-    """
-
-    phi0: float
-    r0: float
-    length: float
-    entrance_phase: float
-    start: np.ndarray
-    start_velocity: np.ndarray
-
-
-SMOOTHNESS_REFERENCE = 40
-"""``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
-``period / 40``); other spacings get the penalty on the same time curvature."""
-
-PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
-                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25),
-                  "turn_height": 1e-3}
-"""Keywords of :meth:`RhythmicDMP.fit` that give the paper's formulation as first implemented here
-(LWR (11), a stiff spring, narrow basis functions, the bare mixture (5)); roll out with
-``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}`` fits the same basis by
-global least squares."""
-
-
-def start_blend_profiles(elapsed: np.ndarray, length: float) -> np.ndarray:
-    """Quintic profiles of the start blend and their first two time derivatives, ``[2, 3, T]``.
-
-    Profile 0 falls from 1 to 0 with zero slope and curvature at both ends (minimum jerk); profile 1
-    has slope 1 and zero value and curvature at the start. Both are 0 with zero derivatives from
-    ``length`` on, so ``e(t) = dy P0(t) + dv P1(t)`` moves a start offset ``(dy, dv)`` away smoothly (C2).
-    """
-    u = np.clip(elapsed / length, 0.0, 1.0)
-    fall = np.stack([1.0 - u**3 * (10.0 - 15.0 * u + 6.0 * u**2),
-                     -30.0 * u**2 * (1.0 - u) ** 2 / length,
-                     -60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) / length**2])
-    slope = np.stack([length * u * (1.0 - u) ** 3 * (1.0 + 3.0 * u),
-                      (1.0 - u) ** 2 * (1.0 + 2.0 * u - 15.0 * u**2),
-                      -12.0 * u * (1.0 - u) * (3.0 - 5.0 * u) / length])
-    return np.stack([fall, slope])
 
 
 def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, velocity_offset: np.ndarray,
@@ -116,14 +51,6 @@ def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, ve
         return shift
 
 
-def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tuple[np.ndarray, np.ndarray]:
-    """The state ``(y, yd)`` ``[..., d]`` that the forcing term ``[..., d]`` holds at the start: the spring's
-    equilibrium ``g + f / (alpha_z beta_z)``, at rest. From there the acceleration starts at 0 and the spring
-    follows the forcing term with no fast transient of its own (for a demonstration that starts at rest,
-    this is about its start)."""
-    return anchor + forcing / (alpha_z * alpha_z / 4.0), np.zeros_like(anchor + forcing)
-
-
 def travel_input(sweep: Sweep, tau: np.ndarray, points: np.ndarray | None, omega: float, alpha_z: float
                  ) -> np.ndarray:
     """The anchor term that carries the pattern rigidly along ``sweep``: ``[T, d]`` (``[B, T, d]`` for ``points
@@ -134,23 +61,6 @@ def travel_input(sweep: Sweep, tau: np.ndarray, points: np.ndarray | None, omega
     beta_z = alpha_z / 4.0
     return (sweep.offsets(tau, points) + sweep.offsets(tau, points, 1) / (beta_z * omega)
             + sweep.offsets(tau, points, 2) / (alpha_z * beta_z * omega**2))
-
-
-@lru_cache(maxsize=64)
-def _transformation(omega: float, dt: float, alpha_z: float) -> TransformationSystem:
-    return TransformationSystem(omega, dt, alpha_z)
-
-
-def _as_demos(demos: Demonstration | Sequence[Demonstration]) -> list[Demonstration]:
-    demos = [demos] if isinstance(demos, Demonstration) else list(demos)
-    if not demos:
-        raise ValueError("demos: expected at least one Demonstration")
-    for index, demo in enumerate(demos):
-        if not isinstance(demo, Demonstration):
-            raise TypeError(f"demos[{index}]: expected a Demonstration, got {type(demo).__name__}")
-        if demo.n_dims != demos[0].n_dims:
-            raise ValueError(f"demos[{index}]: has {demo.n_dims} dimensions, demos[0] has {demos[0].n_dims}")
-    return demos
 
 
 def _transform_matrix(n_dims: int, scale: float | np.ndarray, rotation: float | np.ndarray | None
@@ -174,29 +84,6 @@ def _transform_matrix(n_dims: int, scale: float | np.ndarray, rotation: float | 
     if rotation is None and np.all(scale == 1.0):
         return None
     return matrix * scale
-
-
-def _trajectory_design(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence[Demonstration],
-                       inits: Sequence[tuple[float, float]], lengths: Sequence[float], anchor: np.ndarray,
-                       alpha_z: float, substeps: int) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
-    """The smooth-start rollout model ``y = P(t) + (y0 - P(0)) P0(t) + yd0 P1(t)`` at each demonstration's
-    samples (P: the motion from the settled state, linear in the weights; P0, P1: the start-blend profiles),
-    as ``(responses [L_k, D], start_columns [L_k, 2], samples minus the anchor's part [L_k, d])`` per
-    demonstration. The basis responses are simulated ``substeps`` times finer than the samples."""
-    responses, start_columns, samples = [], [], []
-    for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
-        phi, r = canonical.state(np.zeros(1), phi0, r0)
-        settled, settled_yd = settled_state(basis.normalized(phi, r)[0], np.zeros(basis.n_basis), alpha_z)
-        fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
-        phi, r = canonical.state(fine, phi0, r0)
-        system = _transformation(canonical.omega, demo.dt / substeps, alpha_z)
-        response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
-                                  settled, settled_yd / canonical.omega)[0][::substeps]  # [L, D]
-        (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
-        responses.append(response - fall[:, None] * settled - slope[:, None] * settled_yd)
-        start_columns.append(np.stack([fall, slope], axis=1))
-        samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
-    return responses, start_columns, samples
 
 
 class RhythmicDMP:
@@ -268,135 +155,13 @@ class RhythmicDMP:
     # ------------------------------------------------------------------ fitting
     @classmethod
     def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-            n_transient: int | Sequence[int] = 40, method: str = "trajectory", *,
-            segmentations: Sequence[Segmentation] | None = None, period: float | None = None,
-            alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
-            beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
-            delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
-            smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.3,
-            floor: float = SMOOTH_FLOOR, substeps: int = 4,
-            fading_fractions: tuple[float, float] = (0.5, 0.25), turn_height: float = 0.3) -> RhythmicDMP:
+            n_transient: int | Sequence[int] = 40, method: str = "trajectory", **settings: Any) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
-        Args:
-            demos: a :class:`Demonstration` or K of them (one transient each), all with d dimensions.
-            n_periodic: periodic basis functions N.
-            n_transient: transient basis functions per transient (an int or K ints).
-            method: ``"trajectory"`` (default: weights and start state that make the rollout itself match the
-                samples, see :func:`~rdmp_gym.fitting.fit_trajectory`), ``"lwr"`` (the paper's (11)/(12)) or
-                ``"ridge"`` (global least squares on the forcing target (10)).
-            segmentations: per demonstration; estimated with :func:`segment` when omitted.
-            period: common period (s); the mean of the segmentations' periods when omitted.
-            alpha_z: transformation-system gain (default 5: a softer spring, see the docs' design rationale;
-                25 in :data:`PAPER_SETTINGS`).
-            mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
-            mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
-            fading_time: t_f (s), the overlap of transient and periodic basis; default
-                ``min(a period, b shortest transient)`` with ``(a, b) = fading_fractions``.
-            delta: support threshold of the fades.
-            periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
-                wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
-            smoothing: Savitzky-Golay window (s) for the demonstration's derivatives (``lwr``, ``ridge``).
-            regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the
-                forcing term stays gentle off the encoded paths; 1e-6 otherwise).
-            smoothness: relative penalty on second differences of neighbouring weights (``ridge``,
-                ``trajectory``); 0 in :data:`PAPER_SETTINGS`. 0.3 holds the periodic acceleration error of a small
-                pure sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %).
-            floor: added to the sum of activations in the mixture (5) (:class:`Fading`), so that the forcing
-                term fades to 0 where no basis function is active.
-            substeps: ``trajectory`` simulates each basis function's response this many times finer than the
-                samples.
-            fading_fractions: ``(a, b)`` of the default ``fading_time``; ``(0.5, 0.25)`` gives a gentler
-                hand-over than the earlier ``(0.25, 0.25)`` where the period is short (the last transient
-                functions are narrowed there by the close turns of the spiral).
-            turn_height: the largest value a transient basis function may keep on the next turn of its spiral
-                (:func:`~rdmp_gym.basis.transient_basis_along_path`; 1e-3 in :data:`PAPER_SETTINGS`). Near the
-                hand-over of a short period the turns are close, and a lower height narrows the last functions
-                until gaps open between them: a ripple at the basis spacing (jerk up to 3x the true signal's).
+        The fit is :func:`rdmp_gym.fitting.fit_rhythmic`, which documents the arguments and every keyword of
+        ``settings`` (``segmentations``, ``period``, ``alpha_z``, ``smoothness``, ``handover``, ...).
         """
-        demos = _as_demos(demos)
-        if regularization is None:
-            regularization = 1e-4 if method == "trajectory" else 1e-6
-        regularization = check_nonnegative(regularization, "regularization")
-        if not 0.0 < turn_height < 1.0:
-            raise ValueError(f"turn_height: must lie in (0, 1), got {turn_height!r}")
-        smoothness = check_nonnegative(smoothness, "smoothness")
-        check_positive(smoothing, "smoothing")
-        check_positive(alpha_z, "alpha_z")
-        if method not in FIT_METHODS:
-            raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
-        n_periodic = check_count(n_periodic, "n_periodic", 2)
-        sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
-                 else [check_count(m, "n_transient", 1) for m in n_transient])
-        if len(sizes) != len(demos) or min(sizes) < 1:
-            raise ValueError(f"n_transient: expected a positive int or {len(demos)} positive ints, got {n_transient!r}")
-        if segmentations is None:
-            segmentations = [segment(demo, period=period) for demo in demos]
-        elif len(segmentations) != len(demos):
-            raise ValueError(f"segmentations: expected {len(demos)}, got {len(segmentations)}")
-        common_period = (check_positive(period, "period") if period is not None
-                         else float(np.mean([seg.period for seg in segmentations])))
-        canonical = CanonicalSystem(common_period, mu=mu, eta=eta, alpha=alpha, beta=beta)
-        anchor = np.mean([seg.anchor for seg in segmentations], axis=0)
-        lengths = [seg.transient_length for seg in segmentations]
-        for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True)):
-            if seg.transient_length < max(_MIN_TRANSIENT * seg.period, demo.dt):
-                raise ValueError(f"demos[{k}]: {demo.name or 'the demonstration'} is periodic from its first samples "
-                                 f"(transient {seg.transient_length:.3g} s, period {seg.period:.3g} s): this DMP "
-                                 "encodes a start from rest into the pattern, so record the approach too, or use "
-                                 "rdmp_gym.PeriodicDMP for a purely periodic movement")
-
-        reference = int(np.argmin(lengths))
-        entrance = [canonical.omega * phase_shift(demos[reference], segmentations[reference], demo, seg,
-                                                  common_period) if k != reference else 0.0
-                    for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
-        mu1 = mu1_factor * mu
-        t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
-               else min(fading_fractions[0] * common_period, fading_fractions[1] * min(lengths)))
-        if t_f >= min(lengths):
-            raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
-        fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
-
-        inits = [canonical.init_T(length, phase, mu1) for length, phase in zip(lengths, entrance, strict=True)]
-        paths = [transient_basis_along_path(canonical, phi0, r0, length - 0.5 * t_f, m,
-                                            transient_overlap, turn_height)
-                 for (phi0, r0), length, m in zip(inits, lengths, sizes, strict=True)]
-        basis = BasisSet(
-            periodic_centres=2.0 * np.pi * np.arange(n_periodic) / n_periodic,
-            periodic_widths=np.full(n_periodic, periodic_width(n_periodic, periodic_overlap)),
-            transient_centres=np.concatenate([centres for centres, _ in paths]),
-            transient_widths=np.concatenate([widths for _, widths in paths]),
-            transient_sizes=tuple(sizes), fading=fading)
-
-        spacings = [common_period / n_periodic] + [(length - 0.5 * t_f) / max(m - 1, 1)
-                                                   for length, m in zip(lengths, sizes, strict=True)]
-        differences = second_differences((int(n_periodic), *sizes), (True,) + (False,) * len(sizes), spacings,
-                                         common_period / SMOOTHNESS_REFERENCE)
-        responses, start_columns, samples = _trajectory_design(canonical, basis, demos, inits, lengths, anchor,
-                                                               alpha_z, substeps)
-        if method == "trajectory":
-            weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness,
-                                             regularization)
-        else:
-            activations, targets, starts = [], [], []
-            for demo, (phi0, r0) in zip(demos, inits, strict=True):
-                Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
-                phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
-                activations.append(basis.activations(phi, r))
-                targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
-                starts.append(Y[0])
-            weights = fit_weights(np.concatenate(activations), np.concatenate(targets), method, regularization,
-                                  smoothness, differences, floor)
-            # the demonstrated start (smoothed), and the start velocity that best explains the samples under
-            # the smooth start (a derivative estimate at the first sample is noisy)
-            starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
-                                           rcond=None)[0][0])
-                      for y0, response, columns, sample in zip(starts, responses, start_columns, samples, strict=True)]
-        transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
-                      for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
-        logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
-                    len(demos), n_periodic, sizes, common_period, method)
-        return cls(canonical, basis, weights.T, transients, anchor, alpha_z)
+        return cls(*fit_rhythmic(demos, n_periodic, n_transient, method, **settings))
 
     # ------------------------------------------------------------------ rollouts
     def _check_transient(self, transient: int) -> int:
@@ -511,7 +276,7 @@ class RhythmicDMP:
             blend = self.ending.anchor_blend((elapsed - stop.exit_time) * tempo)[None, :, None]
             path = (path if path.ndim == 3 else path[:, None, :]) + blend * (
                 (stop.goal - anchors)[:, None, :] - travel)
-        system = _transformation(omega, dt, self.alpha_z)
+        system = cached_system(omega, dt, self.alpha_z)
         with np.errstate(all="ignore"):
             u = system.input(path, forcing, out=forcing, scratch=path is not anchors)   # a blended path is ours
             del path, forcing
@@ -851,7 +616,7 @@ class DMPStepper:
         self.blend_length = dmp.transients[transient].length / tempo
         self.canonical = replace(dmp.canonical, tempo=tempo)
         self.omega = self.canonical.omega * tempo
-        self.system = _transformation(self.omega, dt, dmp.alpha_z)
+        self.system = cached_system(self.omega, dt, dmp.alpha_z)
         self.steps = 0
         self.y, self.z = y0, yd0 / self.omega
         self._block_index, self._block = -1, np.empty((0, dmp.n_dims))

@@ -1,4 +1,9 @@
-"""Imitation: the target forcing term (10) from a demonstration and the two regressions.
+"""Imitation: fitting a rhythmic DMP to demonstrations (:func:`fit_rhythmic`), and the regressions it uses.
+
+:func:`fit_rhythmic` is the whole fit behind :meth:`RhythmicDMP.fit <rdmp_gym.dmp.RhythmicDMP.fit>`: segmentation,
+the canonical system, the basis functions along each transient's canonical path, the smoothness penalty, and one
+of three regressions of the weights (the formulation is in :mod:`rdmp_gym.basis` and :mod:`rdmp_gym.canonical`,
+the rollout in :mod:`rdmp_gym.dmp`):
 
 * ``lwr``: locally weighted regression exactly as the paper's (11)/(12): each weight is the
   activation-weighted mean of the target, one basis function at a time.
@@ -13,15 +18,36 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .basis import NORMALISATION_EPSILON, normalize
-from .validation import check_positive
+from .basis import (
+    NORMALISATION_EPSILON,
+    SMOOTH_FLOOR,
+    BasisSet,
+    Fading,
+    normalize,
+    periodic_width,
+    transient_basis_along_path,
+    transient_times,
+    von_mises,
+)
+from .canonical import CanonicalSystem
+from .demonstrations import Demonstration
+from .segmentation import Segmentation, phase_shift, segment
+from .start import TransientStart, settled_state, start_blend_profiles
+from .transformation import cached_system
+from .validation import check_count, check_nonnegative, check_positive
 
-__all__ = ["FIT_METHODS", "fit_trajectory", "fit_weights", "forcing_target", "second_differences", "smooth_derivatives"]
+__all__ = ["FADE_BEFORE_T", "FIT_METHODS", "HANDOVERS", "HANDOVER_FLOOR", "PAPER_SETTINGS", "PRIORS",
+           "SMOOTHNESS_REFERENCE", "FittedDMP", "fit_rhythmic", "fit_trajectory", "fit_weights", "forcing_target",
+           "relative_to_pattern", "second_differences", "smooth_derivatives", "trajectory_design"]
+
+logger = logging.getLogger(__name__)
 
 FIT_METHODS = ("lwr", "ridge", "trajectory")
 
@@ -138,3 +164,294 @@ def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.n
     penalty[:n_basis, :n_basis] = scale * (smoothness * differences.T @ differences + regularization * np.eye(n_basis))
     solution = np.linalg.solve(gram + penalty, design.T @ right)
     return solution[:n_basis], solution[n_basis:].reshape(n_demos, n_start, -1)
+
+
+# ------------------------------------------------------------------ the rhythmic DMP's fit
+
+MIN_TRANSIENT = 0.05
+"""The shortest transient :func:`fit_rhythmic` encodes, as a fraction of the period."""
+
+HANDOVERS = ("after", "before")
+"""Where :func:`fit_rhythmic` puts the fade between the transient and the periodic family (``handover``)."""
+
+PRIORS = ("pattern", "flat")
+"""What the smoothness penalty of :func:`fit_rhythmic` holds the transient weights to (``prior``)."""
+
+HANDOVER_FLOOR = 0.3
+"""The mixture's floor (:class:`~rdmp_gym.basis.Fading`) of :func:`fit_rhythmic`: during the fade after T neither
+family's activations sum to much, and a floor of 30 % of the sum on the encoded path makes the forcing term fade
+smoothly off it (canonical starts off the encoded path: peak acceleration within 3x the demonstration's)."""
+
+SMOOTHNESS_REFERENCE = 40
+"""``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
+``period / 40``); other spacings get the penalty on the same time curvature."""
+
+PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
+                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25),
+                  "turn_height": 1e-3, "handover": "before", "transient_lead": 0.0, "prior": "flat"}
+"""Keywords of :func:`fit_rhythmic` that give the paper's formulation as first implemented here (LWR (11), a stiff
+spring, narrow basis functions, the bare mixture (5), the families' fade before T, the first transient centre at
+the start); roll out with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}``
+fits the same basis by global least squares."""
+
+FADE_BEFORE_T = {"handover": "before", "transient_lead": 0.0, "prior": "flat", "floor": SMOOTH_FLOOR}
+"""Keywords of :func:`fit_rhythmic` for the fade over the ``t_f`` before T, the first transient centre at the start,
+a plain second-difference penalty and the mixture's floor of 1 %. The environments fit their imitation DMP with
+these, so their tasks stay as published."""
+
+
+class FittedDMP(NamedTuple):
+    """The parts of a fitted :class:`~rdmp_gym.dmp.RhythmicDMP`, in its constructor's order."""
+
+    canonical: CanonicalSystem
+    basis: BasisSet
+    weights: np.ndarray                 # [d, D]
+    transients: list[TransientStart]
+    anchor: np.ndarray                  # [d]
+    alpha_z: float
+
+
+def relative_to_pattern(differences: np.ndarray, n_periodic: int, pattern: np.ndarray, shares: np.ndarray
+                        ) -> np.ndarray:
+    """The penalty rows ``[R, D]`` with each transient weight taken relative to its share of the periodic forcing.
+
+    A row acts on ``w_t - shares * (pattern @ w_p)`` instead of ``w_t`` (``w_p``: the N periodic weights first,
+    ``w_t``: the transient ones; ``pattern [M, N]``: the periodic mixture at each transient centre's phase;
+    ``shares [M]`` in [0, 1]). Rows on the periodic weights alone are unchanged.
+    """
+    relative = differences.copy()
+    relative[:, :n_periodic] -= differences[:, n_periodic:] @ (shares[:, None] * pattern)
+    return relative
+
+
+def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
+                 n_transient: int | Sequence[int] = 40, method: str = "trajectory", *,
+                 segmentations: Sequence[Segmentation] | None = None, period: float | None = None,
+                 alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
+                 beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
+                 delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
+                 smoothing: float = 0.15, regularization: float | None = None, smoothness: float = 0.3,
+                 floor: float = HANDOVER_FLOOR, substeps: int = 4, fading_fractions: tuple[float, float] = (0.5, 0.25),
+                 turn_height: float = 0.3, handover: str = "after", transient_lead: float = 1.0,
+                 prior: str = "pattern") -> FittedDMP:
+    """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
+
+    :meth:`RhythmicDMP.fit <rdmp_gym.dmp.RhythmicDMP.fit>` calls this and builds the DMP from its parts.
+
+    Args:
+        demos: a :class:`Demonstration` or K of them (one transient each), all with d dimensions.
+        n_periodic: periodic basis functions N.
+        n_transient: transient basis functions per transient (an int or K ints).
+        method: ``"trajectory"`` (default: weights and start state that make the rollout itself match the
+            samples, see :func:`fit_trajectory`), ``"lwr"`` (the paper's (11)/(12)) or ``"ridge"`` (global least
+            squares on the forcing target (10)).
+        segmentations: per demonstration; estimated with :func:`~rdmp_gym.segmentation.segment` when omitted.
+        period: common period (s); the mean of the segmentations' periods when omitted.
+        alpha_z: transformation-system gain (default 5: a softer spring, see the docs' design rationale;
+            25 in :data:`PAPER_SETTINGS`).
+        mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
+        mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
+        fading_time: t_f (s), the overlap of transient and periodic basis; default
+            ``min(a period, b shortest transient)`` with ``(a, b) = fading_fractions``.
+        delta: support threshold of the fades.
+        periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
+            wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
+        smoothing: Savitzky-Golay window (s) for the demonstration's derivatives (``lwr``, ``ridge``).
+        regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the forcing term
+            stays gentle off the encoded paths; 1e-6 otherwise).
+        smoothness: relative penalty on second differences of neighbouring weights (``ridge``,
+            ``trajectory``); 0 in :data:`PAPER_SETTINGS`. 0.3 holds the periodic acceleration error of a small
+            pure sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %).
+        floor: added to the sum of activations in the mixture (5) (:class:`~rdmp_gym.basis.Fading`), so that the
+            forcing term fades to 0 where no basis function is active.
+        substeps: ``trajectory`` simulates each basis function's response this many times finer than the samples.
+        fading_fractions: ``(a, b)`` of the default ``fading_time``.
+        turn_height: the largest value a transient basis function may keep on the next turn of its spiral
+            (:func:`~rdmp_gym.basis.transient_basis_along_path`; 1e-3 in :data:`PAPER_SETTINGS`). Near the
+            hand-over of a short period the turns are close, and a lower height narrows the last functions
+            until gaps open between them: a ripple at the basis spacing (jerk up to 3x the true signal's).
+        handover: where the transient family fades out and the periodic one fades in: ``"after"`` (default) over
+            the ``t_f`` after T, where the demonstration is on its cycle; ``"before"`` over the ``t_f`` before T
+            (the paper), where the mixture cannot follow a demonstration that is still off its cycle.
+        transient_lead: spacings by which the first transient centre lies before the start
+            (:func:`~rdmp_gym.basis.transient_times`; 0 in :data:`PAPER_SETTINGS`).
+        prior: what the smoothness penalty holds the transient weights to: ``"pattern"`` (default) the periodic
+            forcing at the centre's phase, in the share that the start blend has handed over to the pattern by the
+            centre's time (0 at the start, 1 from T on), so the transient family can follow the pattern through
+            the hand-over; ``"flat"``: plain second differences (straight lines).
+    """
+    demos = _as_demos(demos)
+    regularization = _check_settings(method, regularization, smoothness, smoothing, alpha_z, turn_height, handover,
+                                     prior)
+    n_periodic = check_count(n_periodic, "n_periodic", 2)
+    sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
+             else [check_count(m, "n_transient", 1) for m in n_transient])
+    if len(sizes) != len(demos):
+        raise ValueError(f"n_transient: expected a positive int or {len(demos)} positive ints, got {n_transient!r}")
+    segmentations, common_period = _segmentations(demos, segmentations, period)
+    canonical = CanonicalSystem(common_period, mu=mu, eta=eta, alpha=alpha, beta=beta)
+    anchor = np.mean([seg.anchor for seg in segmentations], axis=0)
+    lengths = [seg.transient_length for seg in segmentations]
+    entrance = _entrance_phases(canonical, demos, segmentations)
+    mu1 = mu1_factor * mu
+    t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
+           else min(fading_fractions[0] * common_period, fading_fractions[1] * min(lengths)))
+    if t_f >= min(lengths):
+        raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
+    fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
+    late = t_f if handover == "after" else 0.0          # the canonical state reaches mu1 at T + late
+    inits = [canonical.init_T(length + late, phase + canonical.omega * late, mu1)
+             for length, phase in zip(lengths, entrance, strict=True)]
+    spans = [length + late - 0.5 * t_f for length in lengths]        # the last transient centre
+    times = [transient_times(span, m, transient_lead) for span, m in zip(spans, sizes, strict=True)]
+    paths = [transient_basis_along_path(canonical, phi0, r0, span, m, transient_overlap, turn_height, transient_lead)
+             for (phi0, r0), span, m in zip(inits, spans, sizes, strict=True)]
+    basis = BasisSet(periodic_centres=2.0 * np.pi * np.arange(n_periodic) / n_periodic,
+                     periodic_widths=np.full(n_periodic, periodic_width(n_periodic, periodic_overlap)),
+                     transient_centres=np.concatenate([centres for centres, _ in paths]),
+                     transient_widths=np.concatenate([widths for _, widths in paths]),
+                     transient_sizes=tuple(sizes), fading=fading)
+    differences = _penalty(basis, times, lengths, common_period, prior)
+    weights, starts = _regression(method, demos, canonical, basis, inits, lengths, anchor, alpha_z, substeps,
+                                  smoothing, smoothness, regularization, differences)
+    transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
+                  for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
+    logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
+                len(demos), n_periodic, sizes, common_period, method)
+    return FittedDMP(canonical, basis, weights.T, transients, anchor, alpha_z)
+
+
+def _as_demos(demos: Demonstration | Sequence[Demonstration]) -> list[Demonstration]:
+    demos = [demos] if isinstance(demos, Demonstration) else list(demos)
+    if not demos:
+        raise ValueError("demos: expected at least one Demonstration")
+    for index, demo in enumerate(demos):
+        if not isinstance(demo, Demonstration):
+            raise TypeError(f"demos[{index}]: expected a Demonstration, got {type(demo).__name__}")
+        if demo.n_dims != demos[0].n_dims:
+            raise ValueError(f"demos[{index}]: has {demo.n_dims} dimensions, demos[0] has {demos[0].n_dims}")
+    return demos
+
+
+def _check_settings(method: str, regularization: float | None, smoothness: float, smoothing: float,
+                    alpha_z: float, turn_height: float, handover: str, prior: str) -> float:
+    """Refuse bad keywords of :func:`fit_rhythmic`; returns the regularization (its default resolved per method)."""
+    if method not in FIT_METHODS:
+        raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
+    if handover not in HANDOVERS:
+        raise ValueError(f"handover: expected one of {HANDOVERS}, got {handover!r}")
+    if prior not in PRIORS:
+        raise ValueError(f"prior: expected one of {PRIORS}, got {prior!r}")
+    if not 0.0 < turn_height < 1.0:
+        raise ValueError(f"turn_height: must lie in (0, 1), got {turn_height!r}")
+    check_nonnegative(smoothness, "smoothness")
+    check_positive(smoothing, "smoothing")
+    check_positive(alpha_z, "alpha_z")
+    if regularization is None:
+        regularization = 1e-4 if method == "trajectory" else 1e-6
+    return check_nonnegative(regularization, "regularization")
+
+
+def _segmentations(demos: list[Demonstration], segmentations: Sequence[Segmentation] | None, period: float | None
+                   ) -> tuple[list[Segmentation], float]:
+    """One segmentation per demonstration (estimated when omitted) and the common period (s)."""
+    if segmentations is None:
+        segmentations = [segment(demo, period=period) for demo in demos]
+    elif len(segmentations) != len(demos):
+        raise ValueError(f"segmentations: expected {len(demos)}, got {len(segmentations)}")
+    common_period = (check_positive(period, "period") if period is not None
+                     else float(np.mean([seg.period for seg in segmentations])))
+    for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True)):
+        if seg.transient_length < max(MIN_TRANSIENT * seg.period, demo.dt):
+            raise ValueError(f"demos[{k}]: {demo.name or 'the demonstration'} is periodic from its first samples "
+                             f"(transient {seg.transient_length:.3g} s, period {seg.period:.3g} s): this DMP "
+                             "encodes a start from rest into the pattern, so record the approach too, or use "
+                             "rdmp_gym.PeriodicDMP for a purely periodic movement")
+    return list(segmentations), common_period
+
+
+def _entrance_phases(canonical: CanonicalSystem, demos: list[Demonstration], segmentations: list[Segmentation]
+                     ) -> list[float]:
+    """The phase (rad) at which each transient enters the pattern, relative to the shortest transient's."""
+    lengths = [seg.transient_length for seg in segmentations]
+    reference = int(np.argmin(lengths))
+    return [canonical.omega * phase_shift(demos[reference], segmentations[reference], demo, seg, canonical.period)
+            if k != reference else 0.0 for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
+
+
+def _penalty(basis: BasisSet, times: list[np.ndarray], lengths: list[float], period: float, prior: str
+             ) -> np.ndarray:
+    """The smoothness penalty's rows ``[R, D]``: second differences of each family's weights (see
+    :func:`second_differences`), the transient ones relative to the pattern under ``prior="pattern"``
+    (:func:`relative_to_pattern`, with the start blend's progress ``1 - P0(t_j)`` at the centre times ``times``)."""
+    n_periodic = basis.n_periodic
+    spacings = [period / n_periodic] + [float(np.ptp(t)) / max(t.size - 1, 1) for t in times]
+    differences = second_differences((n_periodic, *basis.transient_sizes), (True,) + (False,) * len(times),
+                                     spacings, period / SMOOTHNESS_REFERENCE)
+    if prior == "flat":
+        return differences
+    phases = np.arctan2(basis.transient_centres[:, 1], basis.transient_centres[:, 0])
+    pattern = normalize(von_mises(phases, basis.periodic_centres, basis.periodic_widths), basis.fading.floor)
+    shares = np.concatenate([1.0 - start_blend_profiles(t, length)[0, 0] for t, length in zip(times, lengths,
+                                                                                              strict=True)])
+    return relative_to_pattern(differences, n_periodic, pattern, shares)
+
+
+def _regression(method: str, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
+                lengths: list[float], anchor: np.ndarray, alpha_z: float, substeps: int, smoothing: float,
+                smoothness: float, regularization: float, differences: np.ndarray) -> tuple[np.ndarray, list]:
+    """Weights ``[D, d]`` and per demonstration the start ``(y0 [d], yd0 [d])``, by ``method``: the trajectory fit
+    (:func:`fit_trajectory`), or ``lwr``/``ridge`` on the forcing target (10) (:func:`fit_weights`) with the smoothed
+    start and the start velocity that best explains the samples under the smooth start (a derivative estimate at
+    the first noisy sample is off by up to 0.1 m/s)."""
+    responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
+                                                          substeps)
+    if method == "trajectory":
+        weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
+        return weights, list(starts)
+    activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
+                                                             smoothing)
+    weights = fit_weights(activations, targets, method, regularization, smoothness, differences, basis.fading.floor)
+    starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,
+                                   rcond=None)[0][0])
+              for y0, response, columns, sample in zip(smoothed_starts, responses, start_columns, samples,
+                                                       strict=True)]
+    return weights, starts
+
+
+def _forcing_targets(demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
+                     anchor: np.ndarray, alpha_z: float, smoothing: float
+                     ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The raw activations ``[L, D]`` and forcing targets (10) ``[L, d]`` of all smoothed demonstrations (stacked),
+    and each demonstration's smoothed start ``[d]``."""
+    activations, targets, starts = [], [], []
+    for demo, (phi0, r0) in zip(demos, inits, strict=True):
+        Y, Yd, Ydd = smooth_derivatives(demo.Y, demo.dt, smoothing)
+        phi, r = canonical.state(demo.t - demo.t[0], phi0, r0)
+        activations.append(basis.activations(phi, r))
+        targets.append(forcing_target(Y, Yd, Ydd, anchor, canonical.omega, alpha_z))
+        starts.append(Y[0])
+    return np.concatenate(activations), np.concatenate(targets), starts
+
+
+def trajectory_design(canonical: CanonicalSystem, basis: BasisSet, demos: Sequence[Demonstration],
+                      inits: Sequence[tuple[float, float]], lengths: Sequence[float], anchor: np.ndarray,
+                      alpha_z: float, substeps: int) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+    """The smooth-start rollout model ``y = P(t) + (y0 - P(0)) P0(t) + yd0 P1(t)`` at each demonstration's
+    samples (P: the motion from the settled state, linear in the weights; P0, P1: the start-blend profiles),
+    as ``(responses [L_k, D], start_columns [L_k, 2], samples minus the anchor's part [L_k, d])`` per
+    demonstration. The basis responses are simulated ``substeps`` times finer than the samples."""
+    responses, start_columns, samples = [], [], []
+    for demo, (phi0, r0), length in zip(demos, inits, lengths, strict=True):
+        phi, r = canonical.state(np.zeros(1), phi0, r0)
+        settled, settled_yd = settled_state(basis.normalized(phi, r)[0], np.zeros(basis.n_basis), alpha_z)
+        fine = np.arange((demo.n_samples - 1) * substeps + 1) * demo.dt / substeps
+        phi, r = canonical.state(fine, phi0, r0)
+        system = cached_system(canonical.omega, demo.dt / substeps, alpha_z)
+        response = system.rollout(system.input(np.zeros(basis.n_basis), basis.normalized(phi, r)),
+                                  settled, settled_yd / canonical.omega)[0][::substeps]  # [L, D]
+        (fall, _, _), (slope, _, _) = start_blend_profiles(demo.t - demo.t[0], length)
+        responses.append(response - fall[:, None] * settled - slope[:, None] * settled_yd)
+        start_columns.append(np.stack([fall, slope], axis=1))
+        samples.append(demo.Y - (1.0 - fall[:, None]) * anchor)
+    return responses, start_columns, samples

@@ -29,9 +29,16 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .demonstrations import Demonstration
-from .dmp import SMOOTHNESS_REFERENCE, RhythmicDMP, _trajectory_design
+from .dmp import RhythmicDMP
 from .ending import minimum_jerk_inverse
-from .fitting import fit_trajectory, second_differences, smooth_derivatives
+from .fitting import (
+    FADE_BEFORE_T,
+    SMOOTHNESS_REFERENCE,
+    fit_trajectory,
+    second_differences,
+    smooth_derivatives,
+    trajectory_design,
+)
 from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
 from .segmentation import Segmentation
 from .stopping import StopSegmentation, fit_stop
@@ -104,7 +111,8 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
         n_periodic, n_transient, n_stop: basis functions of the rhythm, of its entry and of the stop.
         normalise: fit the recording with its cycles stretched to their mean period (:func:`normalise_tempo`).
         smoothness: penalty on second differences of neighbouring weights (see :meth:`RhythmicDMP.fit`).
-        fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ...).
+        fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ...), over the settings of
+            :data:`~rdmp_gym.fitting.FADE_BEFORE_T` that the rhythm's entry is fitted with here.
     """
     if not isinstance(demo, Demonstration):
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
@@ -131,7 +139,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     entry_length = seg.rhythm_start - t[rows][0]
     short = RhythmicDMP.fit(rhythm, n_periodic=n_periodic, n_transient=n_transient,
                             segmentations=[Segmentation(seg.period, entry_length, anchor)], period=seg.period,
-                            smoothness=smoothness, **fit_kwargs)
+                            smoothness=smoothness, **{**FADE_BEFORE_T, **fit_kwargs})
     full = Demonstration(t[t <= seg.rhythm_end + 0.5 * demo.dt],
                          (demo.Y - sweep.offsets(t))[t <= seg.rhythm_end + 0.5 * demo.dt], name=demo.name)
     dmp = _delayed(short, full, seg.rhythm_start, entry_length, substeps=int(fit_kwargs.get("substeps", 4)),
@@ -164,7 +172,7 @@ def _delayed(short: RhythmicDMP, full: Demonstration, rhythm_start: float, entry
     canonical, basis = short.canonical, short.basis
     transient = short.transients[0]
     phi0, r0 = canonical.init_T(rhythm_start, transient.entrance_phase, basis.fading.mu1)
-    responses, start_columns, samples = _trajectory_design(canonical, basis, [full], [(phi0, r0)], [rhythm_start],
+    responses, start_columns, samples = trajectory_design(canonical, basis, [full], [(phi0, r0)], [rhythm_start],
                                                            short.anchor, short.alpha_z, substeps)
     n_transient = basis.transient_sizes[0]
     differences = second_differences((basis.n_periodic, n_transient), (True, False),

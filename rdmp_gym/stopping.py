@@ -45,7 +45,7 @@ from .demonstrations import (
     _vector3,
 )
 from .ending import Ending, StopFading, StopPlan, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
-from .fitting import forcing_target, smooth_derivatives
+from .fitting import fit_rhythmic, forcing_target, smooth_derivatives
 from .rhythm import rest_start
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
 from .transformation import TransformationSystem
@@ -219,7 +219,7 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     head = Demonstration(demo.t[: end_index + 1], demo.Y[: end_index + 1], name=demo.name)
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: give the StopSegmentation as segmentation=")
-    defaults = inspect.signature(RhythmicDMP.fit).parameters
+    defaults = inspect.signature(fit_rhythmic).parameters
     delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
                                         for name in ("delta", "smoothing", "regularization"))
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)

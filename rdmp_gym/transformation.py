@@ -20,7 +20,7 @@ is why we use it rather than Euler or RK4. Fitting inverts the continuous equati
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.linalg import expm
@@ -28,7 +28,7 @@ from scipy.signal import lfilter
 
 from .validation import check_positive
 
-__all__ = ["FREE_RESPONSE_FLOOR", "TransformationSystem"]
+__all__ = ["FREE_RESPONSE_FLOOR", "TransformationSystem", "cached_system"]
 
 FREE_RESPONSE_FLOOR = 1e-17
 """Relative size below which the decaying response to the initial state is taken as 0."""
@@ -158,3 +158,10 @@ class TransformationSystem:
         phi, b0, b1 = self._discrete
         state = phi @ np.stack([y, z]) + b0[:, None] * u_now + b1[:, None] * u_next
         return state[0], state[1]
+
+
+@lru_cache(maxsize=64)
+def cached_system(omega: float, dt: float, alpha_z: float) -> TransformationSystem:
+    """The :class:`TransformationSystem` of these constants, built once (its discretisation costs a matrix
+    exponential)."""
+    return TransformationSystem(omega, dt, alpha_z)

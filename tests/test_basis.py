@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from rdmp_gym import CanonicalSystem, Fading, RhythmicDMP, wiping_demonstration
-from rdmp_gym.basis import periodic_width, transient_basis_along_path
+from rdmp_gym.basis import periodic_width, transient_basis_along_path, transient_times
+from rdmp_gym.fitting import FADE_BEFORE_T
 
 
 @pytest.fixture(scope="module")
@@ -49,17 +50,35 @@ def test_transient_centres_uniform_in_time_on_the_path():
     assert np.all(np.exp(-widths * next_turn**2) <= 1e-3 + 1e-12)
 
 
-def test_only_periodic_basis_after_transient_and_transient_before(dmp):
+@pytest.mark.parametrize("settings", [{}, FADE_BEFORE_T])
+def test_only_periodic_basis_after_the_fade_and_transient_before(settings):
+    """The families hand over in the ``t_f`` after T (default) or before it (``FADE_BEFORE_T``); the mixture keeps
+    a steady share of the floor on the path (the activations sum to about 2 there)."""
+    dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=0), n_periodic=20, n_transient=20, **settings)
     start = dmp.transients[0]
     t = np.arange(0, 8.0, 0.01)
     phi, r = dmp.canonical.state(t, start.phi0, start.r0)
     act = dmp.basis.normalized(phi, r)
     periodic_share = act[:, : dmp.basis.n_periodic].sum(1)
-    length = start.length
+    fading = dmp.basis.fading
+    t_f = dmp.canonical.time_between(fading.mu2, fading.mu1)
+    fade_end = start.length + (t_f if settings.get("handover", "after") == "after" else 0.0)
     total = act.sum(1)
-    assert np.all(total > 0.97) and np.all(total <= 1.0)          # covered everywhere (the floor takes < 3 %)
-    assert np.all(periodic_share[t >= length] > total[t >= length] - 1e-3)
-    assert np.all(periodic_share[t < 0.5 * length] < 1e-3)
+    lowest = 1.0 / (1.0 + 2.0 * fading.floor)                     # the floor takes at most a third of a sum of 1
+    assert np.all(total > lowest) and np.all(total <= 1.0)
+    assert np.all(periodic_share[t >= fade_end] > total[t >= fade_end] - 1e-3)
+    assert np.all(periodic_share[t < 0.5 * start.length] < 1e-3)
+    assert np.any(periodic_share[t < fade_end] < 0.5 * total[t < fade_end])     # the fade is not over sooner
+
+
+def test_transient_times_lead_the_start():
+    times = transient_times(1.8, 10, lead=1.0)
+    assert times[-1] == pytest.approx(1.8) and times[1] == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(np.diff(times), 1.8 / 8)                 # 8 spacings from the start to 1.8 s
+    np.testing.assert_allclose(transient_times(1.8, 10), np.linspace(0.0, 1.8, 10))
+    assert transient_times(1.8, 2, lead=1.0)[0] == 0.0                 # one centre stays at or after the start
+    with pytest.raises(ValueError, match="transient_lead"):
+        transient_times(1.8, 10, lead=-1.0)
 
 
 def test_normalised_mixture_is_finite_far_from_every_support(dmp):
