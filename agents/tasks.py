@@ -11,8 +11,8 @@ import numpy as np
 
 from .imitation import load_demonstration
 
-__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec", "episode_metrics",
-           "run_episode", "task_options"]
+__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions",
+           "TaskSpec", "episode_metrics", "run_episode", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
@@ -30,15 +30,21 @@ CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
                  "sigma_factors": "approach=3"},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
+#: smooth exploration for the one-θ learners on the tasks published with it (ArmarWipe-v1's runs keep theirs)
+SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {WIPE_V2_ID: {"length": 5.0}}
+_SMOOTH_AGENTS = ("pi2", "pibb", "cmaes")
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 
 def task_options(env_id: str, agent: str, options: Mapping[str, Any], env_kwargs: Mapping[str, Any] | None = None
                  ) -> dict[str, Any]:
-    """``options`` over the task's defaults for ``agent`` (:data:`CONTEXTUAL_SEARCH_DEFAULTS`; none when
-    ``env_kwargs`` choose other action ``groups``, which the defaults may not name)."""
+    """``options`` over the task's defaults for ``agent``: :data:`CONTEXTUAL_SEARCH_DEFAULTS` (none when
+    ``env_kwargs`` choose other action ``groups``, which the defaults may not name) and
+    :data:`SMOOTH_EXPLORATION_DEFAULTS`."""
     chosen = agent in _TASK_DEFAULT_AGENTS and "groups" not in (env_kwargs or {})
     defaults = CONTEXTUAL_SEARCH_DEFAULTS.get(env_id, {}) if chosen else {}
+    if agent in _SMOOTH_AGENTS:
+        defaults = SMOOTH_EXPLORATION_DEFAULTS.get(env_id, {})
     return {**defaults, **options}
 
 

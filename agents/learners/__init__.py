@@ -83,15 +83,15 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         rng: the learner's random generator.
         options: fields of the learner's config dataclass (a misspelt name is a ``ValueError``).
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only).
-        space: action layout and context standardisation (the contextual learners; PI² and PI^BB with
-            ``length > 0``, their smooth exploration).
+        space: action layout and context standardisation (the contextual learners; PI², PI^BB and CMA-ES
+            with ``length > 0``, their smooth exploration).
     """
     if agent not in LEARNERS:
         raise ValueError(f"agent: expected one of {sorted(LEARNERS)}, got {agent!r}")
     cls, config_cls = LEARNERS[agent]
     config = from_options(config_cls, options, agent)
     factor = None
-    if getattr(config, "length", 0.0) > 0 and cls in (PI2, PIBB):
+    if getattr(config, "length", 0.0) > 0 and cls in (PI2, PIBB, CMAES):
         if space is None:
             raise ValueError(f"space: {agent} with length > 0 (smooth exploration) needs the action layout")
         factor = smooth_factor(np.asarray(initial_mean).size, space.slices, space.n_dims, config.length)
@@ -101,6 +101,8 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         return PI2(initial_mean, rollouts, rng, time_weights, config, factor)
     if cls is PIBB:
         return PIBB(initial_mean, rollouts, rng, config, factor)
+    if cls is CMAES:
+        return CMAES(initial_mean, rollouts, rng, config, factor)
     if cls.uses_context and space is None:
         raise ValueError(f"space: {agent} needs the action layout and context standardisation (SearchSpace)")
     if cls is ContextualSearch:

@@ -6,6 +6,10 @@ normal samples through the ``randn`` option, which is fed from the learner's Gen
 reproducible. The strategy is not stored as an object: the state holds the start (mean and RNG state)
 and the costs told so far ``[U, K]``, and loading replays the ``U`` generations, which restores the
 strategy exactly (and checks that the replay reaches the stored RNG state and mean).
+
+With ``length > 0`` the search runs in smooth coordinates ``z``: ``a = clip(a0 + L z)``, ``L`` the factor of the
+correlation of neighbouring DMP weights (:func:`.smooth.smooth_factor`), so the first generations explore
+smooth paths and the covariance CMA-ES learns is a correction of that shape; the box is then kept by clipping.
 """
 
 from __future__ import annotations
@@ -33,15 +37,18 @@ class CMAESConfig:
         sigma: initial step size in action units.
         bounds: ``"transform"`` or ``"penalty"`` handling of the ``[-1, 1]`` box.
         diagonal: learn only a diagonal covariance (separable CMA-ES; faster in high dimension).
+        length: correlation length of the exploration in neighbouring weights (0 = CMA-ES's isotropic start).
     """
 
     sigma: float = 0.6
     bounds: str = "transform"
     diagonal: bool = False
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "cmaes.sigma", 0.0, None, low_open=True)
         check_choice(self.bounds, "cmaes.bounds", BOUND_MODES)
+        check_range(self.length, "cmaes.length", 0.0, None)
 
 
 class _GeneratorNormal:
@@ -62,14 +69,18 @@ class CMAES(Learner):
         rollouts: population size ``K``.
         rng: source of the samples (handed to ``cma`` via its ``randn`` option).
         config: the settings.
+        factor: ``[n, n]`` the smooth factor ``L`` (with ``config.length > 0``), else None.
     """
 
     name = "cmaes"
 
     def __init__(self, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator,
-                 config: CMAESConfig | None = None) -> None:
+                 config: CMAESConfig | None = None, factor: np.ndarray | None = None) -> None:
         super().__init__(initial_mean, rollouts, rng)
         self.config = config or CMAESConfig()
+        if factor is not None and np.shape(factor) != (self.n_params, self.n_params):
+            raise ValueError(f"factor: expected shape [{self.n_params}, {self.n_params}], got {np.shape(factor)}")
+        self.factor = None if factor is None else np.asarray(factor, dtype=np.float64)
         self._start_rng = self.rng.bit_generator.state
         self._start_mean = self._mean.copy()
         self._costs: list[np.ndarray] = []
@@ -78,12 +89,22 @@ class CMAES(Learner):
 
     def _new_strategy(self) -> cma.CMAEvolutionStrategy:
         handler = cma.BoundTransform if self.config.bounds == "transform" else cma.BoundPenalty
-        options = {"popsize": self.rollouts, "bounds": [-1.0, 1.0], "BoundaryHandler": handler,
+        smooth = self.factor is not None
+        options = {"popsize": self.rollouts, "bounds": [None, None] if smooth else [-1.0, 1.0],
+                   "BoundaryHandler": None if smooth else handler,
                    "randn": _GeneratorNormal(self.rng), "seed": math.nan, "CMA_diagonal": self.config.diagonal,
                    "verbose": -9, "verb_disp": 0, "verb_log": 0, "tolflatfitness": 10**9,
                    "tolfun": 0.0, "tolfunhist": 0.0, "tolx": 0.0, "tolstagnation": 10**9,
                    "maxiter": 10**9, "maxfevals": 10**12}
-        return cma.CMAEvolutionStrategy(self._start_mean.copy(), self.config.sigma, options)
+        start = np.zeros(self.n_params) if smooth else self._start_mean.copy()
+        return cma.CMAEvolutionStrategy(start, self.config.sigma, options)
+
+    def _actions(self, points: Any) -> np.ndarray:
+        """``[K, n]`` (or ``[n]``) the actions of CMA-ES's points (the smooth coordinates mapped back), in the box."""
+        x = np.asarray(points, dtype=np.float64)
+        if self.factor is not None:
+            x = self._start_mean + x @ self.factor.T
+        return np.clip(x, -1.0, 1.0)
 
     @property
     def exploration(self) -> float:
@@ -91,18 +112,17 @@ class CMAES(Learner):
 
     def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         self._pending = self.strategy.ask()
-        return np.clip(np.array(self._pending, dtype=np.float64), -1.0, 1.0)
+        return self._actions(self._pending)
 
     def _update(self, batch: EpisodeBatch) -> None:
         if self._pending is None:
             raise RuntimeError("tell: call ask() first")
-        asked = np.clip(np.array(self._pending), -1.0, 1.0)
-        if not np.array_equal(asked, batch.actions):
+        if not np.array_equal(self._actions(self._pending), batch.actions):
             raise ValueError("batch.actions: not the actions returned by the last ask()")
         self.strategy.tell(self._pending, batch.costs.tolist())
         self._costs.append(np.array(batch.costs, dtype=np.float64))
         self._pending = None
-        self._mean = np.clip(np.asarray(self.strategy.result.xfavorite, dtype=np.float64), -1.0, 1.0)
+        self._mean = self._actions(self.strategy.result.xfavorite)
 
     def _extra_state(self) -> dict[str, Any]:
         if self._pending is not None:
@@ -124,7 +144,7 @@ class CMAES(Learner):
             self.strategy.tell(self.strategy.ask(), row.tolist())
         self._costs = list(costs)
         self._pending = None
-        self._mean = np.clip(np.asarray(self.strategy.result.xfavorite, dtype=np.float64), -1.0, 1.0)
+        self._mean = self._actions(self.strategy.result.xfavorite)
         if self.rng.bit_generator.state != target_rng or not np.array_equal(self._mean, target_mean):
             raise ValueError("state: replaying the stored CMA-ES generations does not reach the stored mean and "
                              "RNG state (the state was altered or written by another cma version)")
