@@ -194,10 +194,11 @@ def cross_validation_score(normal_matrix: np.ndarray, gram: np.ndarray, moments:
     mean squared residual over ``(1 - dof / L)^2``, ``dof`` the trace of the hat matrix. It estimates the error on
     unseen samples (Craven and Wahba 1979), so the penalty it prefers is about the least that keeps the noise out:
     weak on clean samples, stronger on noisy ones."""
-    solution = np.linalg.solve(normal_matrix, moments)
+    both = np.linalg.solve(normal_matrix, np.concatenate([moments, gram], axis=1))       # one factorisation
+    solution, hat = both[:, : moments.shape[1]], both[:, moments.shape[1]:]
     residual = (energy - 2.0 * np.sum(solution * moments) + np.sum(solution * (gram @ solution))) / n_values
     n_rows = n_values / moments.shape[1]
-    dof = float(np.trace(np.linalg.solve(normal_matrix, gram)))
+    dof = float(np.trace(hat))
     return float(residual) / (1.0 - dof / n_rows) ** 2
 
 
