@@ -15,7 +15,8 @@ The hand-over: signals whose start is a quintic from rest joined to the orbit at
 velocity and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump
 in the approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults (the families
 fade over the ``t_f`` after T, the first transient centre one spacing before the start, the smoothness penalty
-relative to the pattern) and with :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments
+relative to the pattern, each family's smoothness chosen by generalised cross-validation), with one fixed smoothness
+0.3 for both families, and with :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments
 fit). Per signal (:func:`rdmp_gym.smoothness.handover_figures`): acceleration error over the transient and the
 periodic part, the worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it
 starts, relative to T), jerk ratios, position errors, and the largest peak acceleration from canonical starts off
@@ -51,7 +52,7 @@ from rdmp_gym.smoothness import (
 DT = 1e-3
 MODELS = {"default": ({}, True), "fade before T": (FADE_BEFORE_T, True), "paper lwr": (PAPER_SETTINGS, False),
           "paper ridge": ({**PAPER_SETTINGS, "method": "ridge"}, False)}
-HANDOVER_MODELS = {"fade before T": FADE_BEFORE_T, "default": {}}
+HANDOVER_MODELS = {"fade before T": FADE_BEFORE_T, "smoothness 0.3": {"smoothness": 0.3}, "default": {}}
 
 
 def cases(seed: int, n_signals: int):

@@ -139,7 +139,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     entry_length = seg.rhythm_start - t[rows][0]
     short = RhythmicDMP.fit(rhythm, n_periodic=n_periodic, n_transient=n_transient,
                             segmentations=[Segmentation(seg.period, entry_length, anchor)], period=seg.period,
-                            smoothness=smoothness, **{**FADE_BEFORE_T, **fit_kwargs})
+                            **{**FADE_BEFORE_T, "smoothness": smoothness, **fit_kwargs})
     full = Demonstration(t[t <= seg.rhythm_end + 0.5 * demo.dt],
                          (demo.Y - sweep.offsets(t))[t <= seg.rhythm_end + 0.5 * demo.dt], name=demo.name)
     dmp = _delayed(short, full, seg.rhythm_start, entry_length, substeps=int(fit_kwargs.get("substeps", 4)),
