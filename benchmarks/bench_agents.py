@@ -76,6 +76,8 @@ def _parse() -> argparse.Namespace:
                         help="learners, or LABEL=LEARNER to run one learner under a second name with its own "
                              "--option LABEL.KEY=VALUE settings")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")
+    parser.add_argument("--agent-seeds", action="append", default=[], metavar="LABEL=N",
+                        help="seeds 0..N-1 for one agent instead of --seeds (e.g. fewer for a control; repeatable)")
     parser.add_argument("--budget", type=int, default=1000, help="training episodes per run")
     parser.add_argument("--rollouts", type=int, default=20, help="episodes per update")
     parser.add_argument("--test-contexts", type=int, default=20, help="test contexts (final policy)")
@@ -125,6 +127,18 @@ def _options(args: argparse.Namespace) -> dict[str, dict]:
         agent, _, name = key.partition(".")
         options.setdefault(agent, {})[name] = _value(value)
     return options
+
+
+def _seed_counts(args: argparse.Namespace, labels: dict[str, str]) -> dict[str, int]:
+    """``{label: number of seeds}``: ``--seeds`` unless ``--agent-seeds LABEL=N`` says otherwise."""
+    counts = dict.fromkeys(labels, args.seeds)
+    for item in args.agent_seeds:
+        label, _, count = item.partition("=")
+        if label not in labels or not count.isdigit() or int(count) < 1:
+            raise SystemExit(f"--agent-seeds: expected LABEL=N with LABEL one of {list(labels)} and N >= 1, "
+                             f"got {item!r}")
+        counts[label] = int(count)
+    return counts
 
 
 def _episodes_to_target(records: list[dict]) -> int | None:
@@ -333,12 +347,13 @@ def main() -> None:
         baselines, observations, reference = _baselines(spec, seeds, 1 if args.backend == "ray" else args.workers)
         workers = 1 if args.backend == "ray" else args.workers
         labels = _labels(args.agents)
+        counts = _seed_counts(args, labels)
         configs = [TrainConfig(agent=learner, env_id=args.env_id, updates=args.budget // args.rollouts,
                                rollouts=args.rollouts, seed=seed, workers=workers, env_kwargs=env_kwargs,
                                options=options.get(label, {}), eval_episodes=args.val_contexts,
                                eval_every=args.eval_every, shared_context=False)
-                   for label, learner in labels.items() for seed in range(args.seeds)]
-        names = [label for label in labels for _ in range(args.seeds)]
+                   for label, learner in labels.items() for seed in range(counts[label])]
+        names = [label for label in labels for _ in range(counts[label])]
         if args.backend == "ray":
             runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
         else:

@@ -1,0 +1,37 @@
+"""The learner benchmark's command line: labels, per-agent seed counts and the run cache's key."""
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from bench_agents import _cache_key, _labels, _seed_counts
+from rdmp_gym.agents.training import TrainConfig
+
+
+def _args(seeds: int, agent_seeds: list[str]) -> argparse.Namespace:
+    return argparse.Namespace(seeds=seeds, agent_seeds=agent_seeds)
+
+
+def test_agent_seeds_override_the_common_count_for_one_label():
+    labels = _labels(["bbrl", "plain=cpi2", "random"])
+    assert _seed_counts(_args(10, ["random=3", "plain=2"]), labels) == {"bbrl": 10, "plain": 2, "random": 3}
+
+
+@pytest.mark.parametrize("item", ["sac=2", "random=0", "random=x", "random"])
+def test_bad_agent_seeds_name_the_argument(item):
+    with pytest.raises(SystemExit, match="--agent-seeds"):
+        _seed_counts(_args(10, [item]), _labels(["bbrl", "random"]))
+
+
+def test_cache_key_ignores_workers_but_not_options_or_test_contexts():
+    config = TrainConfig(agent="bbrl", updates=2, rollouts=2, seed=0, workers=1)
+    seeds = np.arange(3)
+    assert _cache_key(config, seeds) == _cache_key(TrainConfig(agent="bbrl", updates=2, rollouts=2, seed=0,
+                                                               workers=2), seeds)
+    assert _cache_key(config, seeds) != _cache_key(config, np.arange(4))
+    other = TrainConfig(agent="bbrl", updates=2, rollouts=2, seed=0, workers=1, options={"sigma": 0.2})
+    assert _cache_key(config, seeds) != _cache_key(other, seeds)
