@@ -274,6 +274,11 @@ def _print(rows: list[dict], settings: dict) -> None:
           f"env {settings['env_id']})")
 
 
+def _print_hardest(field: dict) -> None:
+    hardest = ", ".join(f"{h['index']} ({h['success']:.2f})" for h in field["hardest"]) or "none"
+    print(f"test contexts that {field['best']} solves in fewer than half of its seeds (index, share): {hardest}")
+
+
 def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
     figure, axes = plt.subplots(1, 4, figsize=(18, 4))
     agents = list(dict.fromkeys(r["agent"] for r in runs))
@@ -329,13 +334,14 @@ def main() -> None:
         if args.update_baselines:
             saved = document["settings"]
             spec = TaskSpec(saved["env_id"], saved["env_kwargs"])
-            document["baselines"] = _baselines(spec, np.asarray(saved["final_test_seeds"]), args.workers)[0]
+            baselines, observations, _ = _baselines(spec, np.asarray(saved["final_test_seeds"]), args.workers)
+            document["baselines"], document["test_contexts"] = baselines, observations.tolist()
             document.pop("imitation", None)
             document["summary"] = _summary(document["runs"], document["baselines"])
             path.write_text(json.dumps(document, indent=1) + "\n")
         _print(document["summary"], document["settings"])
         _plot(document["runs"], document["summary"], RESULTS / f"{args.name}.png", _title(document["settings"]))
-        write_field_report(document, RESULTS, args.name, _title(document["settings"]))
+        _print_hardest(write_field_report(document, RESULTS, args.name, _title(document["settings"])))
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
@@ -367,10 +373,11 @@ def main() -> None:
     settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
                      "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
     _print(rows, settings)
-    document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs}
+    document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs,
+                "test_contexts": np.asarray(observations).tolist()}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
     _plot(runs, rows, RESULTS / f"{args.name}.png", _title(settings))
-    write_field_report(document, RESULTS, args.name, _title(settings))
+    _print_hardest(write_field_report(document, RESULTS, args.name, _title(settings)))
     print(f"wrote {RESULTS / (args.name + '.json')}, {args.name}.png and {args.name}_field.json/.png")
 
 

@@ -7,7 +7,9 @@
 - performance profiles: the fraction of (seed, test context) pairs whose coverage exceeds each threshold;
 - the probability that a run of the best learner succeeds on a test context where a run of another does not
   (``P(X > Y)`` on per-context success, ties one half);
-- episodes until the validation success rate first reaches 0.5, 0.8 and 0.9 (median over the seeds that do).
+- episodes until the validation success rate first reaches 0.5, 0.8 and 0.9 (median over the seeds that do);
+- the best learner's hardest test contexts: those it solves in fewer than half of its seeds, with their context
+  vectors (where the document holds them), to read what they share.
 
 Writes ``<name>_field.json`` and ``<name>_field.png`` beside the document:
 
@@ -71,6 +73,15 @@ def ceiling(test_seeds: list[int], env_id: str) -> dict | None:
     return {"success": float(flags.mean()), "contexts": len(flags)}
 
 
+def hardest_contexts(success: np.ndarray, test_seeds: list[int], contexts: list | None) -> list[dict]:
+    """The test contexts that fewer than half of the runs solve, ``success [R, M]``, hardest first: index, seed,
+    share of runs that succeed, and the context vector (``contexts [M, C]``, or None)."""
+    rates = success.mean(axis=0)
+    order = [int(i) for i in np.argsort(rates, kind="stable") if rates[i] < 0.5]
+    return [{"index": i, "seed": int(test_seeds[i]), "success": float(rates[i]),
+             "context": None if contexts is None else [round(float(v), 4) for v in contexts[i]]} for i in order]
+
+
 def field_summary(document: dict) -> dict:
     """Every number of the module docstring, per agent; ``best`` is the agent with the highest IQM test success."""
     runs, agents = document["runs"], _agents(document["runs"])
@@ -95,6 +106,8 @@ def field_summary(document: dict) -> dict:
                                     e is not None for e in v) else None} for t, v in reached.items()}}
     best = max(agents, key=lambda a: result["agents"][a]["test_success"]["estimate"])
     result["best"] = best
+    result["hardest"] = hardest_contexts(success[best], document["settings"]["final_test_seeds"],
+                                         document.get("test_contexts"))
     result["improvement"] = {other: probability_of_improvement(success[best], success[other]).to_dict()
                              for other in agents if other != best}
     return result

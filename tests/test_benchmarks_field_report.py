@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from field_report import episodes_to, field_summary, write
+from field_report import episodes_to, field_summary, hardest_contexts, write
 
 
 def _run(agent, seed, successes, rate):
@@ -40,3 +40,12 @@ def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_t
     assert summary["imitation_success"] == 0.25
     assert (tmp_path / "bench_field.json").is_file() and (tmp_path / "bench_field.png").stat().st_size > 10_000
     assert field_summary(_document())["agents"]["good"]["curve"][-1][0] == 0.95
+
+
+def test_hardest_contexts_are_those_most_runs_fail_hardest_first():
+    success = np.array([[1, 0, 0, 1], [1, 0, 1, 0], [1, 0, 0, 1]], dtype=float)
+    contexts = [[0.0, 1.0], [0.5, 0.25], [0.125, 0.0], [1.0, 1.0]]
+    hardest = hardest_contexts(success, [10, 11, 12, 13], contexts)
+    assert [h["index"] for h in hardest] == [1, 2]
+    assert hardest[0] == {"index": 1, "seed": 11, "success": 0.0, "context": [0.5, 0.25]}
+    assert hardest_contexts(success, [10, 11, 12, 13], None)[1]["context"] is None
