@@ -155,7 +155,7 @@ class RhythmicDMP:
     # ------------------------------------------------------------------ fitting
     @classmethod
     def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-            n_transient: int | Sequence[int] = 40, method: str = "trajectory", **settings: Any) -> RhythmicDMP:
+            n_transient: int | Sequence[int] = 44, method: str = "trajectory", **settings: Any) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
         The fit is :func:`rdmp_gym.fitting.fit_rhythmic`, which documents the arguments and every keyword of

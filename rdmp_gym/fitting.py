@@ -44,9 +44,9 @@ from .start import TransientStart, settled_state, start_blend_profiles
 from .transformation import cached_system
 from .validation import check_count, check_nonnegative, check_positive
 
-__all__ = ["FADE_BEFORE_T", "FIT_METHODS", "HANDOVERS", "HANDOVER_FLOOR", "PAPER_SETTINGS", "PRIORS",
+__all__ = ["FADE_BEFORE_T", "FIT_METHODS", "HANDOVERS", "HANDOVER_FLOOR", "JOIN_FLOOR", "PAPER_SETTINGS", "PRIORS",
            "SMOOTHNESS_CANDIDATES", "SMOOTHNESS_REFERENCE", "FittedDMP", "cross_validation_score", "fit_rhythmic",
-           "fit_trajectory", "fit_weights", "forcing_target",
+           "fit_trajectory", "fit_weights", "forcing_target", "join_relief",
            "relative_to_pattern", "second_differences", "smooth_derivatives", "trajectory_design"]
 
 logger = logging.getLogger(__name__)
@@ -134,7 +134,8 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
 
 def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.ndarray],
                    samples: Sequence[np.ndarray], differences: np.ndarray | Sequence[np.ndarray],
-                   smoothness: float | Sequence, regularization: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+                   smoothness: float | Sequence, regularization: float = 1e-8,
+                   start_penalty: Sequence[float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Weights and start states that make the DMP's own rollout match the sampled positions.
 
     The rollout is linear in the weights and in each demonstration's start: ``y(t) = sum_b w_b R_b(t) +
@@ -152,6 +153,8 @@ def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.n
             an entry may be a sequence of candidates: the combination of least generalised cross-validation score
             (:func:`cross_validation_score`) is used.
         regularization: penalty on ``w``. All relative to the mean diagonal of the normal matrix of the weights.
+        start_penalty: ``[C]`` penalties pulling each start value towards 0, relative to its column's diagonal of
+            the normal matrix (none when omitted).
     Returns:
         ``(W [D, d], starts [K, C, d])``.
     """
@@ -165,12 +168,15 @@ def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.n
     design, right = np.concatenate(rows), np.concatenate(samples)
     gram, moments = design.T @ design, design.T @ right
     scale = max(float(np.mean(np.diag(gram)[:n_basis])), 1e-300)
+    start_prior = np.diag(np.concatenate([np.zeros(n_basis), np.tile(
+        np.zeros(n_start) if start_penalty is None else np.asarray(start_penalty, dtype=float), n_demos)])
+        * np.diag(gram))
 
     operators = [differences] if isinstance(differences, np.ndarray) else list(differences)
     curvatures = [operator.T @ operator for operator in operators]
 
     def normal_matrix(weights: tuple[float, ...]) -> np.ndarray:
-        matrix = gram.copy()
+        matrix = gram + start_prior
         matrix[:n_basis, :n_basis] += scale * (sum(w * curvature for w, curvature in zip(weights, curvatures,
                                                                                            strict=True))
                                                + regularization * np.eye(n_basis))
@@ -232,6 +238,11 @@ SMOOTHNESS_REFERENCE = 40
 """``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
 ``period / 40``); other spacings get the penalty on the same time curvature."""
 
+JOIN_FLOOR = 0.1
+"""The share of the transient smoothness penalty that :func:`fit_rhythmic` keeps at T (``join_width``): a C2 join's
+acceleration has a corner there (its jerk jumps by up to 170 m/s^3 on the test joins), which the full penalty rounds
+off over several basis spacings."""
+
 SMOOTHNESS_CANDIDATES = tuple(float(value) for value in np.logspace(np.log10(0.15), 1.0, 16))
 """The smoothness penalties among which :func:`fit_rhythmic` chooses, for each family, by generalised
 cross-validation (``smoothness="auto"``, trajectory fit): 0.15 to 10. The lower end keeps the noise out of the
@@ -239,18 +250,20 @@ transient near the hand-over (0.1: the worst 0.2 s window of one C2 join rose fr
 penalty for both families: the peak acceleration from canonical starts off the encoded path reached 7.7x the
 demonstration's on noise-free samples)."""
 
-PAPER_SETTINGS = {"method": "lwr", "alpha_z": 25.0, "periodic_overlap": 0.5, "transient_overlap": 0.5,
-                  "smoothness": 0.0, "floor": NORMALISATION_EPSILON, "fading_fractions": (0.25, 0.25),
-                  "turn_height": 1e-3, "handover": "before", "transient_lead": 0.0, "prior": "flat"}
+PAPER_SETTINGS = {"method": "lwr", "n_transient": 40, "alpha_z": 25.0, "periodic_overlap": 0.5,
+                  "transient_overlap": 0.5, "smoothness": 0.0, "floor": NORMALISATION_EPSILON,
+                  "fading_fractions": (0.25, 0.25), "turn_height": 1e-3, "handover": "before", "transient_lead": 0.0,
+                  "prior": "flat", "start_prior": 0.0, "join_width": 0.0}
 """Keywords of :func:`fit_rhythmic` that give the paper's formulation as first implemented here (LWR (11), a stiff
 spring, narrow basis functions, the bare mixture (5), the families' fade before T, the first transient centre at
 the start); roll out with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}``
 fits the same basis by global least squares."""
 
 FADE_BEFORE_T = {"handover": "before", "transient_lead": 0.0, "prior": "flat", "floor": SMOOTH_FLOOR,
-                 "smoothness": 0.3}
+                 "smoothness": 0.3, "start_prior": 0.0, "join_width": 0.0}
 """Keywords of :func:`fit_rhythmic` for the fade over the ``t_f`` before T, the first transient centre at the start,
-a plain second-difference penalty of fixed weight 0.3 and the mixture's floor of 1 %. The environments fit their
+a plain second-difference penalty of fixed weight 0.3, not relaxed about T, a free start velocity and the mixture's
+floor of 1 %. The environments fit their
 imitation DMP with these, so their tasks stay as published."""
 
 
@@ -279,15 +292,15 @@ def relative_to_pattern(differences: np.ndarray, n_periodic: int, pattern: np.nd
 
 
 def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-                 n_transient: int | Sequence[int] = 40, method: str = "trajectory", *,
+                 n_transient: int | Sequence[int] = 44, method: str = "trajectory", *,
                  segmentations: Sequence[Segmentation] | None = None, period: float | None = None,
                  alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
                  beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
                  delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
                  smoothing: float = 0.15, regularization: float | None = None, smoothness: float | str = "auto",
                  floor: float = HANDOVER_FLOOR, substeps: int = 4, fading_fractions: tuple[float, float] = (0.5, 0.25),
-                 turn_height: float = 0.3, handover: str = "after", transient_lead: float = 1.0,
-                 prior: str = "pattern") -> FittedDMP:
+                 turn_height: float = 0.3, handover: str = "after", transient_lead: float = 2.0,
+                 prior: str = "pattern", start_prior: float = 0.01, join_width: float = 0.1) -> FittedDMP:
     """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
     :meth:`RhythmicDMP.fit <rdmp_gym.dmp.RhythmicDMP.fit>` calls this and builds the DMP from its parts.
@@ -337,10 +350,17 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
             forcing at the centre's phase, in the share that the start blend has handed over to the pattern by the
             centre's time (0 at the start, 1 from T on), so the transient family can follow the pattern through
             the hand-over; ``"flat"``: plain second differences (straight lines).
+        start_prior: ``trajectory`` only: a penalty pulling the fitted start velocity towards rest, relative to its
+            column of the normal matrix (0: free). A free start velocity trades against the first weights and
+            absorbs misfit of the whole transient (its blend profile spans it): 50-80 mm/s fitted on C2 joins that
+            start at rest, even from noise-free samples, with a spike of acceleration after the start.
+        join_width: the transient penalty's rows are relaxed about T (:func:`join_relief`, to :data:`JOIN_FLOOR`)
+            over this many seconds (0: not at all).
     """
     demos = _as_demos(demos)
     regularization, smoothness = _check_settings(method, regularization, smoothness, smoothing, alpha_z, turn_height,
                                                  handover, prior)
+    start_prior, join_width = check_nonnegative(start_prior, "start_prior"), check_nonnegative(join_width, "join_width")
     n_periodic = check_count(n_periodic, "n_periodic", 2)
     sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
              else [check_count(m, "n_transient", 1) for m in n_transient])
@@ -369,9 +389,9 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
                      transient_centres=np.concatenate([centres for centres, _ in paths]),
                      transient_widths=np.concatenate([widths for _, widths in paths]),
                      transient_sizes=tuple(sizes), fading=fading)
-    differences = _penalty(basis, times, lengths, common_period, prior)
+    differences = _penalty(basis, times, lengths, common_period, prior, join_width)
     weights, starts = _regression(method, demos, canonical, basis, inits, lengths, anchor, alpha_z, substeps,
-                                  smoothing, smoothness, regularization, differences)
+                                  smoothing, smoothness, regularization, differences, start_prior)
     transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
                   for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
     logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
@@ -444,39 +464,51 @@ def _entrance_phases(canonical: CanonicalSystem, demos: list[Demonstration], seg
             if k != reference else 0.0 for k, (demo, seg) in enumerate(zip(demos, segmentations, strict=True))]
 
 
-def _penalty(basis: BasisSet, times: list[np.ndarray], lengths: list[float], period: float, prior: str
-             ) -> list[np.ndarray]:
+def _penalty(basis: BasisSet, times: list[np.ndarray], lengths: list[float], period: float, prior: str,
+             join_width: float) -> list[np.ndarray]:
     """The smoothness penalty's rows: second differences of each family's weights (see :func:`second_differences`),
     the transient ones relative to the pattern under ``prior="pattern"`` (:func:`relative_to_pattern`, with the start
-    blend's progress ``1 - P0(t_j)`` at the centre times ``times``); as ``[rows on the periodic weights [R_p, D],
-    rows on the transient ones [R_t, D]]``."""
+    blend's progress ``1 - P0(t_j)`` at the centre times ``times``) and relaxed about T (:func:`join_relief`); as
+    ``[rows on the periodic weights [R_p, D], rows on the transient ones [R_t, D]]``."""
     n_periodic = basis.n_periodic
     spacings = [period / n_periodic] + [float(np.ptp(t)) / max(t.size - 1, 1) for t in times]
     differences = second_differences((n_periodic, *basis.transient_sizes), (True,) + (False,) * len(times),
                                      spacings, period / SMOOTHNESS_REFERENCE)
     periodic = ~np.any(differences[:, n_periodic:], axis=1)
+    relief = np.concatenate([join_relief(t[1:-1], length, join_width) for t, length in zip(times, lengths,
+                                                                                           strict=True)])
     if prior == "flat":
-        return [differences[periodic], differences[~periodic]]
+        return [differences[periodic], np.sqrt(relief)[:, None] * differences[~periodic]]
     phases = np.arctan2(basis.transient_centres[:, 1], basis.transient_centres[:, 0])
     pattern = normalize(von_mises(phases, basis.periodic_centres, basis.periodic_widths), basis.fading.floor)
     shares = np.concatenate([1.0 - start_blend_profiles(t, length)[0, 0] for t, length in zip(times, lengths,
                                                                                               strict=True)])
     relative = relative_to_pattern(differences, n_periodic, pattern, shares)
-    return [relative[periodic], relative[~periodic]]
+    return [relative[periodic], np.sqrt(relief)[:, None] * relative[~periodic]]
+
+
+def join_relief(times: np.ndarray, length: float, width: float) -> np.ndarray:
+    """Weights ``[M]`` of the transient penalty's rows centred at ``times [M]`` (s): ``1 - (1 - JOIN_FLOOR)
+    exp(-((t - T) / width)^2 / 2)``, down to :data:`JOIN_FLOOR` at T = ``length``, where a start planned to meet the
+    moving pattern bends fastest (its jerk jumps); all 1 for ``width`` 0."""
+    if width == 0.0:
+        return np.ones_like(times)
+    return 1.0 - (1.0 - JOIN_FLOOR) * np.exp(-0.5 * ((times - length) / width) ** 2)
 
 
 def _regression(method: str, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
                 lengths: list[float], anchor: np.ndarray, alpha_z: float, substeps: int, smoothing: float,
-                smoothness: float | tuple, regularization: float, differences: list[np.ndarray]
+                smoothness: float | tuple, regularization: float, differences: list[np.ndarray], start_prior: float
                 ) -> tuple[np.ndarray, list]:
     """Weights ``[D, d]`` and per demonstration the start ``(y0 [d], yd0 [d])``, by ``method``: the trajectory fit
-    (:func:`fit_trajectory`), or ``lwr``/``ridge`` on the forcing target (10) (:func:`fit_weights`) with the smoothed
-    start and the start velocity that best explains the samples under the smooth start (a derivative estimate at
-    the first noisy sample is off by up to 0.1 m/s)."""
+    (:func:`fit_trajectory`, the start velocity pulled towards rest by ``start_prior``), or ``lwr``/``ridge`` on
+    the forcing target (10) (:func:`fit_weights`) with the smoothed start and the start velocity that best explains
+    the samples under the smooth start (a derivative estimate at the first noisy sample is off by up to 0.1 m/s)."""
     responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
                                                           substeps)
     if method == "trajectory":
-        weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization)
+        weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization,
+                                         (0.0, start_prior))
         return weights, list(starts)
     activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
                                                              smoothing)
