@@ -45,9 +45,9 @@ from .transformation import cached_system
 from .validation import check_count, check_nonnegative, check_positive
 
 __all__ = ["FADE_BEFORE_T", "FIT_METHODS", "HANDOVERS", "HANDOVER_FLOOR", "JOIN_FLOOR", "PAPER_SETTINGS", "PRIORS",
-           "SMOOTHNESS_CANDIDATES", "SMOOTHNESS_REFERENCE", "FittedDMP", "cross_validation_score", "fit_rhythmic",
-           "fit_trajectory", "fit_weights", "forcing_target", "join_relief",
-           "relative_to_pattern", "second_differences", "smooth_derivatives", "trajectory_design"]
+           "SMOOTHNESS_CANDIDATES", "SMOOTHNESS_REFERENCE", "START_PRIOR", "FittedDMP", "cross_validation_score",
+           "fit_rhythmic", "fit_trajectory", "fit_weights", "forcing_target", "join_relief", "relative_to_pattern",
+           "second_differences", "smooth_derivatives", "trajectory_design"]
 
 logger = logging.getLogger(__name__)
 
@@ -135,7 +135,7 @@ def fit_weights(activations: np.ndarray, target: np.ndarray, method: str = "ridg
 def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.ndarray],
                    samples: Sequence[np.ndarray], differences: np.ndarray | Sequence[np.ndarray],
                    smoothness: float | Sequence, regularization: float = 1e-8,
-                   start_penalty: Sequence[float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   start_penalties: Sequence[Sequence[float]] = ()) -> tuple[np.ndarray, np.ndarray]:
     """Weights and start states that make the DMP's own rollout match the sampled positions.
 
     The rollout is linear in the weights and in each demonstration's start: ``y(t) = sum_b w_b R_b(t) +
@@ -153,44 +153,54 @@ def fit_trajectory(responses: Sequence[np.ndarray], start_columns: Sequence[np.n
             an entry may be a sequence of candidates: the combination of least generalised cross-validation score
             (:func:`cross_validation_score`) is used.
         regularization: penalty on ``w``. All relative to the mean diagonal of the normal matrix of the weights.
-        start_penalty: ``[C]`` penalties pulling each start value towards 0, relative to its column's diagonal of
-            the normal matrix (none when omitted).
+        start_penalties: candidates, each ``[C]`` penalties pulling the start values towards 0, relative to their
+            columns' diagonal of the normal matrix: the smoothness is chosen under the first, then the candidate of
+            least score at that smoothness is used (no pull when empty).
     Returns:
         ``(W [D, d], starts [K, C, d])``.
     """
-    n_basis, n_demos, n_start = responses[0].shape[1], len(samples), start_columns[0].shape[1]
-    rows = []
-    for k, (response, columns) in enumerate(zip(responses, start_columns, strict=True)):
-        design = np.zeros((response.shape[0], n_basis + n_start * n_demos))
-        design[:, :n_basis] = response
-        design[:, n_basis + n_start * k: n_basis + n_start * (k + 1)] = columns
-        rows.append(design)
-    design, right = np.concatenate(rows), np.concatenate(samples)
+    n_basis, n_demos = responses[0].shape[1], len(samples)
+    design, right = _stacked_design(responses, start_columns), np.concatenate(samples)
     gram, moments = design.T @ design, design.T @ right
     scale = max(float(np.mean(np.diag(gram)[:n_basis])), 1e-300)
-    start_prior = np.diag(np.concatenate([np.zeros(n_basis), np.tile(
-        np.zeros(n_start) if start_penalty is None else np.asarray(start_penalty, dtype=float), n_demos)])
-        * np.diag(gram))
-
+    pulls = [np.tile(np.asarray(penalty, dtype=float), n_demos) * np.diag(gram)[n_basis:]
+             for penalty in start_penalties] or [np.zeros(gram.shape[0] - n_basis)]
     operators = [differences] if isinstance(differences, np.ndarray) else list(differences)
     curvatures = [operator.T @ operator for operator in operators]
 
-    def normal_matrix(weights: tuple[float, ...]) -> np.ndarray:
-        matrix = gram + start_prior
+    def normal_matrix(weights: tuple[float, ...], pull: np.ndarray) -> np.ndarray:
+        matrix = gram.copy()
         matrix[:n_basis, :n_basis] += scale * (sum(w * curvature for w, curvature in zip(weights, curvatures,
                                                                                            strict=True))
                                                + regularization * np.eye(n_basis))
+        matrix[n_basis:, n_basis:] += np.diag(pull)
         return matrix
 
-    candidates = list(itertools.product(*_smoothness_grids(smoothness, len(operators))))
     energy = float(np.sum(right**2))
-    chosen = (candidates[0] if len(candidates) == 1 else
-              min(candidates, key=lambda weights: cross_validation_score(normal_matrix(weights), gram, moments,
-                                                                         energy, right.size)))
+
+    def score(weights: tuple[float, ...], pull: np.ndarray) -> float:
+        return cross_validation_score(normal_matrix(weights, pull), gram, moments, energy, right.size)
+
+    candidates = list(itertools.product(*_smoothness_grids(smoothness, len(operators))))
+    chosen = candidates[0] if len(candidates) == 1 else min(candidates, key=lambda weights: score(weights, pulls[0]))
+    pull = pulls[0] if len(pulls) == 1 else min(pulls, key=lambda candidate: score(chosen, candidate))
     if len(candidates) > 1:
         logger.info("smoothness %s chosen by generalised cross-validation", [f"{w:.3g}" for w in chosen])
-    solution = np.linalg.solve(normal_matrix(chosen), moments)
-    return solution[:n_basis], solution[n_basis:].reshape(n_demos, n_start, -1)
+    solution = np.linalg.solve(normal_matrix(chosen, pull), moments)
+    return solution[:n_basis], solution[n_basis:].reshape(n_demos, start_columns[0].shape[1], -1)
+
+
+def _stacked_design(responses: Sequence[np.ndarray], start_columns: Sequence[np.ndarray]) -> np.ndarray:
+    """The design ``[sum L_k, D + K C]`` of :func:`fit_trajectory`: the shared weights' responses, then each
+    demonstration's start columns in its own block."""
+    n_basis, n_start = responses[0].shape[1], start_columns[0].shape[1]
+    rows = []
+    for k, (response, columns) in enumerate(zip(responses, start_columns, strict=True)):
+        design = np.zeros((response.shape[0], n_basis + n_start * len(responses)))
+        design[:, :n_basis] = response
+        design[:, n_basis + n_start * k: n_basis + n_start * (k + 1)] = columns
+        rows.append(design)
+    return np.concatenate(rows)
 
 
 def cross_validation_score(normal_matrix: np.ndarray, gram: np.ndarray, moments: np.ndarray, energy: float,
@@ -242,6 +252,12 @@ JOIN_FLOOR = 0.1
 """The share of the transient smoothness penalty that :func:`fit_rhythmic` keeps at T (``join_width``): a C2 join's
 acceleration has a corner there (its jerk jumps by up to 170 m/s^3 on the test joins), which the full penalty rounds
 off over several basis spacings."""
+
+START_PRIOR = 0.01
+"""The pull of the fitted start velocity towards rest that :func:`fit_rhythmic` tries (``start_prior="auto"``), relative
+to its column of the normal matrix. The start velocity's blend profile spans the whole transient, so a free start
+velocity trades against the first weights and absorbs misfit anywhere in the transient: 49-83 mm/s fitted on C2 joins
+that start at rest, from noise-free samples too, with a spike of acceleration after the start (1.3 mm/s pulled)."""
 
 SMOOTHNESS_CANDIDATES = tuple(float(value) for value in np.logspace(np.log10(0.15), 1.0, 16))
 """The smoothness penalties among which :func:`fit_rhythmic` chooses, for each family, by generalised
@@ -300,7 +316,7 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
                  smoothing: float = 0.15, regularization: float | None = None, smoothness: float | str = "auto",
                  floor: float = HANDOVER_FLOOR, substeps: int = 4, fading_fractions: tuple[float, float] = (0.5, 0.25),
                  turn_height: float = 0.3, handover: str = "after", transient_lead: float = 2.0,
-                 prior: str = "pattern", start_prior: float = 0.01, join_width: float = 0.1) -> FittedDMP:
+                 prior: str = "pattern", start_prior: float | str = "auto", join_width: float = 0.1) -> FittedDMP:
     """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
     :meth:`RhythmicDMP.fit <rdmp_gym.dmp.RhythmicDMP.fit>` calls this and builds the DMP from its parts.
@@ -351,16 +367,19 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
             centre's time (0 at the start, 1 from T on), so the transient family can follow the pattern through
             the hand-over; ``"flat"``: plain second differences (straight lines).
         start_prior: ``trajectory`` only: a penalty pulling the fitted start velocity towards rest, relative to its
-            column of the normal matrix (0: free). A free start velocity trades against the first weights and
-            absorbs misfit of the whole transient (its blend profile spans it): 50-80 mm/s fitted on C2 joins that
-            start at rest, even from noise-free samples, with a spike of acceleration after the start.
+            column of the normal matrix (0: free). ``"auto"`` (default): :data:`START_PRIOR` or none, whichever has
+            the lower generalised cross-validation score at the chosen smoothness: the pull on demonstrations that
+            start at rest (35 of 36 C2 joins), none on ones that start moving (23 of 24 cut 0.2-0.4 s after rest;
+            pulled, their transient acceleration error rose to 40-90 %).
         join_width: the transient penalty's rows are relaxed about T (:func:`join_relief`, to :data:`JOIN_FLOOR`)
             over this many seconds (0: not at all).
     """
     demos = _as_demos(demos)
     regularization, smoothness = _check_settings(method, regularization, smoothness, smoothing, alpha_z, turn_height,
                                                  handover, prior)
-    start_prior, join_width = check_nonnegative(start_prior, "start_prior"), check_nonnegative(join_width, "join_width")
+    start_penalties = ([(0.0, 0.0), (0.0, START_PRIOR)] if isinstance(start_prior, str) and start_prior == "auto"
+                       else [(0.0, check_nonnegative(start_prior, "start_prior"))])
+    join_width = check_nonnegative(join_width, "join_width")
     n_periodic = check_count(n_periodic, "n_periodic", 2)
     sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
              else [check_count(m, "n_transient", 1) for m in n_transient])
@@ -391,7 +410,7 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
                      transient_sizes=tuple(sizes), fading=fading)
     differences = _penalty(basis, times, lengths, common_period, prior, join_width)
     weights, starts = _regression(method, demos, canonical, basis, inits, lengths, anchor, alpha_z, substeps,
-                                  smoothing, smoothness, regularization, differences, start_prior)
+                                  smoothing, smoothness, regularization, differences, start_penalties)
     transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
                   for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
     logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
@@ -498,17 +517,17 @@ def join_relief(times: np.ndarray, length: float, width: float) -> np.ndarray:
 
 def _regression(method: str, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
                 lengths: list[float], anchor: np.ndarray, alpha_z: float, substeps: int, smoothing: float,
-                smoothness: float | tuple, regularization: float, differences: list[np.ndarray], start_prior: float
-                ) -> tuple[np.ndarray, list]:
+                smoothness: float | tuple, regularization: float, differences: list[np.ndarray],
+                start_penalties: list[tuple[float, float]]) -> tuple[np.ndarray, list]:
     """Weights ``[D, d]`` and per demonstration the start ``(y0 [d], yd0 [d])``, by ``method``: the trajectory fit
-    (:func:`fit_trajectory`, the start velocity pulled towards rest by ``start_prior``), or ``lwr``/``ridge`` on
+    (:func:`fit_trajectory`, the start pulled towards rest by one of ``start_penalties``), or ``lwr``/``ridge`` on
     the forcing target (10) (:func:`fit_weights`) with the smoothed start and the start velocity that best explains
     the samples under the smooth start (a derivative estimate at the first noisy sample is off by up to 0.1 m/s)."""
     responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
                                                           substeps)
     if method == "trajectory":
         weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization,
-                                         (0.0, start_prior))
+                                         start_penalties)
         return weights, list(starts)
     activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
                                                              smoothing)

@@ -5,10 +5,14 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP
+from rdmp_gym.demonstrations import Demonstration
 from rdmp_gym.fitting import (
     FADE_BEFORE_T,
+    JOIN_FLOOR,
+    START_PRIOR,
     fit_rhythmic,
     fit_trajectory,
+    join_relief,
     relative_to_pattern,
     second_differences,
     trajectory_design,
@@ -27,6 +31,8 @@ from rdmp_gym.smoothness import (
 )
 
 DT = 1e-3
+FORMER_DEFAULTS = {"n_transient": 40, "transient_lead": 1.0, "start_prior": 0.0, "join_width": 0.0}
+"""A free start velocity, the full penalty at T and M = 40 from one spacing before the start."""
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +47,7 @@ def figures(joins):
     return {model: [handover_figures(signal, RhythmicDMP.fit(demo, **settings), demo.duration)
                     for signal, demo in joins]
             for model, settings in {"default": {}, "smoothness 0.3": {"smoothness": 0.3},
-                                    "fade before T": FADE_BEFORE_T}.items()}
+                                    "fade before T": FADE_BEFORE_T, "former defaults": FORMER_DEFAULTS}.items()}
 
 
 def test_quintic_join_is_c2_at_T():
@@ -93,6 +99,10 @@ def test_fit_settings_are_checked(joins):
         RhythmicDMP.fit(demo, smoothness="gcv")
     with pytest.raises(ValueError, match="smoothness"):
         RhythmicDMP.fit(demo, smoothness=-0.1)
+    with pytest.raises(ValueError, match="start_prior"):
+        RhythmicDMP.fit(demo, start_prior=-0.01)
+    with pytest.raises(ValueError, match="join_width"):
+        RhythmicDMP.fit(demo, join_width=float("nan"))
 
 
 def _bump_fit_errors(noise: float, candidates: np.ndarray) -> tuple[float, list[float]]:
@@ -166,24 +176,28 @@ def test_the_fade_before_T_cannot_follow_a_c2_join(joins):
     assert _best_transient_acceleration_error(signal, {}) < 0.06
 
 
-def test_defaults_halve_the_transient_error_of_the_fade_before_T(figures):
-    """Over the 12 joins (measured medians 10.2 % vs 30.4 %, worst 31.0 % vs 87.3 %)."""
+def test_defaults_cut_the_transient_error_of_the_fade_before_T_to_a_third(figures):
+    """Over the 12 joins (measured medians 8.5 % vs 30.7 %, worst 22.2 % vs 85.3 %; worst windows: median 11.0 % vs
+    32.1 %)."""
     new, old = (np.array([row["transient acceleration"] for row in figures[model]])
                 for model in ("default", "fade before T"))
-    assert np.median(new) < 0.5 * np.median(old) and new.max() < 0.5 * old.max()
+    assert np.median(new) < 0.35 * np.median(old) and new.max() < 0.35 * old.max()
     new, old = (np.array([row["worst window"] for row in figures[model]]) for model in ("default", "fade before T"))
-    assert np.median(new) < 0.6 * np.median(old)
+    assert np.median(new) < 0.4 * np.median(old)
 
 
 def test_cross_validated_smoothness_loses_no_target_of_the_fixed_one(figures):
     """Per join, the defaults miss no target that one fixed smoothness 0.3 meets; the periodic acceleration error is
-    lower on every join (measured at most 4.5 % against 4.9 %) and the median transient one too (10.2 % vs 11.2 %)."""
+    about as low or lower on every join (measured at most 3.2 % against 4.5 %; join 5: 0.91 % against 0.90 %) and the
+    median transient one lower too (8.5 % vs 10.7 %)."""
     for index, (new, old) in enumerate(zip(figures["default"], figures["smoothness 0.3"], strict=True)):
         assert set(handover_misses(new)) <= set(handover_misses(old)), index
-        assert new["periodic acceleration"] < old["periodic acceleration"], index
-    new, old = (np.array([row["transient acceleration"] for row in figures[model]])
-                for model in ("default", "smoothness 0.3"))
-    assert np.median(new) < np.median(old)
+        assert new["periodic acceleration"] < 1.05 * old["periodic acceleration"], index
+    transient, periodic = ({model: np.array([row[name] for row in figures[model]])
+                            for model in ("default", "smoothness 0.3")}
+                           for name in ("transient acceleration", "periodic acceleration"))
+    assert np.median(transient["default"]) < np.median(transient["smoothness 0.3"])
+    assert periodic["default"].max() < 0.8 * periodic["smoothness 0.3"].max()
 
 
 def test_defaults_keep_the_periodic_position_and_off_path_targets_on_every_join(figures):
@@ -192,11 +206,59 @@ def test_defaults_keep_the_periodic_position_and_off_path_targets_on_every_join(
         assert not set(keep) & set(handover_misses(row)), (index, handover_misses(row))
 
 
-def test_defaults_meet_every_target_on_half_the_joins(figures):
-    """Every one of :data:`HANDOVER_TARGETS` on joins 2, 5, 7, 9, 10 and 11 (one fixed smoothness 0.3: on 5, 7, 9 and
-    10; the fade before T: on none)."""
-    met = [index for index, row in enumerate(figures["default"]) if not handover_misses(row)]
-    assert met == [2, 5, 7, 9, 10, 11]
-    assert [index for index, row in enumerate(figures["smoothness 0.3"]) if not handover_misses(row)] == [5, 7, 9, 10]
-    assert not any(not handover_misses(row) for row in figures["fade before T"])
+def test_defaults_meet_every_target_on_seven_joins(figures):
+    """Every one of :data:`HANDOVER_TARGETS` on joins 0, 2, 5, 7, 9, 10 and 11 (the former defaults: on 2, 5, 7, 9, 10
+    and 11; one fixed smoothness 0.3: on 0, 5, 7, 9, 10 and 11; the fade before T: on none)."""
+    met = {model: [index for index, row in enumerate(rows) if not handover_misses(row)]
+           for model, rows in figures.items()}
+    assert met["default"] == [0, 2, 5, 7, 9, 10, 11]
+    assert met["former defaults"] == [2, 5, 7, 9, 10, 11]
+    assert met["smoothness 0.3"] == [0, 5, 7, 9, 10, 11]
+    assert met["fade before T"] == []
     assert set(HANDOVER_TARGETS) <= set(figures["default"][0])
+
+
+def test_defaults_lose_no_target_of_the_former_fit_and_no_window_exceeds_the_bar(figures):
+    """Per join, the defaults miss no target that the former defaults (a free start velocity, the full penalty at T,
+    M = 40 from one spacing before the start) meet; every worst 0.2 s window is within the 20 % bar (measured at most
+    17.7 %, was up to 38.9 %: joins 0, 1, 3 and 8 missed it) and the largest jerk ratio halves (5.5x, was 10.2x)."""
+    for index, (new, old) in enumerate(zip(figures["default"], figures["former defaults"], strict=True)):
+        assert set(handover_misses(new)) <= set(handover_misses(old)), index
+    windows = {model: [row["worst window"] for row in figures[model]] for model in ("default", "former defaults")}
+    assert max(windows["default"]) <= HANDOVER_TARGETS["worst window"] < max(windows["former defaults"])
+    jerks = {model: max(row["jerk"] for row in figures[model]) for model in ("default", "former defaults")}
+    assert jerks["default"] < 0.6 * jerks["former defaults"]
+
+
+def test_the_fit_keeps_a_start_from_rest_at_rest(joins):
+    """Noise-free C2 joins that start at rest (joins 1, 3 and 6, the worst): with a free start velocity the fit trades
+    it against the first weights (measured 49-82 mm/s, and a spike of acceleration after the start); by default
+    cross-validation pulls it to rest (measured at most 1.3 mm/s)."""
+    for index in (1, 3, 6):
+        demo = joins[index][1]
+        clean = Demonstration(demo.t, demo.truth.clean, truth=demo.truth)
+        free = fit_rhythmic(clean, start_prior=0.0).transients[0].start_velocity
+        pulled = fit_rhythmic(clean).transients[0].start_velocity
+        assert np.abs(free).max() > 0.04 and np.abs(pulled).max() < 0.003, (index, free, pulled)
+
+
+def test_the_fit_keeps_a_moving_start_moving(joins):
+    """The same joins from 0.4 s on, where they move at 0.14-0.19 m/s: cross-validation leaves the start velocity free
+    (the default's equals the free fit's: errors 16-42 mm/s), where the pull would hold it near rest."""
+    for index in (1, 3, 6):
+        signal, demo = joins[index]
+        keep = demo.t >= 0.4 - 1e-9
+        moving = Demonstration(demo.t[keep] - demo.t[keep][0], demo.Y[keep])
+        truth = signal.derivatives(demo.t[keep][:1])[1][0]
+        auto, free, pulled = (fit_rhythmic(moving, **settings).transients[0].start_velocity
+                              for settings in ({}, {"start_prior": 0.0}, {"start_prior": START_PRIOR}))
+        np.testing.assert_allclose(auto, free, atol=1e-9)
+        assert np.abs(auto - truth).max() < 0.05 < np.abs(pulled - truth).max(), (index, auto, pulled, truth)
+
+
+def test_join_relief_dips_to_the_floor_at_T():
+    times = np.linspace(0.0, 2.0, 41)
+    relief = join_relief(times, 1.0, 0.1)
+    assert relief[20] == pytest.approx(JOIN_FLOOR) and relief.min() == relief[20]
+    assert np.all(relief[np.abs(times - 1.0) > 0.5] > 0.999)
+    assert np.array_equal(join_relief(times, 1.0, 0.0), np.ones(41))
