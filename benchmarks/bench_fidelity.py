@@ -11,19 +11,20 @@ paper), and the classic periodic DMP.
 Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
 position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
-The hand-over: signals whose start is a quintic from rest joined to the orbit at T with matching position,
-velocity and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump
-in the approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults (the families
-fade over the ``t_f`` after T, the first transient centre one spacing before the start, the smoothness penalty
-relative to the pattern, each family's smoothness chosen by generalised cross-validation), with one fixed smoothness
-0.3 for both families, and with :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments
-fit). Per signal (:func:`rdmp_gym.smoothness.handover_figures`): acceleration error over the transient and the
-periodic part, the worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it
-starts, relative to T), jerk ratios, position errors, and the largest peak acceleration from canonical starts off
-the encoded path over the demonstration's peak; targets in :data:`rdmp_gym.smoothness.HANDOVER_TARGETS`
-(transient acceleration <= 10 %, periodic <= 5 %, window <= 20 %, jerk <= 1.5x, position < 0.8 % / 0.3 %,
-off-path peak <= 3x). The figure ``handover.png`` shows the acceleration about T on the three signals that the
-fade before T reproduces worst.
+The hand-over: signals whose start is a quintic from rest joined to the orbit at T with matching position, velocity
+and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump in the
+approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults (the families fade over
+the ``t_f`` after T, M = 44 transient centres from two spacings before the start, the smoothness penalty relative to
+the pattern and relaxed about T, each family's smoothness and the start velocity's pull towards rest chosen by
+generalised cross-validation), with one fixed smoothness 0.3 for both families, with a free start velocity, the full
+penalty at T and M = 40 from one spacing before the start ("free start, M 40"), and with
+:data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments fit). Per signal
+(:func:`rdmp_gym.smoothness.handover_figures`): acceleration error over the transient and the periodic part, the
+worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it starts, relative to T),
+jerk ratios, position errors, and the largest peak acceleration from canonical starts off the encoded path over the
+demonstration's peak; targets in :data:`rdmp_gym.smoothness.HANDOVER_TARGETS` (transient acceleration <= 10 %,
+periodic <= 5 %, window <= 20 %, jerk <= 1.5x, position < 0.8 % / 0.3 %, off-path peak <= 3x). The figure
+``handover.png`` shows the acceleration about T on the three signals that the fade before T reproduces worst.
 
 Prints the tables; writes benchmarks/results/fidelity.json and handover.png.
 
@@ -52,7 +53,9 @@ from rdmp_gym.smoothness import (
 DT = 1e-3
 MODELS = {"default": ({}, True), "fade before T": (FADE_BEFORE_T, True), "paper lwr": (PAPER_SETTINGS, False),
           "paper ridge": ({**PAPER_SETTINGS, "method": "ridge"}, False)}
-HANDOVER_MODELS = {"fade before T": FADE_BEFORE_T, "smoothness 0.3": {"smoothness": 0.3}, "default": {}}
+FREE_START = {"n_transient": 40, "transient_lead": 1.0, "start_prior": 0.0, "join_width": 0.0}
+HANDOVER_MODELS = {"fade before T": FADE_BEFORE_T, "smoothness 0.3": {"smoothness": 0.3},
+                   "free start, M 40": FREE_START, "default": {}}
 
 
 def cases(seed: int, n_signals: int):
@@ -90,10 +93,10 @@ def handover_benchmark(seed: int, n_signals: int, folder) -> list[dict]:
             rows.append({"case": name, "model": model, **figures, "misses": handover_misses(figures)})
             accelerations[model] = finite_derivatives(dmp.rollout(t), DT)[1]
         traces.append((name, signal, accelerations, acceleration))
-    print(f"\n{'hand-over case':<44} {'model':<14} {'acc % tr/per':>13} {'window % (from T)':>18} "
+    print(f"\n{'hand-over case':<44} {'model':<16} {'acc % tr/per':>13} {'window % (from T)':>18} "
           f"{'jerk x tr/all':>14} {'pos % tr/per':>13} {'off-path x':>10}  misses")
     for row in rows:
-        print(f"{row['case']:<44} {row['model']:<14} {100 * row['transient acceleration']:6.1f}/"
+        print(f"{row['case']:<44} {row['model']:<16} {100 * row['transient acceleration']:6.1f}/"
               f"{100 * row['periodic acceleration']:5.1f} {100 * row['worst window']:8.1f} "
               f"({row['worst window from']:+.2f} s) "
               f"{row['transient jerk']:7.2f}/{row['jerk']:5.2f} {100 * row['transient position']:6.2f}/"

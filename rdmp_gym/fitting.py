@@ -368,9 +368,9 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
             the hand-over; ``"flat"``: plain second differences (straight lines).
         start_prior: ``trajectory`` only: a penalty pulling the fitted start velocity towards rest, relative to its
             column of the normal matrix (0: free). ``"auto"`` (default): :data:`START_PRIOR` or none, whichever has
-            the lower generalised cross-validation score at the chosen smoothness: the pull on demonstrations that
-            start at rest (35 of 36 C2 joins), none on ones that start moving (23 of 24 cut 0.2-0.4 s after rest;
-            pulled, their transient acceleration error rose to 40-90 %).
+            the lower generalised cross-validation score at the chosen smoothness: the pull on 28 of 36 C2 joins that
+            start at rest, none on 23 of 24 that start moving (cut 0.2-0.4 s after rest; pulled, their transient
+            acceleration error rose to 40-90 %).
         join_width: the transient penalty's rows are relaxed about T (:func:`join_relief`, to :data:`JOIN_FLOOR`)
             over this many seconds (0: not at all).
     """
