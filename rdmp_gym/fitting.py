@@ -279,8 +279,7 @@ FADE_BEFORE_T = {"handover": "before", "transient_lead": 0.0, "prior": "flat", "
                  "smoothness": 0.3, "start_prior": 0.0, "join_width": 0.0}
 """Keywords of :func:`fit_rhythmic` for the fade over the ``t_f`` before T, the first transient centre at the start,
 a plain second-difference penalty of fixed weight 0.3, not relaxed about T, a free start velocity and the mixture's
-floor of 1 %. The environments fit their
-imitation DMP with these, so their tasks stay as published."""
+floor of 1 %. The environments fit their imitation DMP with these, so their tasks stay as published."""
 
 
 class FittedDMP(NamedTuple):
