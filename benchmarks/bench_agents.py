@@ -318,7 +318,8 @@ def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
 
 
 def _title(settings: dict) -> str:
-    return (f"{settings['env_id']}: {settings['budget']} episodes, {settings['seeds']} seed(s), "
+    fewer = "".join(f", {item.replace('=', ' ')}" for item in settings.get("agent_seeds", []))
+    return (f"{settings['env_id']}: {settings['budget']} episodes, {settings['seeds']} seed(s){fewer}, "
             f"{settings['test_contexts']} test contexts")
 
 
