@@ -47,6 +47,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from field_report import episodes_to
 from field_report import write as write_field_report
 from output import SCRATCH, add_save_argument, results_dir
 from rdmp_gym.agents.assessment import trained_actions
@@ -141,13 +142,6 @@ def _seed_counts(args: argparse.Namespace, labels: dict[str, str]) -> dict[str, 
     return counts
 
 
-def _episodes_to_target(records: list[dict]) -> int | None:
-    for record in records:
-        if record.get("eval_success") is not None and record["eval_success"] >= SUCCESS_TARGET:
-            return int(record["episodes"])
-    return None
-
-
 def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.ndarray, observations: np.ndarray,
              reference_jerk: np.ndarray) -> dict:
     """One training run and the test evaluation of its final policy. Every episode goes through an
@@ -161,7 +155,7 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
                                                "eval_return_mean", "return_mean", "exploration")}
              for record in records if record.get("eval_return_mean") is not None]
     return {"agent": config.agent, "seed": config.seed, "seconds": round(time.perf_counter() - began, 1),
-            "options": config.options, "episodes_to_target": _episodes_to_target(records), "curve": curve,
+            "options": config.options, "episodes_to_target": episodes_to(records, SUCCESS_TARGET), "curve": curve,
             "test": scores.to_dict(), "test_means": scores.means()}
 
 
@@ -274,7 +268,12 @@ def _print(rows: list[dict], settings: dict) -> None:
           f"env {settings['env_id']})")
 
 
-def _print_hardest(field: dict) -> None:
+def _report(document: dict, folder: Path, name: str) -> None:
+    """Print the table, draw ``<name>.png`` and write the field report (``<name>_field.json/.png``) in ``folder``."""
+    title = _title(document["settings"])
+    _print(document["summary"], document["settings"])
+    _plot(document["runs"], document["summary"], folder / f"{name}.png", title)
+    field = write_field_report(document, folder, name, title)
     hardest = ", ".join(f"{h['index']} ({h['success']:.2f})" for h in field["hardest"]) or "none"
     print(f"test contexts that {field['best']} solves in fewer than half of its seeds (index, share): {hardest}")
 
@@ -340,9 +339,7 @@ def main() -> None:
             document.pop("imitation", None)
             document["summary"] = _summary(document["runs"], document["baselines"])
             path.write_text(json.dumps(document, indent=1) + "\n")
-        _print(document["summary"], document["settings"])
-        _plot(document["runs"], document["summary"], RESULTS / f"{args.name}.png", _title(document["settings"]))
-        _print_hardest(write_field_report(document, RESULTS, args.name, _title(document["settings"])))
+        _report(document, RESULTS, args.name)
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
@@ -373,12 +370,10 @@ def main() -> None:
                 if key not in ("option", "env_option", "replot", "ray_address")}
     settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
                      "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
-    _print(rows, settings)
     document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs,
                 "test_contexts": np.asarray(observations).tolist()}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
-    _plot(runs, rows, RESULTS / f"{args.name}.png", _title(settings))
-    _print_hardest(write_field_report(document, RESULTS, args.name, _title(settings)))
+    _report(document, RESULTS, args.name)
     print(f"wrote {RESULTS / (args.name + '.json')}, {args.name}.png and {args.name}_field.json/.png")
 
 

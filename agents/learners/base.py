@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_weights", "ridge_hat"]
+__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_to_go", "cost_weights", "ridge_hat"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,13 @@ def cost_weights(costs: np.ndarray, h: float) -> np.ndarray:
     scaled = np.divide(costs - low, spread, out=np.zeros_like(costs, dtype=np.float64), where=spread > 0)
     weights = np.exp(-h * scaled)
     return weights / weights.sum(axis=-1, keepdims=True)
+
+
+def cost_to_go(costs: np.ndarray, traces: np.ndarray) -> np.ndarray:
+    """``[N, T]`` the cost still to come from each control step on: the per-step costs ``traces [N, T]`` summed
+    from that step to the end, plus the part of the episode costs ``costs [N]`` that the traces do not hold."""
+    terminal = costs - traces.sum(axis=1)
+    return np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]
 
 
 def ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:

@@ -44,7 +44,7 @@ import numpy as np
 import torch
 
 from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_weights, ridge_hat
+from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
 from .contextual import SearchSpace
 from .smooth import smooth_factor, squash, unsquash
 
@@ -121,8 +121,7 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     episode = cost_weights(costs - hat @ costs, h)
     if traces is None or time_weights is None:
         return episode[None], episode
-    terminal = costs - traces.sum(axis=1)
-    to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]           # [N, T]
+    to_go = cost_to_go(costs, traces)                                                   # [N, T]
     per_step = cost_weights((to_go - hat @ to_go).T, h)                                 # [T, N]
     norm = time_weights.sum(axis=0)                                                     # [n]
     per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]

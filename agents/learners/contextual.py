@@ -36,7 +36,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_weights, ridge_hat
+from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
 from .smooth import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
@@ -441,8 +441,7 @@ class ContextualSearch(Learner):
         traces = np.concatenate([b["traces"] for b in self._buffer])                     # [N, T]
         if traces.shape[1] != self.time_weights.shape[0]:
             raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
-        terminal = data["costs"] - traces.sum(axis=1)
-        to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]        # [N, T]
+        to_go = cost_to_go(data["costs"], traces)                                       # [N, T]
         advantage = to_go - ridge_hat(data["x"], self.config.gain_prior) @ to_go
         per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
         norm = self.time_weights.sum(axis=0)                                              # [n]

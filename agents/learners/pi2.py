@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..options import check_range
-from .base import EpisodeBatch, Learner, cost_weights
+from .base import EpisodeBatch, Learner, cost_to_go, cost_weights
 
 __all__ = ["PI2", "PI2Config"]
 
@@ -103,9 +103,7 @@ class PI2(Learner):
         if traces.shape != (batch.size, steps):
             raise ValueError(f"batch.cost_traces: expected shape {(batch.size, steps)} (one cost per "
                              f"control step), got {traces.shape}")
-        terminal = batch.costs - traces.sum(axis=1)                               # [K]
-        to_go = np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]    # [K, T]
-        probabilities = cost_weights(to_go.T, self.config.h)                      # [T, K]
+        probabilities = cost_weights(cost_to_go(batch.costs, traces).T, self.config.h)   # [T, K]
         noise = batch.actions - self._mean                                        # [K, n]
         per_step = probabilities @ noise                                          # [T, n]
         total = (self._step_weights * per_step).sum(axis=0)                       # [n]
