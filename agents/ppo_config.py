@@ -23,6 +23,7 @@ Why these settings (PPO as a contextual bandit, one step per episode):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from .options import check_range
@@ -45,6 +46,8 @@ class PPOConfig:
         target_kl: early stop of an update's epochs at this approximate KL divergence; 0 = never.
         envs: parallel envs of the vector env (at most; the largest divisor of ``rollouts`` not above it).
         tensorboard: write SB3's training statistics to ``<run>/tensorboard`` (needs the ``tensorboard`` extra).
+        length: correlation length of the exploration in neighbouring DMP weights: the policy acts on a latent
+            vector mapped smoothly to the action (:mod:`rdmp_gym.agents.smooth_actions`); 0 = on the action itself.
     """
 
     sigma: float = 0.6
@@ -57,6 +60,7 @@ class PPOConfig:
     target_kl: float = 0.05
     envs: int = 2
     tensorboard: bool = False
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "ppo.sigma", 0.0, None, low_open=True)
@@ -68,3 +72,4 @@ class PPOConfig:
         check_range(self.target_kl, "ppo.target_kl", 0.0, None)
         check_range(self.ent_coef, "ppo.ent_coef", 0.0, None)
         check_range(self.envs, "ppo.envs", 1, None)
+        check_range(self.length, "ppo.length", 0.0, math.inf, high_open=True)

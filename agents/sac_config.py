@@ -10,6 +10,7 @@ The squashed-Gaussian actor starts at the imitation (mean layer bias ``atanh(sta
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from .options import check_range
@@ -28,6 +29,8 @@ class SACConfig:
         gradient_steps: gradient steps per environment step.
         hidden: units in each of the two hidden layers (actor and critics).
         buffer_size: replay buffer capacity (episodes).
+        length: correlation length of the exploration in neighbouring DMP weights: the policy acts on a latent
+            vector mapped smoothly to the action (:mod:`rdmp_gym.agents.smooth_actions`); 0 = on the action itself.
     """
 
     sigma: float = 0.3
@@ -36,6 +39,7 @@ class SACConfig:
     gradient_steps: int = 1
     hidden: int = 64
     buffer_size: int = 100_000
+    length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sac.sigma", 0.0, None, low_open=True)
@@ -44,3 +48,4 @@ class SACConfig:
         check_range(self.gradient_steps, "sac.gradient_steps", 1, None)
         check_range(self.hidden, "sac.hidden", 1, None)
         check_range(self.buffer_size, "sac.buffer_size", 1, None)
+        check_range(self.length, "sac.length", 0.0, math.inf, high_open=True)

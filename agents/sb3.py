@@ -7,6 +7,9 @@ A resumed PPO run continues from the saved model and optimiser, but not bit-iden
 random streams restart). Its checkpoint is SB3's own ``.zip``, of which only the weights are read
 (``set_parameters``: torch ``weights_only`` loading); SB3's ``data`` entry, which may hold pickled
 objects, is never loaded.
+
+With the ``length`` option > 0 the policy acts on a latent vector that a fixed smooth map turns into the action
+(:mod:`rdmp_gym.agents.smooth_actions`); the agents' batches, policy actions and evaluation are actions.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from .learners.base import EpisodeBatch
 from .options import from_options
 from .ppo_config import PPOConfig
 from .sac_config import SACConfig
+from .smooth_actions import SmoothActions, SmoothActionVecEnv
 from .tasks import TaskSpec, episode_metrics
 
 __all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]
@@ -36,17 +40,19 @@ __all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]
 
 class _EpisodeCollector(BaseCallback):
     """Collects the executed actions and episode metrics of one rollout phase (``key``: the name of the
-    executed actions among the algorithm's locals: ``clipped_actions`` for PPO, ``actions`` for SAC)."""
+    policy's actions among the algorithm's locals: ``clipped_actions`` for PPO, ``actions`` for SAC; ``smooth``:
+    their map to the executed actions, None if they are executed as they are)."""
 
-    def __init__(self, key: str = "clipped_actions") -> None:
+    def __init__(self, key: str = "clipped_actions", smooth: SmoothActions | None = None) -> None:
         super().__init__()
         self.key = key
+        self.smooth = smooth
         self.actions: list[np.ndarray] = []
         self.metrics: list[dict[str, Any]] = []
 
     def _on_step(self) -> bool:
-        for action, reward, info in zip(self.locals[self.key], self.locals["rewards"],
-                                        self.locals["infos"], strict=True):
+        actions = self.locals[self.key] if self.smooth is None else self.smooth(self.locals[self.key])
+        for action, reward, info in zip(actions, self.locals["rewards"], self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
             # float32 as PPO learns from it (DummyVecEnv keeps rewards in float32, SubprocVecEnv in float64)
             self.metrics.append(episode_metrics(float(np.float32(reward)), info))
@@ -70,12 +76,28 @@ def parallel_envs(rollouts: int, envs: int) -> int:
     return max(count for count in range(1, min(envs, rollouts) + 1) if rollouts % count == 0)
 
 
-def _vector_env(task: TaskSpec, envs: int, workers: int) -> VecEnv:
-    """``envs`` envs, in this process (``workers == 1``) or one subprocess each (the same numbers either way)."""
+def _vector_env(task: TaskSpec, envs: int, workers: int, smooth: SmoothActions | None) -> VecEnv:
+    """``envs`` envs, in this process (``workers == 1``) or one subprocess each (the same numbers either way),
+    taking latent actions if ``smooth`` is given."""
     makers = [task.make_with_options] * envs
-    if workers == 1 or envs == 1:
-        return DummyVecEnv(makers)
-    return SubprocVecEnv(makers, start_method="spawn")
+    venv = DummyVecEnv(makers) if workers == 1 or envs == 1 else SubprocVecEnv(makers, start_method="spawn")
+    return venv if smooth is None else SmoothActionVecEnv(venv, smooth)
+
+
+def _smooth_actions(task: TaskSpec, length: float) -> SmoothActions | None:
+    """The latent-to-action map correlated over ``length`` neighbouring weights; None for ``length`` 0."""
+    if length == 0:
+        return None
+    env = task.make()
+    try:
+        return SmoothActions.from_env(env, length)
+    finally:
+        env.close()
+
+
+def _latent(smooth: SmoothActions | None, action: np.ndarray) -> np.ndarray:
+    """``[n]`` the policy's output for the action ``[n]``."""
+    return np.asarray(action, dtype=np.float64) if smooth is None else smooth.latent(action)
 
 
 def _logger(tensorboard: bool, log_dir: str | Path | None) -> Logger:
@@ -108,11 +130,13 @@ def load_weights(model: PPO | SAC, state: Mapping[str, Any], name: str) -> None:
 class _SB3Agent:
     """What PPO and SAC agents share: deterministic policy actions, weights-only checkpoints, the divergence check.
 
-    Subclasses set ``model``, ``env``, ``name`` (``"ppo"``, ``"sac"``) and ``divergence_hint``.
+    Subclasses set ``model``, ``env``, ``smooth`` (the latent-to-action map or None), ``name`` (``"ppo"``,
+    ``"sac"``) and ``divergence_hint``.
     """
 
     model: PPO | SAC
     env: VecEnv
+    smooth: SmoothActions | None
     name: str = ""
     divergence_hint: str = ""
 
@@ -125,6 +149,8 @@ class _SB3Agent:
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         """``[E, n]`` deterministic actions for the contexts ``observations [E, o]``, in ``[-1, 1]``."""
         actions, _ = self.model.predict(np.asarray(observations, dtype=np.float32), deterministic=True)
+        if self.smooth is not None:
+            return self.smooth(actions)
         return np.clip(np.asarray(actions, dtype=np.float64), -1.0, 1.0)
 
     def state_dict(self) -> dict[str, Any]:
@@ -163,7 +189,8 @@ class PPOAgent(_SB3Agent):
         self._logger = _logger(self.config.tensorboard, log_dir)
         envs = parallel_envs(rollouts, self.config.envs)
         self.rollouts = rollouts
-        self.env = _vector_env(task, envs, workers)
+        self.smooth = _smooth_actions(task, self.config.length)
+        self.env = _vector_env(task, envs, workers, self.smooth)
         self.env.seed(seed)
         batch = self.config.batch_size or rollouts
         hidden = [self.config.hidden, self.config.hidden]
@@ -176,8 +203,9 @@ class PPOAgent(_SB3Agent):
                                         "log_std_init": math.log(self.config.sigma)})
         self.model.set_logger(self._logger)
         with torch.no_grad():
-            self.model.policy.action_net.bias.copy_(torch.as_tensor(initial_action, dtype=torch.float32))
-        self._collector = _EpisodeCollector()
+            self.model.policy.action_net.bias.copy_(torch.as_tensor(_latent(self.smooth, initial_action),
+                                                                    dtype=torch.float32))
+        self._collector = _EpisodeCollector(smooth=self.smooth)
 
     @property
     def exploration(self) -> float:
@@ -211,7 +239,8 @@ class SACAgent(_SB3Agent):
                  options: Mapping[str, Any] | None = None) -> None:
         self.config = from_options(SACConfig, options, "sac")
         self.rollouts = rollouts
-        self.env = DummyVecEnv([task.make_with_options])
+        self.smooth = _smooth_actions(task, self.config.length)
+        self.env = _vector_env(task, 1, 1, self.smooth)
         self.env.seed(seed)
         hidden = [self.config.hidden, self.config.hidden]
         self.model = SAC("MlpPolicy", self.env, learning_rate=self.config.learning_rate,
@@ -219,7 +248,7 @@ class SACAgent(_SB3Agent):
                          gamma=0.0, train_freq=(rollouts, "step"), gradient_steps=self.config.gradient_steps * rollouts,
                          seed=seed, device="cpu", verbose=0,
                          policy_kwargs={"net_arch": hidden})
-        start = np.arctanh(np.clip(np.asarray(initial_action, dtype=np.float64), -0.999, 0.999))
+        start = np.arctanh(np.clip(_latent(self.smooth, initial_action), -0.999, 0.999))
         actor = self.model.actor
         with torch.no_grad():    # mean at the start action and std = sigma for every context, at first
             actor.mu.weight.mul_(0.01)
@@ -227,7 +256,7 @@ class SACAgent(_SB3Agent):
             actor.log_std.weight.mul_(0.01)
             actor.log_std.bias.fill_(math.log(self.config.sigma))
         self.model.set_logger(_logger(False, None))
-        self._collector = _EpisodeCollector("actions")
+        self._collector = _EpisodeCollector("actions", self.smooth)
 
     @property
     def exploration(self) -> float:

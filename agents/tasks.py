@@ -30,9 +30,9 @@ CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
                  "sigma_factors": "approach=3"},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
-#: smooth exploration for the one-θ learners on the tasks published with it (ArmarWipe-v1's runs keep theirs)
+#: smooth exploration for the one-θ learners and SB3's on the tasks published with it (ArmarWipe-v1's runs keep theirs)
 SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {WIPE_V2_ID: {"length": 5.0}}
-_SMOOTH_AGENTS = ("pi2", "pibb", "cmaes")
+_SMOOTH_AGENTS = ("pi2", "pibb", "cmaes", "ppo", "sac")
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 

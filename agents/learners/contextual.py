@@ -40,7 +40,7 @@ from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
 from .smooth import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
-           "ContextualSearch", "RandomReturnConfig", "SearchSpace", "policy_from_state"]
+           "ContextualSearch", "RandomReturnConfig", "SearchSpace", "action_layout", "policy_from_state"]
 
 WEIGHTINGS = ("reps", "pibb", "pi2")
 _BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
@@ -168,13 +168,7 @@ class SearchSpace:
         """From an env (``unwrapped``: ``dmp``, ``groups``, ``action_time_weights()``) and sample
         observations ``[E, o]`` of its contexts (their mean and standard deviation standardise φ)."""
         base = env.unwrapped
-        n = int(env.action_space.shape[0])
-        if hasattr(base, "action_map"):       # the wiping envs: DMP groups, then e.g. ``approach``, ``sweep_x``
-            slices, n_dims = base.action_map.action_slices(), int(base.dmp.n_dims)
-        elif hasattr(base, "dmp") and hasattr(base, "groups"):
-            slices, n_dims = dict(base.dmp.param_slices(base.groups)), int(base.dmp.n_dims)
-        else:
-            slices, n_dims = {"all": slice(0, n)}, 1
+        slices, n_dims = action_layout(env)
         observations = np.asarray(observations, dtype=np.float64)
         gate = _context_gate(base, observations.shape[1])
         center, scale = observations.mean(axis=0), observations.std(axis=0)
@@ -185,6 +179,16 @@ class SearchSpace:
         weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
         return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None,
                    _context_names(base, observations.shape[1]))
+
+
+def action_layout(env: Any) -> tuple[dict[str, slice], int]:
+    """``({group: slice}, n_dims)`` of an env's action (``{"all": slice(0, n)}`` and 1 if it has no DMP groups)."""
+    base = env.unwrapped
+    if hasattr(base, "action_map"):       # the wiping envs: DMP groups, then e.g. ``approach``, ``sweep_x``
+        return dict(base.action_map.action_slices()), int(base.dmp.n_dims)
+    if hasattr(base, "dmp") and hasattr(base, "groups"):
+        return dict(base.dmp.param_slices(base.groups)), int(base.dmp.n_dims)
+    return {"all": slice(0, int(env.action_space.shape[0]))}, 1
 
 
 def _items(spec: str) -> list[str]:
