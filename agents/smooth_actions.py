@@ -2,8 +2,9 @@
 ``a = clip(A z, -1, 1)``.
 
 SB3's policies are independent (diagonal) Gaussians, so exploring the DMP weights directly is white noise
-along the movement, and a mean learned from it is as rough. Here ``A`` is the smooth factor of the correlation
-of neighbouring weights (:func:`.learners.smooth.smooth_factor`) with every row scaled to unit norm: noise of
+along the movement, and a mean learned from it is as rough. Here ``A`` is the symmetric square root of the smooth
+correlation of neighbouring weights (:func:`.learners.smooth.smooth_factor`), each column a smooth bump, so that
+the learned mean ``A z`` is smooth whatever ``z`` is, with every row scaled to unit norm: noise of
 standard deviation ``sigma`` on ``z`` is executed as noise of standard deviation ``sigma`` on every action
 dimension (as without ``A``), correlated over about ``length`` neighbouring weights of each degree of freedom.
 Single parameters (initial conditions, amplitude factors, ``approach``, ``sweep_*``) keep identity rows.
@@ -44,7 +45,7 @@ class SmoothActions:
         """The map for ``env``'s action layout (:func:`.learners.contextual.action_layout`), correlated over
         ``length`` (> 0) neighbouring weights, each row of ``A`` of unit norm."""
         slices, n_dims = action_layout(env)
-        factor = smooth_factor(int(env.action_space.shape[0]), slices, n_dims, length)
+        factor = smooth_factor(int(env.action_space.shape[0]), slices, n_dims, length, symmetric=True)
         return cls(factor / np.linalg.norm(factor, axis=1, keepdims=True))
 
     def __call__(self, latent: np.ndarray) -> np.ndarray:

@@ -155,12 +155,23 @@ class SmoothNoise:
         return total
 
 
-def smooth_factor(n: int, slices: Mapping[str, slice], n_dims: int, length: float) -> np.ndarray:
+def smooth_factor(n: int, slices: Mapping[str, slice], n_dims: int, length: float, symmetric: bool = False
+                  ) -> np.ndarray:
     """``[n, n]`` a factor ``L`` of the smooth correlation ``C = L Lᵀ`` of an action (block-diagonal: each DoF's
     weights correlated over about ``length`` neighbours, :class:`SmoothNoise`; the identity elsewhere and for
-    ``length = 0``). ``sigma · L ε`` with ``ε ~ N(0, I)`` is smooth exploration of mean standard deviation ~sigma."""
+    ``length = 0``). ``sigma · L ε`` with ``ε ~ N(0, I)`` is smooth exploration of mean standard deviation ~sigma.
+
+    ``symmetric``: the symmetric square root ``C^½`` instead of the Cholesky factor. Every column is then a smooth
+    bump about its weight, so ``L z`` is smooth for any ``z`` (a Cholesky column starts with a kink at its
+    diagonal, and the last column of a block is a single weight), not only for white noise ``z``."""
     noise = SmoothNoise(n, block_layout(slices, n_dims), length)
     factor = np.eye(n)
     for (part, _), block in zip(noise.blocks, noise.factors, strict=True):
-        factor[part, part] = block
+        factor[part, part] = _symmetric_root(block @ block.T) if symmetric else block
     return factor
+
+
+def _symmetric_root(covariance: np.ndarray) -> np.ndarray:
+    """``[m, m]`` the symmetric positive square root of a covariance ``[m, m]``."""
+    values, vectors = np.linalg.eigh(covariance)
+    return (vectors * np.sqrt(np.maximum(values, 0.0))) @ vectors.T
