@@ -32,9 +32,8 @@ def _agent(agent: str, length: float, rollouts: int = 32, initial: np.ndarray | 
     return SACAgent(TASK, start, rollouts=rollouts, seed=0, options=options)
 
 
-def _roughness(actions: np.ndarray) -> float:
-    """Mean squared circular second difference of the first DoF's periodic weights, per unit variance."""
-    block = actions[:, :WEIGHTS] - np.mean(actions[:, :WEIGHTS], axis=0)
+def _roughness(block: np.ndarray) -> float:
+    """Mean squared circular second difference of the rows of ``block [K, WEIGHTS]`` per unit mean square."""
     second = np.roll(block, -1, axis=1) - 2 * block + np.roll(block, 1, axis=1)
     return float(np.mean(second**2) / np.mean(block**2))
 
@@ -50,8 +49,10 @@ def _first_batch(agent: str, length: float):
 @pytest.mark.parametrize("agent", ["ppo", "sac"])
 def test_smooth_exploration_is_far_smoother_than_independent_noise_and_as_large(agent):
     rough, smooth = (_first_batch(agent, length).actions for length in (0.0, 5.0))
-    assert _roughness(rough) > 3.0                         # white noise: about 6 per unit variance
-    assert _roughness(smooth) < 0.1 * _roughness(rough)
+    rough_noise, smooth_noise = (actions[:, :WEIGHTS] - np.mean(actions[:, :WEIGHTS], axis=0)  # first DoF's weights
+                                 for actions in (rough, smooth))
+    assert _roughness(rough_noise) > 3.0                   # white noise: about 6 per unit variance
+    assert _roughness(smooth_noise) < 0.1 * _roughness(rough_noise)
     assert np.all(np.abs(smooth) <= 1.0)
     assert 0.6 < np.std(smooth[:, :WEIGHTS]) / np.std(rough[:, :WEIGHTS]) < 1.4
 
@@ -65,6 +66,8 @@ def test_the_map_keeps_the_imitation_and_the_scale_of_every_dimension():
     np.testing.assert_array_equal(smooth.matrix[initial, initial], np.eye(initial.stop - initial.start))
     target = 0.3 * np.sin(2 * np.pi * np.arange(N) / WEIGHTS)
     np.testing.assert_allclose(smooth(smooth.latent(target)), target, atol=1e-12)
+    columns = smooth.matrix[:WEIGHTS, :WEIGHTS].T               # A z for z = each unit vector of the block
+    assert max(_roughness(column[None]) for column in columns) < 0.1    # any z maps to smooth weights
     with pytest.raises(ValueError, match="matrix"):
         SmoothActions(np.ones((3, 4)))
 
