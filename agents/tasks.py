@@ -11,8 +11,8 @@ import numpy as np
 
 from .imitation import load_demonstration
 
-__all__ = ["CONTEXTUAL_SEARCH_DEFAULTS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions",
-           "TaskSpec", "episode_metrics", "run_episode", "task_options"]
+__all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID",
+           "ResetOptions", "TaskSpec", "episode_metrics", "run_episode", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
@@ -33,6 +33,9 @@ _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 #: smooth exploration for the one-θ learners and SB3's on the tasks published with it (ArmarWipe-v1's runs keep theirs)
 SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {WIPE_V2_ID: {"length": 5.0}}
 _SMOOTH_AGENTS = ("pi2", "pibb", "cmaes", "ppo", "sac")
+#: one learner's own settings on a task: PPO's step size with smooth actions on ArmarWipe-v2 (at v1's 3e-2 the
+#: policy mean ran far outside the action box, so nearly every weight was executed at a face; see the docs)
+AGENT_TASK_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {WIPE_V2_ID: {"ppo": {"learning_rate": 3e-3}}}
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 
@@ -40,12 +43,12 @@ def task_options(env_id: str, agent: str, options: Mapping[str, Any], env_kwargs
                  ) -> dict[str, Any]:
     """``options`` over the task's defaults for ``agent``: :data:`CONTEXTUAL_SEARCH_DEFAULTS` (none when
     ``env_kwargs`` choose other action ``groups``, which the defaults may not name) and
-    :data:`SMOOTH_EXPLORATION_DEFAULTS`."""
+    :data:`SMOOTH_EXPLORATION_DEFAULTS` and :data:`AGENT_TASK_DEFAULTS`."""
     chosen = agent in _TASK_DEFAULT_AGENTS and "groups" not in (env_kwargs or {})
     defaults = CONTEXTUAL_SEARCH_DEFAULTS.get(env_id, {}) if chosen else {}
     if agent in _SMOOTH_AGENTS:
         defaults = SMOOTH_EXPLORATION_DEFAULTS.get(env_id, {})
-    return {**defaults, **options}
+    return {**defaults, **AGENT_TASK_DEFAULTS.get(env_id, {}).get(agent, {}), **options}
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from rdmp_gym.agents import sb3
 from rdmp_gym.agents.learners.contextual import action_layout
 from rdmp_gym.agents.sb3 import PPOAgent, SACAgent
 from rdmp_gym.agents.smooth_actions import SmoothActions
-from rdmp_gym.agents.tasks import TaskSpec
+from rdmp_gym.agents.tasks import WIPE_ID, WIPE_V2_ID, TaskSpec, task_options
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.tracking import TRACKING_ID
 
@@ -114,3 +114,11 @@ def test_a_smooth_ppo_run_resumes(tmp_path):
 def test_a_bad_length_is_an_error_naming_the_option(agent, length):
     with pytest.raises(ValueError, match=f"{agent}.length"):
         TrainConfig(agent=agent, env_id=TRACKING_ID, options={"length": length})
+
+
+def test_v2_runs_ppo_and_sac_with_smooth_actions_and_v1_keeps_its_published_settings():
+    assert task_options(WIPE_V2_ID, "ppo", {}) == {"length": 5.0, "learning_rate": 3e-3}
+    assert task_options(WIPE_V2_ID, "sac", {}) == {"length": 5.0}
+    assert task_options(WIPE_V2_ID, "ppo", {"length": 0.0, "learning_rate": 3e-2}) == {"length": 0.0,
+                                                                                        "learning_rate": 3e-2}
+    assert task_options(WIPE_ID, "ppo", {}) == {} and task_options(WIPE_ID, "sac", {}) == {}
