@@ -60,6 +60,7 @@ from rdmp_gym.agents.protocol import (
     interval,
     path_jerk,
 )
+from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from tqdm import tqdm
@@ -156,7 +157,23 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
              for record in records if record.get("eval_return_mean") is not None]
     return {"agent": config.agent, "seed": config.seed, "seconds": round(time.perf_counter() - began, 1),
             "options": config.options, "episodes_to_target": episodes_to(records, SUCCESS_TARGET), "curve": curve,
-            "test": scores.to_dict(), "test_means": scores.means()}
+            "test": scores.to_dict(), "test_means": scores.means(), "code": _code(run)}
+
+
+def _code(run: RunDirectory) -> dict:
+    """The rdmp-gym commit that trained ``run`` (``{"commit", "dirty"}``; the cache does not key on it, so a
+    document can hold runs of several commits: :func:`code_versions` lists them)."""
+    return run.read_provenance()["sessions"][-1]["rdmp_gym"]
+
+
+def code_versions(runs: list[dict]) -> dict[str, list[str]]:
+    """``{commit (+ "-dirty"): ["label-seed", ...]}`` of the runs that record one (older caches do not)."""
+    versions: dict[str, list[str]] = {}
+    for run in runs:
+        code = run.get("code") or {}
+        commit = f"{code.get('commit')}{'-dirty' if code.get('dirty') else ''}" if code else "unrecorded"
+        versions.setdefault(commit, []).append(f"{run['agent']}-{run['seed']}")
+    return versions
 
 
 def _cache_key(config: TrainConfig, test_seeds: np.ndarray) -> str:
@@ -374,6 +391,8 @@ def main() -> None:
                 "test_contexts": np.asarray(observations).tolist()}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
     _report(document, RESULTS, args.name)
+    for commit, names in code_versions(runs).items():
+        print(f"code {commit}: {len(names)} run(s)")
     print(f"wrote {RESULTS / (args.name + '.json')}, {args.name}.png and {args.name}_field.json/.png")
 
 

@@ -7,8 +7,8 @@ Per join:
   basis (noise-free samples at 500 Hz, the true T; least squares on the rollout's acceleration, which is linear in
   both), with the fade before T (:data:`rdmp_gym.fitting.FADE_BEFORE_T`) and with the defaults (fade after T). A
   large value is a limit of what the mixture (5) can express, which no regression and no noise level can lift.
-* ``true T``: the fade-before-T fit given the true T and period instead of the segmentation's estimate (the
-  estimated T, and its error).
+* ``true T``: the fade-before-T fit and the default fit given the true T and period instead of the segmentation's
+  estimate (the estimated T, and its error).
 * ``clean``: the default fit of noise-free samples (its error is the fit's bias; the rest is noise), and the same
   without the smoothness and ridge penalties (what is left is the basis's).
 * centre timing: the time spacing of the transient centres along the canonical path and the spread of their
@@ -95,7 +95,8 @@ def main() -> None:
                                                                      "quintic")):
         estimated = segment(demo)
         before = RhythmicDMP.fit(demo, segmentations=[estimated], **FADE_BEFORE_T)
-        given = RhythmicDMP.fit(demo, segmentations=[true_segmentation(signal)], **FADE_BEFORE_T)
+        truth = true_segmentation(signal)
+        given = RhythmicDMP.fit(demo, segmentations=[truth], **FADE_BEFORE_T)
         clean = signal.demonstration(demo.duration, rate=100.0, noise=0.0)
         spread, narrowest, widest = centre_timing(before)
         rows.append({
@@ -104,19 +105,21 @@ def main() -> None:
             "before": handover_figures(signal, before, demo.duration)["transient acceleration"],
             "before, true T": handover_figures(signal, given, demo.duration)["transient acceleration"],
             "default": handover_figures(signal, RhythmicDMP.fit(demo), demo.duration)["transient acceleration"],
+            "default, true T": handover_figures(signal, RhythmicDMP.fit(demo, segmentations=[truth]),
+                                                demo.duration)["transient acceleration"],
             "default, clean": handover_figures(signal, RhythmicDMP.fit(clean), demo.duration)["transient acceleration"],
             "default, clean, no penalty": handover_figures(signal, RhythmicDMP.fit(
                 clean, smoothness=0.0, regularization=1e-10), demo.duration)["transient acceleration"],
             "spacing spread": spread, "width min": narrowest, "width max": widest,
             "start error, lead 0": start_error(signal, 0.0), "start error, lead 1": start_error(signal, 1.0)})
     print(f"{'join':>4} {'T / est (s)':>12} {'capacity % before/default':>26} {'before % est/true T':>20} "
-          f"{'default % noisy/clean/no penalty':>32} {'spacing spread':>14} {'width s min/max':>16} "
+          f"{'default % noisy/true T/clean/no penalty':>39} {'spacing spread':>14} {'width s min/max':>16} "
           f"{'start m/s2 lead 0/1':>20}")
     for row in rows:
         print(f"{row['join']:4d} {row['T']:5.2f}/{row['T estimated']:5.2f} "
               f"{100 * row['capacity before']:17.1f}/{100 * row['capacity default']:5.1f} "
               f"{100 * row['before']:14.1f}/{100 * row['before, true T']:5.1f} "
-              f"{100 * row['default']:20.1f}/{100 * row['default, clean']:5.1f}/"
+              f"{100 * row['default']:21.1f}/{100 * row['default, true T']:5.1f}/{100 * row['default, clean']:5.1f}/"
               f"{100 * row['default, clean, no penalty']:5.1f} "
               f"{row['spacing spread']:14.1e} "
               f"{row['width min']:9.3f}/{row['width max']:5.3f} "

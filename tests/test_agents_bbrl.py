@@ -128,3 +128,20 @@ def test_per_step_credit_judges_a_weight_by_the_costs_from_when_it_acts():
     assert episode.argmax() == 0
     only_episode, _ = sample_weights(costs, None, np.zeros((3, 1)), activation, h=10.0, ridge=1.0)
     assert only_episode.shape == (1, 3)
+
+
+def test_groups_leave_the_other_dimensions_at_the_start_action():
+    start = np.linspace(-0.5, 0.5, N)
+    learner = make_learner("bbrl", start, 10, np.random.default_rng(0), {"groups": "amplitude"}, space=_space())
+    _run(learner, 3)
+    contexts = np.random.default_rng(4).uniform(-1, 1, (10, 2))
+    asked, policy = learner.ask(contexts), learner.policy_actions(contexts)
+    np.testing.assert_allclose(asked[:, : N - 2], np.broadcast_to(start[: N - 2], (10, N - 2)), atol=1e-12)
+    np.testing.assert_allclose(policy[:, : N - 2], asked[:, : N - 2], atol=1e-12)
+    assert np.all(np.std(asked[:, N - 2:], axis=0) > 1e-3)                  # the amplitudes are explored
+    np.testing.assert_allclose(policy_from_state(learner.state_dict(), contexts), policy, atol=1e-12)
+    other = _learner()
+    with pytest.raises(ValueError, match="state"):
+        other.load_state_dict(learner.state_dict())
+    with pytest.raises(ValueError, match="groups"):
+        _learner(groups="sweep")

@@ -1,4 +1,4 @@
-"""The learner benchmark's command line: labels, per-agent seed counts and the run cache's key."""
+"""The learner benchmark's command line: labels, per-agent seed counts, the run cache's key and the code versions."""
 
 import argparse
 import sys
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from bench_agents import _cache_key, _labels, _seed_counts
+from bench_agents import _cache_key, _labels, _seed_counts, code_versions
 from rdmp_gym.agents.training import TrainConfig
 
 
@@ -35,3 +35,11 @@ def test_cache_key_ignores_workers_but_not_options_or_test_contexts():
     assert _cache_key(config, seeds) != _cache_key(config, np.arange(4))
     other = TrainConfig(agent="bbrl", updates=2, rollouts=2, seed=0, workers=1, options={"sigma": 0.2})
     assert _cache_key(config, seeds) != _cache_key(other, seeds)
+
+
+def test_code_versions_group_the_runs_by_the_commit_that_trained_them():
+    runs = [{"agent": "bbrl", "seed": 0, "code": {"commit": "abc", "dirty": False}},
+            {"agent": "bbrl", "seed": 1, "code": {"commit": "abc", "dirty": True}},
+            {"agent": "cpi2", "seed": 0, "code": {"commit": "abc", "dirty": False}},
+            {"agent": "random", "seed": 0}]
+    assert code_versions(runs) == {"abc": ["bbrl-0", "cpi2-0"], "abc-dirty": ["bbrl-1"], "unrecorded": ["random-0"]}

@@ -45,7 +45,7 @@ import torch
 
 from ..options import check_choice, check_range
 from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
-from .contextual import SearchSpace
+from .contextual import SearchSpace, select_groups
 from .smooth import smooth_factor, squash, unsquash
 
 __all__ = ["BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
@@ -73,6 +73,8 @@ class BBRLConfig:
         reuse: batches (this one and earlier ones) whose samples enter each update.
         value_ridge: ridge of the context baselines of the cost (and cost-to-go).
         min_sigma: floor of each dimension's standard deviation.
+        groups: comma-separated action groups that the policy sets (``""`` = every dimension); the others stay
+            at the start action. Choosing them is task structure, like ``cpi2``'s gain groups.
     """
 
     sigma: float = 0.3
@@ -88,6 +90,7 @@ class BBRLConfig:
     reuse: int = 4
     value_ridge: float = 1.0
     min_sigma: float = 0.01
+    groups: str = ""
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
@@ -192,11 +195,14 @@ class BBRL(Learner):
         self.config = config or BBRLConfig()
         self.space = space
         self.center, self.scale = np.asarray(space.context_center), np.asarray(space.context_scale)
+        #: ``[m]`` the action dimensions the policy sets, and ``[n]`` the start action (unbounded) of the others
+        self.active = self._active_dims(space)
+        self.fixed = unsquash(self._mean)
         factor = smooth_factor(self.n_params, space.slices, space.n_dims, self.config.length)
-        correlation = factor @ factor.T
-        correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.n_params)
+        correlation = (factor @ factor.T)[np.ix_(self.active, self.active)]
+        correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.active.size)
         torch.manual_seed(int(rng.integers(2**31)))
-        self.policy = _Policy(unsquash(self._mean), self.center.size, self.config.hidden, correlation,
+        self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
                               self.config.sigma, self.config.rank)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         self._asked: tuple[np.ndarray, np.ndarray] | None = None      # (contexts [K, o], u [K, n])
@@ -205,13 +211,25 @@ class BBRL(Learner):
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
 
+    def _active_dims(self, space: SearchSpace) -> np.ndarray:
+        if not self.config.groups:
+            return np.arange(self.n_params)
+        chosen = select_groups(space.slices, self.config.groups, "groups").values()
+        return np.unique(np.concatenate([np.arange(self.n_params)[part] for part in chosen]))
+
     def _time_weights(self, space: SearchSpace) -> np.ndarray | None:
         if space.time_weights is None:
             return None
         weights = np.asarray(space.time_weights, dtype=np.float64)
         if weights.ndim != 2 or weights.shape[1] != self.n_params:
             raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
-        return weights
+        return weights[:, self.active]
+
+    def _full(self, u: np.ndarray) -> np.ndarray:
+        """``[K, n]`` actions (unbounded) from the policy's dimensions ``u [K, m]``, the others at the start."""
+        full = np.repeat(self.fixed[None], len(u), axis=0)
+        full[:, self.active] = u
+        return full
 
     # ------------------------------------------------------------------ sampling
     def _features(self, observations: np.ndarray) -> np.ndarray:
@@ -238,13 +256,13 @@ class BBRL(Learner):
         with torch.no_grad():
             mean = self.policy.mean(torch.as_tensor(x)).numpy()
             chol = self._chol().numpy()
-        u = mean + self.rng.standard_normal((self.rollouts, self.n_params)) @ chol.T
+        u = mean + self.rng.standard_normal((self.rollouts, self.active.size)) @ chol.T
         self._asked = (x, u)
-        return squash(u)
+        return squash(self._full(u))
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         with torch.no_grad():
-            return squash(self.policy.mean(torch.as_tensor(self._features(observations))).numpy())
+            return squash(self._full(self.policy.mean(torch.as_tensor(self._features(observations))).numpy()))
 
     # ------------------------------------------------------------------ update
     def _update(self, batch: EpisodeBatch) -> None:
@@ -311,9 +329,13 @@ class BBRL(Learner):
         buffer = {f"buffer_{key}": [b[key].copy() for b in self._buffer] for key in _BUFFER}
         return {"parameters": {name: value.detach().numpy().copy() for name, value in self.policy.state_dict().items()},
                 "context_center": self.center.copy(), "context_scale": self.scale.copy(), **buffer,
+                "active": self.active.copy(), "fixed": self.fixed.copy(),
                 "min_sigma": float(self.config.min_sigma)}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
+        if not np.array_equal(state["active"], self.active) or np.asarray(state["fixed"]).shape != self.fixed.shape:
+            raise ValueError("state.active: the state sets other action dimensions than this learner (groups)")
+        self.fixed = np.asarray(state["fixed"], dtype=np.float64).copy()
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
         self.policy.load_state_dict(parameters)
@@ -337,4 +359,7 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     x = np.where(scale > 0, (obs - center) / np.where(scale > 0, scale, 1.0), 0.0)
     hidden = np.tanh(x @ params["net.0.weight"].T + params["net.0.bias"])
     hidden = np.tanh(hidden @ params["net.2.weight"].T + params["net.2.bias"])
-    return squash(params["u0"] + (hidden @ params["net.4.weight"].T + params["net.4.bias"]) @ params["shape"].T)
+    policy = params["u0"] + (hidden @ params["net.4.weight"].T + params["net.4.bias"]) @ params["shape"].T
+    full = np.repeat(np.asarray(state["fixed"], dtype=np.float64)[None], len(obs), axis=0)
+    full[:, np.asarray(state["active"], dtype=np.int64)] = policy
+    return squash(full)

@@ -196,7 +196,7 @@ def _items(spec: str) -> list[str]:
     return [item.strip() for item in spec.split(",") if item.strip()]
 
 
-def _select(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, slice]:
+def select_groups(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, slice]:
     """The groups of ``slices`` named in the comma-separated ``spec`` (``transient`` names every ``transient:k``)."""
     wanted = _items(spec)
     chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
@@ -216,7 +216,7 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
             factor = float("nan")
         if not np.isfinite(factor) or factor <= 0:
             raise ValueError(f"sigma_factors: {item!r} is not 'group=factor' with a factor > 0")
-        for group in _select(slices, name, "sigma_factors").values():
+        for group in select_groups(slices, name, "sigma_factors").values():
             for index, (part, _) in enumerate(blocks):
                 if group.start <= part.start < group.stop:
                     factors[index] = factor
@@ -318,13 +318,13 @@ class ContextualSearch(Learner):
         self.name = name
         slices = dict(space.slices)
         if self.config.groups:
-            slices = _select(slices, self.config.groups, "groups")
+            slices = select_groups(slices, self.config.groups, "groups")
         self.noise = SmoothNoise(self.n_params, block_layout(slices, space.n_dims), self.config.length)
         self._explored = self.noise.mask()
         self._context_dependent = self._explored.copy()
         if self.config.gain_groups:
             self._context_dependent = np.zeros(self.n_params, dtype=bool)
-            for index in _select(slices, self.config.gain_groups, "gain_groups").values():
+            for index in select_groups(slices, self.config.gain_groups, "gain_groups").values():
                 self._context_dependent[index] = True
         self.center = np.asarray(space.context_center, dtype=np.float64)
         scale = np.asarray(space.context_scale, dtype=np.float64)
