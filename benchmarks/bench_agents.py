@@ -98,6 +98,9 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
     parser.add_argument("--fresh", action="store_true",
                         help="ignore the runs cached by an earlier, interrupted call (default: reuse them)")
+    parser.add_argument("--reuse", action="append", default=[], type=Path, metavar="RESULTS.json",
+                        help="an earlier results file (e.g. the committed one) whose runs stand for runs of this "
+                             "call that match it in every setting (repeatable; local backend)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
     parser.add_argument("--update-baselines", action="store_true",
                         help="re-evaluate the no-learning rows (imitation, coupling) into results/<name>.json, "
@@ -194,6 +197,26 @@ def _store_run(config: TrainConfig, path: Path, test_seeds: np.ndarray, run: dic
     path.write_text(json.dumps({"key": _cache_key(config, test_seeds), "run": run}))
 
 
+def reusable_runs(documents: list[dict], configs: list[TrainConfig], names: list[str],
+                  test_seeds: np.ndarray) -> dict[tuple[str, int], dict]:
+    """``{(label, seed): run}`` from earlier results documents for the configs they match in every setting
+    (learner, budget, rollouts, validation protocol, env, test contexts and the learner's options)."""
+    found: dict[tuple[str, int], dict] = {}
+    for document in documents:
+        saved = document["settings"]
+        learners = _labels(saved["agents"])
+        for name, config in zip(names, configs, strict=True):
+            same = (learners.get(name) == config.agent and saved["env_id"] == config.env_id
+                    and saved["budget"] // saved["rollouts"] == config.updates
+                    and saved["rollouts"] == config.rollouts and saved["val_contexts"] == config.eval_episodes
+                    and saved["eval_every"] == config.eval_every and saved["env_kwargs"] == config.env_kwargs
+                    and saved["final_test_seeds"] == test_seeds.tolist())
+            for run in document["runs"] if same else []:
+                if run["agent"] == name and run["seed"] == config.seed and run["options"] == config.options:
+                    found.setdefault((name, config.seed), run)
+    return found
+
+
 def _run_remote(config: TrainConfig, scratch: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
                 reference_jerk: np.ndarray) -> dict:
     """:func:`_run_job` inside a Ray task: its own one-worker test evaluator."""
@@ -225,11 +248,14 @@ def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Na
                  seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
     """The runs one after the other; each finished run is cached, so an interrupted call resumes where it stopped."""
     cache = SCRATCH / f"{args.name}-runs"
+    earlier = reusable_runs([json.loads(path.read_text()) for path in args.reuse], configs, names, seeds)
+    if args.reuse:
+        print(f"{len(earlier)} run(s) taken from {', '.join(map(str, args.reuse))}")
     runs = []
     with Evaluator(spec, args.workers) as tester:
         for name, config in tqdm(list(zip(names, configs, strict=True)), desc="runs", unit="run"):
             path = cache / f"{name}-{config.seed}.json"
-            run = None if args.fresh else _cached_run(config, path, seeds)
+            run = None if args.fresh else _cached_run(config, path, seeds) or earlier.get((name, config.seed))
             if run is None:
                 run = _run_job(config, scratch, tester, seeds, observations, reference_jerk)
                 _store_run(config, path, seeds, run)

@@ -1,4 +1,5 @@
-"""The learner benchmark's command line: labels, per-agent seed counts, the run cache's key and the code versions."""
+"""The learner benchmark's command line: labels, per-agent seed counts, the run cache's key, reuse of earlier
+results and the code versions."""
 
 import argparse
 import sys
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from bench_agents import _cache_key, _labels, _seed_counts, code_versions
+from bench_agents import _cache_key, _labels, _seed_counts, code_versions, reusable_runs
 from rdmp_gym.agents.training import TrainConfig
 
 
@@ -43,3 +44,21 @@ def test_code_versions_group_the_runs_by_the_commit_that_trained_them():
             {"agent": "cpi2", "seed": 0, "code": {"commit": "abc", "dirty": False}},
             {"agent": "random", "seed": 0}]
     assert code_versions(runs) == {"abc": ["bbrl-0", "cpi2-0"], "abc-dirty": ["bbrl-1"], "unrecorded": ["random-0"]}
+
+
+def _document(options: dict, budget: int = 4) -> dict:
+    settings = {"agents": ["plain=cpi2"], "env_id": "rdmp_gym/ArmarWipe-v2", "budget": budget, "rollouts": 2,
+                "val_contexts": 3, "eval_every": 1, "env_kwargs": {}, "final_test_seeds": [7, 8]}
+    return {"settings": settings, "runs": [{"agent": "plain", "seed": 1, "options": options, "test_means": {}}]}
+
+
+def test_earlier_runs_stand_only_for_configs_that_match_every_setting():
+    config = TrainConfig(agent="cpi2", env_id="rdmp_gym/ArmarWipe-v2", updates=2, rollouts=2, seed=1, workers=1,
+                         eval_episodes=3, eval_every=1)
+    seeds = np.array([7, 8])
+    matching = _document(config.options)
+    assert list(reusable_runs([matching], [config], ["plain"], seeds)) == [("plain", 1)]
+    assert reusable_runs([matching], [config], ["other"], seeds) == {}
+    assert reusable_runs([matching], [config], ["plain"], np.array([7, 9])) == {}
+    assert reusable_runs([_document(config.options, budget=6)], [config], ["plain"], seeds) == {}
+    assert reusable_runs([_document({**config.options, "sigma": 0.3})], [config], ["plain"], seeds) == {}
