@@ -15,6 +15,12 @@ Per join:
   half-height widths in time (equal spacing in time, or not).
 * the start: the noise-free, penalty-free fit's acceleration error over the first 0.1 s with the first transient
   centre at the start and one spacing before it (the normalised mixture is one-sided at its first centre).
+* ceilings on the noisy samples, each with its penalty chosen knowing the truth: ``best penalty``, the least
+  transient acceleration error of the fit over the transient smoothness (:data:`ORACLE_SMOOTHNESS`, the periodic one
+  by cross-validation) and the ridge (:data:`ORACLE_RIDGE`), with that fit's jerk and off-path figures; and
+  ``best smoother``, a quintic P-spline of the raw samples (a knot at each sample, third differences penalised,
+  :data:`SMOOTHER_PENALTIES`) over ``[0.3 s, T)`` (it does not know that the start is at rest), beside the default
+  fit's error over the same span. Low values would mean the defaults' penalty choice is what limits a join.
 
 Prints the table; writes benchmarks/results/handover_causes.json.
 
@@ -28,13 +34,18 @@ import json
 
 import numpy as np
 from output import add_save_argument, results_dir
+from scipy.interpolate import BSpline
 
 from rdmp_gym import RhythmicDMP, segment
 from rdmp_gym.fitting import FADE_BEFORE_T, fit_rhythmic, trajectory_design
 from rdmp_gym.segmentation import Segmentation
-from rdmp_gym.smoothness import draw_test_demonstrations, handover_figures
+from rdmp_gym.smoothness import draw_test_demonstrations, finite_derivatives, handover_figures
 
 RATE = 500.0
+ORACLE_SMOOTHNESS = tuple(float(value) for value in np.logspace(-3.0, 1.0, 9))
+ORACLE_RIDGE = (1e-4, 1e-5, 1e-6)
+SMOOTHER_PENALTIES = tuple(float(value) for value in np.logspace(0.0, 8.0, 17))
+SMOOTHER_FROM = 0.3
 
 
 def true_segmentation(signal) -> Segmentation:
@@ -84,6 +95,43 @@ def start_error(signal, lead: float) -> float:
     return float(np.sqrt(np.mean(np.sum(error[(t > 0.005) & (t < 0.1)] ** 2, axis=1))))
 
 
+def transient_error(signal, Y: np.ndarray, t: np.ndarray, begin: float = 0.0) -> float:
+    """Acceleration error of ``Y [len(t), d]`` over ``[begin, T)`` relative to the truth's RMS there."""
+    acceleration = signal.derivatives(t)[2]
+    span = (t >= begin) & (t < signal.transient_length)
+    error = finite_derivatives(Y, t[1] - t[0])[1] - acceleration
+    return float(np.sqrt(np.sum(error[span] ** 2) / np.sum(acceleration[span] ** 2)))
+
+
+def best_penalty(signal, demo) -> dict:
+    """The fit of least transient acceleration error over :data:`ORACLE_SMOOTHNESS` x :data:`ORACLE_RIDGE`."""
+    t = np.arange(0.0, signal.transient_length + 0.5, 1e-3)
+    fits = [(transient_error(signal, dmp.rollout(t), t), value, ridge, dmp)
+            for value in ORACLE_SMOOTHNESS for ridge in ORACLE_RIDGE
+            for dmp in [RhythmicDMP.fit(demo, smoothness=("auto", value), regularization=ridge)]]
+    _, value, ridge, dmp = min(fits, key=lambda fit: fit[0])
+    figures = handover_figures(signal, dmp, demo.duration)
+    return {"smoothness": value, "ridge": ridge, **{key: figures[key] for key in
+                                                    ("transient acceleration", "transient jerk", "off-path peak")}}
+
+
+def best_smoother(signal, demo) -> float:
+    """The least acceleration error over ``[SMOOTHER_FROM, T)`` of a quintic P-spline of the raw samples."""
+    knots = np.concatenate([[demo.t[0]] * 5, demo.t, [demo.t[-1]] * 5])
+    design = BSpline.design_matrix(demo.t, knots, 5).toarray()
+    differences = np.diff(np.eye(design.shape[1]), 3, axis=0)
+    t = np.arange(0.0, signal.transient_length, 1e-3)
+    acceleration = signal.derivatives(t)[2]
+    span = t >= SMOOTHER_FROM
+    errors = []
+    for penalty in SMOOTHER_PENALTIES:
+        spline = BSpline(knots, np.linalg.solve(design.T @ design + penalty * differences.T @ differences,
+                                                design.T @ demo.Y), 5)
+        error = spline.derivative(2)(t) - acceleration
+        errors.append(np.sqrt(np.sum(error[span] ** 2) / np.sum(acceleration[span] ** 2)))
+    return float(min(errors))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
@@ -99,6 +147,7 @@ def main() -> None:
         given = RhythmicDMP.fit(demo, segmentations=[truth], **FADE_BEFORE_T)
         clean = signal.demonstration(demo.duration, rate=100.0, noise=0.0)
         spread, narrowest, widest = centre_timing(before)
+        grid = np.arange(0.0, signal.transient_length + 0.5, 1e-3)
         rows.append({
             "join": index, "T": signal.transient_length, "T estimated": estimated.transient_length,
             "capacity before": capacity(signal, FADE_BEFORE_T), "capacity default": capacity(signal, {}),
@@ -111,10 +160,13 @@ def main() -> None:
             "default, clean, no penalty": handover_figures(signal, RhythmicDMP.fit(
                 clean, smoothness=0.0, regularization=1e-10), demo.duration)["transient acceleration"],
             "spacing spread": spread, "width min": narrowest, "width max": widest,
-            "start error, lead 0": start_error(signal, 0.0), "start error, lead 1": start_error(signal, 1.0)})
+            "start error, lead 0": start_error(signal, 0.0), "start error, lead 1": start_error(signal, 1.0),
+            "best penalty": best_penalty(signal, demo), "best smoother, from 0.3 s": best_smoother(signal, demo),
+            "default, from 0.3 s": transient_error(signal, RhythmicDMP.fit(demo).rollout(grid), grid, SMOOTHER_FROM)})
     print(f"{'join':>4} {'T / est (s)':>12} {'capacity % before/default':>26} {'before % est/true T':>20} "
           f"{'default % noisy/true T/clean/no penalty':>39} {'spacing spread':>14} {'width s min/max':>16} "
-          f"{'start m/s2 lead 0/1':>20}")
+          f"{'start m/s2 lead 0/1':>20} {'best penalty % (jerk x, off-path x)':>36} "
+          f"{'from 0.3 s: default/best smoother %':>36}")
     for row in rows:
         print(f"{row['join']:4d} {row['T']:5.2f}/{row['T estimated']:5.2f} "
               f"{100 * row['capacity before']:17.1f}/{100 * row['capacity default']:5.1f} "
@@ -123,10 +175,17 @@ def main() -> None:
               f"{100 * row['default, clean, no penalty']:5.1f} "
               f"{row['spacing spread']:14.1e} "
               f"{row['width min']:9.3f}/{row['width max']:5.3f} "
-              f"{row['start error, lead 0']:14.2f}/{row['start error, lead 1']:5.2f}")
+              f"{row['start error, lead 0']:14.2f}/{row['start error, lead 1']:5.2f} "
+              f"{_best_penalty_cell(row['best penalty']):>36} "
+              f"{100 * row['default, from 0.3 s']:29.1f}/{100 * row['best smoother, from 0.3 s']:5.1f}")
     path = results_dir(args.save) / "handover_causes.json"
     path.write_text(json.dumps({"seed": args.seed, "rows": rows}, indent=1))
     print(f"wrote {path}")
+
+
+def _best_penalty_cell(best: dict) -> str:
+    return (f"{100 * best['transient acceleration']:.1f} ({best['transient jerk']:.2f}, {best['off-path peak']:.2f}) "
+            f"s {best['smoothness']:.2g} r {best['ridge']:.0e}")
 
 
 if __name__ == "__main__":

@@ -221,7 +221,8 @@ def cross_validation_score(normal_matrix: np.ndarray, gram: np.ndarray, moments:
 def _smoothness_grids(smoothness: float | Sequence, n_operators: int) -> list[tuple[float, ...]]:
     """Per penalty operator, the candidate weights: a number applies to every operator; a sequence gives each
     operator a number or a sequence of candidates."""
-    if np.ndim(smoothness) == 0:
+    if not isinstance(smoothness, (Sequence, np.ndarray)) or (isinstance(smoothness, np.ndarray)
+                                                               and smoothness.ndim == 0):
         return [(float(smoothness),)] * n_operators
     if len(smoothness) != n_operators:
         raise ValueError(f"smoothness: expected a number or {n_operators} entries, got {len(smoothness)}")
@@ -312,7 +313,8 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
                  alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
                  beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
                  delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
-                 smoothing: float = 0.15, regularization: float | None = None, smoothness: float | str = "auto",
+                 smoothing: float = 0.15, regularization: float | None = None,
+                 smoothness: float | str | Sequence = "auto",
                  floor: float = HANDOVER_FLOOR, substeps: int = 4, fading_fractions: tuple[float, float] = (0.5, 0.25),
                  turn_height: float = 0.3, handover: str = "after", transient_lead: float = 2.0,
                  prior: str = "pattern", start_prior: float | str = "auto", join_width: float = 0.1) -> FittedDMP:
@@ -347,7 +349,8 @@ def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int
             it is as weak as the samples' noise allows and biases clean or well-determined parts little (C2 joins:
             transient acceleration error 10.2 % median against 11.2 % with 0.3); 0.3 for ``lwr`` and ``ridge``. A
             number fixes one penalty for both families: 0.3 holds the periodic acceleration error of a small pure
-            sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %).
+            sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %). A pair
+            ``(periodic, transient)`` (``trajectory`` only), each a number or ``"auto"``, sets each family's own.
         floor: added to the sum of activations in the mixture (5) (:class:`~rdmp_gym.basis.Fading`), so that the
             forcing term fades to 0 where no basis function is active.
         substeps: ``trajectory`` simulates each basis function's response this many times finer than the samples.
@@ -442,17 +445,33 @@ def _check_settings(method: str, regularization: float | None, smoothness: float
         raise ValueError(f"prior: expected one of {PRIORS}, got {prior!r}")
     if not 0.0 < turn_height < 1.0:
         raise ValueError(f"turn_height: must lie in (0, 1), got {turn_height!r}")
-    if isinstance(smoothness, str):
-        if smoothness != "auto":
-            raise ValueError(f"smoothness: expected a number >= 0 or 'auto', got {smoothness!r}")
-        smoothness = (SMOOTHNESS_CANDIDATES,) * 2 if method == "trajectory" else 0.3
-    else:
-        smoothness = check_nonnegative(smoothness, "smoothness")
+    smoothness = _smoothness_setting(smoothness, method)
     check_positive(smoothing, "smoothing")
     check_positive(alpha_z, "alpha_z")
     if regularization is None:
         regularization = 1e-4 if method == "trajectory" else 1e-6
     return check_nonnegative(regularization, "regularization"), smoothness
+
+
+def _smoothness_setting(smoothness: float | str | Sequence, method: str) -> float | tuple:
+    """``smoothness`` of :func:`fit_rhythmic` as :func:`fit_trajectory` takes it: a number, or per family
+    (periodic, transient) a tuple of candidates (``"auto"``: :data:`SMOOTHNESS_CANDIDATES`)."""
+    if isinstance(smoothness, str) and smoothness == "auto":
+        return (SMOOTHNESS_CANDIDATES,) * 2 if method == "trajectory" else 0.3
+    if isinstance(smoothness, Sequence) and not isinstance(smoothness, str):
+        if method != "trajectory" or len(smoothness) != 2:
+            raise ValueError(f"smoothness: a (periodic, transient) pair needs method='trajectory' and two entries, "
+                             f"got {smoothness!r} with method={method!r}")
+        return tuple(SMOOTHNESS_CANDIDATES if isinstance(entry, str) and entry == "auto"
+                     else (_smoothness_number(entry),) for entry in smoothness)
+    return _smoothness_number(smoothness)
+
+
+def _smoothness_number(value: object) -> float:
+    if isinstance(value, str) or np.ndim(value) != 0:
+        raise ValueError(f"smoothness: expected a number >= 0, 'auto' or a (periodic, transient) pair of them, "
+                         f"got {value!r}")
+    return check_nonnegative(value, "smoothness")
 
 
 def _segmentations(demos: list[Demonstration], segmentations: Sequence[Segmentation] | None, period: float | None

@@ -99,6 +99,11 @@ def test_fit_settings_are_checked(joins):
         RhythmicDMP.fit(demo, smoothness="gcv")
     with pytest.raises(ValueError, match="smoothness"):
         RhythmicDMP.fit(demo, smoothness=-0.1)
+    for bad in ((0.3, 0.3, 0.3), (0.3, "gcv"), (0.3, -1.0)):
+        with pytest.raises(ValueError, match="smoothness"):
+            RhythmicDMP.fit(demo, smoothness=bad)
+    with pytest.raises(ValueError, match="smoothness"):
+        RhythmicDMP.fit(demo, method="ridge", smoothness=(0.3, 0.3))
     with pytest.raises(ValueError, match="start_prior"):
         RhythmicDMP.fit(demo, start_prior=-0.01)
     with pytest.raises(ValueError, match="join_width"):
@@ -132,6 +137,18 @@ def test_cross_validation_chooses_the_penalty_the_noise_needs():
         chosen, fixed = _bump_fit_errors(noise, candidates)
         assert chosen <= (1.5 if noise else 2.0) * min(fixed) + 1e-9, (noise, chosen, min(fixed))
     assert chosen < 0.5 * max(fixed)
+
+
+def test_a_smoothness_pair_sets_each_family_and_auto_keeps_cross_validation(joins):
+    demo = joins[3][1]
+    fixed = RhythmicDMP.fit(demo, smoothness=0.3)
+    assert np.allclose(RhythmicDMP.fit(demo, smoothness=(0.3, 0.3)).weights, fixed.weights)
+    assert np.allclose(RhythmicDMP.fit(demo, smoothness=("auto", "auto")).weights, RhythmicDMP.fit(demo).weights)
+    weak = RhythmicDMP.fit(demo, smoothness=("auto", 1e-3))
+    strong = RhythmicDMP.fit(demo, smoothness=("auto", 10.0))
+    roughness = [float(np.sum(np.diff(dmp.weights[:, dmp.basis.n_periodic:], 2, axis=1) ** 2))
+                 for dmp in (weak, strong)]
+    assert roughness[0] > 2.0 * roughness[1]
 
 
 def test_pattern_prior_leaves_transient_weights_that_follow_the_pattern_unpenalised():
