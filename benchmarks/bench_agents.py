@@ -98,7 +98,7 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
     parser.add_argument("--fresh", action="store_true",
                         help="ignore the runs cached by an earlier, interrupted call (default: reuse them)")
-    parser.add_argument("--reuse", action="append", default=[], type=Path, metavar="RESULTS.json",
+    parser.add_argument("--reuse", action="append", default=[], metavar="RESULTS.json",
                         help="an earlier results file (e.g. the committed one) whose runs stand for runs of this "
                              "call that match it in every setting (repeatable; local backend)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
@@ -248,9 +248,9 @@ def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Na
                  seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
     """The runs one after the other; each finished run is cached, so an interrupted call resumes where it stopped."""
     cache = SCRATCH / f"{args.name}-runs"
-    earlier = reusable_runs([json.loads(path.read_text()) for path in args.reuse], configs, names, seeds)
+    earlier = reusable_runs([json.loads(Path(path).read_text()) for path in args.reuse], configs, names, seeds)
     if args.reuse:
-        print(f"{len(earlier)} run(s) taken from {', '.join(map(str, args.reuse))}")
+        print(f"{len(earlier)} run(s) taken from {', '.join(args.reuse)}")
     runs = []
     with Evaluator(spec, args.workers) as tester:
         for name, config in tqdm(list(zip(names, configs, strict=True)), desc="runs", unit="run"):
@@ -359,6 +359,16 @@ def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
     plt.close(figure)
 
 
+def run_settings(args: argparse.Namespace, env_kwargs: dict, options: dict, seeds: np.ndarray) -> dict:
+    """The ``settings`` of the results document: the command line (less what only steers this call) and what it
+    resolved to."""
+    settings = {key: value for key, value in vars(args).items()
+                if key not in ("option", "env_option", "replot", "ray_address")}
+    settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
+                     "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
+    return settings
+
+
 def _title(settings: dict) -> str:
     fewer = "".join(f", {item.replace('=', ' ')}" for item in settings.get("agent_seeds", []))
     return (f"{settings['env_id']}: {settings['budget']} episodes, {settings['seeds']} seed(s){fewer}, "
@@ -409,10 +419,7 @@ def main() -> None:
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     rows = _summary(runs, baselines)
-    settings = {key: value for key, value in vars(args).items()
-                if key not in ("option", "env_option", "replot", "ray_address")}
-    settings.update({"env_kwargs": env_kwargs, "options": options, "cpus": os.cpu_count(),
-                     "final_test_seeds": seeds.tolist(), "success_target": SUCCESS_TARGET})
+    settings = run_settings(args, env_kwargs, options, seeds)
     document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs,
                 "test_contexts": np.asarray(observations).tolist()}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")

@@ -2,6 +2,7 @@
 results and the code versions."""
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from bench_agents import _cache_key, _labels, _seed_counts, code_versions, reusable_runs
+from bench_agents import _cache_key, _labels, _parse, _seed_counts, code_versions, reusable_runs, run_settings
 from rdmp_gym.agents.training import TrainConfig
 
 
@@ -62,3 +63,10 @@ def test_earlier_runs_stand_only_for_configs_that_match_every_setting():
     assert reusable_runs([matching], [config], ["plain"], np.array([7, 9])) == {}
     assert reusable_runs([_document(config.options, budget=6)], [config], ["plain"], seeds) == {}
     assert reusable_runs([_document({**config.options, "sigma": 0.3})], [config], ["plain"], seeds) == {}
+
+
+def test_the_settings_of_a_call_that_reuses_results_are_json(monkeypatch):
+    monkeypatch.setattr(sys, "argv", ["bench_agents.py", "--agents", "bbrl", "--reuse", "results/a.json",
+                                      "--reuse", "results/b.json"])
+    settings = run_settings(_parse(), {}, {"bbrl": {}}, np.arange(2))
+    assert json.loads(json.dumps(settings))["reuse"] == ["results/a.json", "results/b.json"]
