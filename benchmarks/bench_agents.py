@@ -102,6 +102,9 @@ def _parse() -> argparse.Namespace:
                         help="an earlier results file (e.g. the committed one) whose runs stand for runs of this "
                              "call that match it in every setting (repeatable; local backend)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
+    parser.add_argument("--markdown", action="store_true",
+                        help="also print the table in Markdown, with the episodes to 0.5 / 0.8 / 0.9 validation "
+                             "success")
     parser.add_argument("--update-baselines", action="store_true",
                         help="re-evaluate the no-learning rows (imitation, coupling) into results/<name>.json, "
                              "keeping its runs")
@@ -292,8 +295,8 @@ def _summary(runs: list[dict], baselines: dict[str, dict]) -> list[dict]:
     return rows
 
 
-def _cell(entry: dict) -> str:
-    return f"{entry['estimate']:.3f} [{entry['low']:.3f}, {entry['high']:.3f}]"
+def _cell(entry: dict, digits: int = 3) -> str:
+    return f"{entry['estimate']:.{digits}f} [{entry['low']:.{digits}f}, {entry['high']:.{digits}f}]"
 
 
 def _print(rows: list[dict], settings: dict) -> None:
@@ -311,12 +314,29 @@ def _print(rows: list[dict], settings: dict) -> None:
           f"env {settings['env_id']})")
 
 
-def _report(document: dict, folder: Path, name: str) -> None:
+def markdown_table(rows: list[dict], field: dict) -> str:
+    """The summary ``rows`` as a Markdown table, with each learner's episodes to the validation success levels of
+    the field report ``field`` (median over the seeds that reach it, and how many do)."""
+    lines = ["| policy | test success rate | test coverage | jerk / imitation | test return | "
+             "val. success 0.5 / 0.8 / 0.9 (median episodes, seeds) |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        levels = field["agents"].get(r["agent"], {}).get("episodes_to", {})
+        reached = " / ".join(f"{'-' if e['median'] is None else int(e['median'])} ({e['reached']}/{r['n']})"
+                             for e in levels.values())
+        cells = [_cell(r[metric], digits) for metric, digits in
+                 (("success", 2), ("coverage", 3), ("jerk_ratio", 2), ("returns", 3))]
+        lines.append(f"| `{r['agent']}` ({r['n']} {r['over']}) | {' | '.join(cells)} | {reached} |")
+    return "\n".join(lines)
+
+
+def _report(document: dict, folder: Path, name: str, markdown: bool = False) -> None:
     """Print the table, draw ``<name>.png`` and write the field report (``<name>_field.json/.png``) in ``folder``."""
     title = _title(document["settings"])
     _print(document["summary"], document["settings"])
     _plot(document["runs"], document["summary"], folder / f"{name}.png", title)
     field = write_field_report(document, folder, name, title)
+    if markdown:
+        print(markdown_table(document["summary"], field))
     hardest = ", ".join(f"{h['index']} ({h['success']:.2f})" for h in field["hardest"]) or "none"
     print(f"test contexts that {field['best']} solves in fewer than half of its seeds (index, share): {hardest}")
 
@@ -392,7 +412,7 @@ def main() -> None:
             document.pop("imitation", None)
             document["summary"] = _summary(document["runs"], document["baselines"])
             path.write_text(json.dumps(document, indent=1) + "\n")
-        _report(document, RESULTS, args.name)
+        _report(document, RESULTS, args.name, args.markdown)
         return
     env_kwargs = {key: _value(value) for key, value in (item.partition("=")[::2] for item in args.env_option)}
     options = _options(args)
@@ -423,7 +443,7 @@ def main() -> None:
     document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs,
                 "test_contexts": np.asarray(observations).tolist()}
     (RESULTS / f"{args.name}.json").write_text(json.dumps(document, indent=1) + "\n")
-    _report(document, RESULTS, args.name)
+    _report(document, RESULTS, args.name, args.markdown)
     for commit, names in code_versions(runs).items():
         print(f"code {commit}: {len(names)} run(s)")
     print(f"wrote {RESULTS / (args.name + '.json')}, {args.name}.png and {args.name}_field.json/.png")

@@ -10,7 +10,16 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from bench_agents import _cache_key, _labels, _parse, _seed_counts, code_versions, reusable_runs, run_settings
+from bench_agents import (
+    _cache_key,
+    _labels,
+    _parse,
+    _seed_counts,
+    code_versions,
+    markdown_table,
+    reusable_runs,
+    run_settings,
+)
 from rdmp_gym.agents.training import TrainConfig
 
 
@@ -70,3 +79,18 @@ def test_the_settings_of_a_call_that_reuses_results_are_json(monkeypatch):
                                       "--reuse", "results/b.json"])
     settings = run_settings(_parse(), {}, {"bbrl": {}}, np.arange(2))
     assert json.loads(json.dumps(settings))["reuse"] == ["results/a.json", "results/b.json"]
+
+
+def test_markdown_table_has_a_row_per_policy_with_its_episodes_to_each_level():
+    entry = {"estimate": 0.5, "low": 0.25, "high": 0.75}
+    rows = [{"agent": "imitation", "n": 50, "over": "contexts", "success": entry, "coverage": entry,
+             "jerk_ratio": entry, "returns": entry},
+            {"agent": "bbrl", "n": 3, "over": "seeds", "success": entry, "coverage": entry, "jerk_ratio": entry,
+             "returns": entry}]
+    levels = {"0.5": {"reached": 3, "median": 400.0}, "0.8": {"reached": 1, "median": 900.0},
+              "0.9": {"reached": 0, "median": None}}
+    lines = markdown_table(rows, {"agents": {"bbrl": {"episodes_to": levels}}}).splitlines()
+    assert len(lines) == 4 and all(line.count("|") == 7 for line in lines)
+    assert lines[3] == ("| `bbrl` (3 seeds) | 0.50 [0.25, 0.75] | 0.500 [0.250, 0.750] | 0.50 [0.25, 0.75] | "
+                        "0.500 [0.250, 0.750] | 400 (3/3) / 900 (1/3) / - (0/3) |")
+    assert lines[2].endswith("|  |")
