@@ -100,7 +100,7 @@ def _parse() -> argparse.Namespace:
                         help="ignore the runs cached by an earlier, interrupted call (default: reuse them)")
     parser.add_argument("--reuse", action="append", default=[], metavar="RESULTS.json",
                         help="an earlier results file (e.g. the committed one) whose runs stand for runs of this "
-                             "call that match it in every setting (repeatable; local backend)")
+                             "call that match it in every setting (repeatable; local backend; also with --fresh)")
     parser.add_argument("--replot", action="store_true", help="redraw the figure and table from results/<name>.json")
     parser.add_argument("--markdown", action="store_true",
                         help="also print the table in Markdown, with the episodes to 0.5 / 0.8 / 0.9 validation "
@@ -258,7 +258,7 @@ def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Na
     with Evaluator(spec, args.workers) as tester:
         for name, config in tqdm(list(zip(names, configs, strict=True)), desc="runs", unit="run"):
             path = cache / f"{name}-{config.seed}.json"
-            run = None if args.fresh else _cached_run(config, path, seeds) or earlier.get((name, config.seed))
+            run = (None if args.fresh else _cached_run(config, path, seeds)) or earlier.get((name, config.seed))
             if run is None:
                 run = _run_job(config, scratch, tester, seeds, observations, reference_jerk)
                 _store_run(config, path, seeds, run)
