@@ -81,11 +81,12 @@ def test_the_covariance_stays_positive_definite_and_smooth():
     assert np.corrcoef(weights[:, 0], weights[:, 1])[0, 1] > 0.5
 
 
-def test_resume_is_exact_and_the_state_gives_the_policy():
-    learner = _learner()
+@pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}])
+def test_resume_is_exact_and_the_state_gives_the_policy(options):
+    learner = _learner(**options)
     _run(learner, 3)
     state = learner.state_dict()
-    twin = _learner(seed=99)
+    twin = _learner(seed=99, **options)
     twin.load_state_dict(state)
     contexts = np.random.default_rng(7).uniform(-1, 1, (10, 2))
     np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
@@ -104,6 +105,14 @@ def test_bad_options_and_inputs_raise_clear_errors():
         _learner(rank=-1)
     with pytest.raises(ValueError, match="credit"):
         _learner(credit="stepwise")
+    with pytest.raises(ValueError, match="baseline"):
+        _learner(baseline="mlp")
+    with pytest.raises(ValueError, match="history"):
+        _learner(baseline="network", history=0)
+    networked = _learner(baseline="network")
+    _run(networked, 2)
+    with pytest.raises(ValueError, match="state"):
+        _learner().load_state_dict(networked.state_dict())
     with pytest.raises(ValueError, match="space"):
         make_learner("bbrl", np.zeros(N), 10, np.random.default_rng(0))
     learner = _learner()
@@ -145,3 +154,32 @@ def test_groups_leave_the_other_dimensions_at_the_start_action():
         other.load_state_dict(learner.state_dict())
     with pytest.raises(ValueError, match="groups"):
         _learner(groups="sweep")
+
+
+def test_a_predicted_context_cost_lets_the_best_sample_of_an_expensive_context_count():
+    """Contexts near 0 cost 10 more whatever the action (a cost no linear function of the context explains);
+    among them, sample 2 acted best. Over the ridge alone their samples get no weight; with the context's cost
+    predicted, sample 2 gets the most and outweighs the worse samples of the cheap contexts."""
+    contexts = np.array([[-1.0], [-0.6], [0.0], [0.0], [0.6], [1.0]])
+    quality = np.array([2.0, 3.0, 0.5, 4.0, 1.0, 2.5])               # the action's own cost
+    spike = np.where(np.abs(contexts[:, 0]) < 0.3, 10.0, 0.0)
+    costs = quality + spike
+    ridge_only, _ = sample_weights(costs, None, contexts, None, h=10.0, ridge=1.0)
+    predicted, _ = sample_weights(costs, None, contexts, None, h=10.0, ridge=1.0, predicted=spike[:, None])
+    assert ridge_only[0, 2] < 1e-3
+    assert predicted[0, 2] == predicted[0].max() and predicted[0, 3] < predicted[0, 1]
+
+
+def test_the_network_baseline_learns_a_cost_no_linear_function_of_the_context_gives():
+    """The toy's cost plus 5 wherever |s_0| > 0.6: after 30 updates the baseline network predicts the jump."""
+    learner = _learner(baseline="network", history=10, credit="episode")
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        contexts = rng.uniform(-1, 1, (10, 2))
+        actions = learner.ask(contexts)
+        costs = np.sum((actions - _target(contexts)) ** 2, axis=1) + 5.0 * (np.abs(contexts[:, 0]) > 0.6)
+        learner.tell(_batch(actions, -costs))
+    probe = np.array([[0.0, 0.0], [0.9, 0.0], [-0.9, 0.0]])
+    with torch.no_grad():
+        values = learner.value(torch.as_tensor(probe)).numpy()[:, 0]
+    assert values[1] - values[0] > 3.0 and values[2] - values[0] > 3.0

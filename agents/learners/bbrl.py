@@ -22,7 +22,11 @@ One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k
    the context gives per-step weights ``P_k(t) = exp(-h Â_k(t))`` (normalised over the samples); each action
    dimension ``i`` gets ``d_ik = sum_t a_i(t) P_k(t) / sum_t a_i(t)`` from its activation ``a_i(t)`` over time (the
    env's ``action_time_weights``), so a weight that acts early is judged by what happened from then on. Dimensions
-   that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights;
+   that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights.
+   With ``baseline="network"`` a second MLP ``V(s)`` of the cost-to-go, fitted to the last ``history`` batches
+   before this one, is subtracted first (the ridge then removes what is left, e.g. the drift of the policy): a
+   context whose cost no linear function of the context predicts (a cup right on the approach) is then judged
+   against what such contexts usually cost, not against every other context;
 2. **weighted maximum likelihood** (the M-step of MPO, Abdolmaleki et al. 2018): ``epochs`` Adam steps on
    ``1/2 sum_ik d_ik ((u_ki - mu_i(s_k)) / sigma_i)^2 / n`` for the mean network and the episode-weighted
    negative log-likelihood of the samples around the old means for ``sigma`` and ``U``;
@@ -48,10 +52,11 @@ from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
 from .contextual import SearchSpace, select_groups
 from .smooth import smooth_factor, squash, unsquash
 
-__all__ = ["BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
+__all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
 
 _DTYPE = torch.float64
 CREDITS = ("step", "episode")
+BASELINES = ("ridge", "network")
 _BUFFER = ("contexts", "samples", "costs", "traces")
 
 
@@ -75,6 +80,10 @@ class BBRLConfig:
         min_sigma: floor of each dimension's standard deviation.
         groups: comma-separated action groups that the policy sets (``""`` = every dimension); the others stay
             at the start action. Choosing them is task structure, like ``cpi2``'s gain groups.
+        baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
+            ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
+        history: batches the ``"network"`` baseline is fitted to.
+        value_epochs: Adam steps of the baseline network per update.
     """
 
     sigma: float = 0.3
@@ -91,6 +100,9 @@ class BBRLConfig:
     value_ridge: float = 1.0
     min_sigma: float = 0.01
     groups: str = ""
+    baseline: str = "ridge"
+    history: int = 20
+    value_epochs: int = 50
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
@@ -106,10 +118,14 @@ class BBRLConfig:
         check_range(self.reuse, "reuse", 1, None)
         check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
         check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+        check_choice(self.baseline, "baseline", BASELINES)
+        check_range(self.history, "history", 1, None)
+        check_range(self.value_epochs, "value_epochs", 1, None)
 
 
 def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.ndarray,
-                   time_weights: np.ndarray | None, h: float, ridge: float) -> tuple[np.ndarray, np.ndarray]:
+                   time_weights: np.ndarray | None, h: float, ridge: float,
+                   predicted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Per-dimension and episode-level weights of ``N`` samples (step 1 of the module docstring).
 
     Args:
@@ -117,18 +133,57 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
         contexts: ``[N, o]`` standardised contexts (the baselines' regressors).
         time_weights: ``[T, n]`` activation of each action dimension per control step, or None.
         h: eliteness; ridge: ridge of the baselines.
+        predicted: ``[N, T]`` (``[N, 1]`` without traces) a baseline of the cost-to-go subtracted before the
+            ridge (column 0: of the episode cost), or None.
     Returns:
         ``([n, N] or [1, N], [N])``: each row sums to 1 (``[1, N]``, the episode weights, without per-step credit).
     """
     hat = ridge_hat(np.c_[np.ones(len(costs)), contexts], ridge)
-    episode = cost_weights(costs - hat @ costs, h)
+    offset = np.zeros((len(costs), 1)) if predicted is None else np.asarray(predicted, dtype=np.float64)
+    residual = costs - offset[:, 0]
+    episode = cost_weights(residual - hat @ residual, h)
     if traces is None or time_weights is None:
         return episode[None], episode
-    to_go = cost_to_go(costs, traces)                                                   # [N, T]
+    to_go = cost_to_go(costs, traces) - offset                                          # [N, T]
     per_step = cost_weights((to_go - hat @ to_go).T, h)                                 # [T, N]
     norm = time_weights.sum(axis=0)                                                     # [n]
     per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
     return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
+
+
+def value_targets(costs: np.ndarray, traces: np.ndarray | None, credit: bool) -> np.ndarray:
+    """``[N, T]`` the cost-to-go of each step (``credit``, with traces), else ``[N, 1]`` the episode costs."""
+    return cost_to_go(costs, traces) if credit and traces is not None else np.asarray(costs, dtype=np.float64)[:, None]
+
+
+class _Value(torch.nn.Module):
+    """``V(s)``: ``[K, o]`` standardised contexts to ``[K, T]`` cost-to-go, in units of ``scale`` about ``offset``."""
+
+    def __init__(self, n_context: int, hidden: int, n_out: int) -> None:
+        super().__init__()
+        self.net = torch.nn.Sequential(torch.nn.Linear(n_context, hidden), torch.nn.Tanh(),
+                                       torch.nn.Linear(hidden, hidden), torch.nn.Tanh(), torch.nn.Linear(hidden, n_out))
+        torch.nn.init.zeros_(self.net[-1].weight)
+        torch.nn.init.zeros_(self.net[-1].bias)
+        self.register_buffer("offset", torch.zeros(n_out, dtype=_DTYPE))
+        self.register_buffer("scale", torch.ones((), dtype=_DTYPE))
+        self.to(_DTYPE)
+
+    def forward(self, contexts: torch.Tensor) -> torch.Tensor:
+        return self.offset + self.scale * self.net(contexts)
+
+    def fit(self, contexts: torch.Tensor, targets: torch.Tensor, epochs: int, learning_rate: float) -> None:
+        """``epochs`` Adam steps on the mean squared error, from the current weights; the targets' mean and
+        spread set ``offset`` and ``scale`` first."""
+        with torch.no_grad():
+            self.offset.copy_(targets.mean(dim=0))
+            self.scale.copy_(torch.clamp(targets.std(), min=1e-9) if len(targets) > 1 else torch.ones((), dtype=_DTYPE))
+        optimizer = torch.optim.Adam(self.net.parameters(), lr=learning_rate)
+        for _ in range(epochs):
+            optimizer.zero_grad()
+            loss = torch.mean(((self(contexts) - targets) / self.scale) ** 2)
+            loss.backward()
+            optimizer.step()
 
 
 class _Policy(torch.nn.Module):
@@ -205,9 +260,15 @@ class BBRL(Learner):
         self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
                               self.config.sigma, self.config.rank)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
+        #: the cost-to-go baseline network (``baseline="network"``), else None
+        self.value = (_Value(self.center.size, self.config.hidden,
+                             1 if self.time_weights is None else self.time_weights.shape[0])
+                      if self.config.baseline == "network" else None)
         self._asked: tuple[np.ndarray, np.ndarray] | None = None      # (contexts [K, o], u [K, n])
-        #: the samples of the last ``reuse`` batches: contexts [N, o], samples [N, n], costs [N], traces [N, T]
+        #: the samples of the last ``reuse`` (and ``history``) batches: contexts [N, o], samples [N, n], costs [N],
+        #: traces [N, T]
         self._buffer: list[dict[str, np.ndarray]] = []
+        self._kept = max(self.config.reuse, self.config.history) if self.value is not None else self.config.reuse
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
 
@@ -273,10 +334,14 @@ class BBRL(Learner):
         if self.time_weights is not None and traces.shape[1] != self.time_weights.shape[0]:
             raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
         self._buffer = [*self._buffer, {"contexts": x, "samples": u, "costs": batch.costs.copy(),
-                                        "traces": traces}][-self.config.reuse:]
-        data = {key: np.concatenate([b[key] for b in self._buffer]) for key in _BUFFER}
+                                        "traces": traces}][-self._kept:]
+        data = {key: np.concatenate([b[key] for b in self._buffer[-self.config.reuse:]]) for key in _BUFFER}
+        predicted = None
+        if self.value is not None:
+            with torch.no_grad():
+                predicted = self.value(torch.as_tensor(data["contexts"])).numpy()
         per_dimension, episode = sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights,
-                                                self.config.h, self.config.value_ridge)
+                                                self.config.h, self.config.value_ridge, predicted)
         torch.manual_seed(int(self.rng.integers(2**31)))
         contexts, samples = torch.as_tensor(data["contexts"]), torch.as_tensor(data["samples"])
         old = [p.detach().clone() for p in self.policy.parameters()]
@@ -287,6 +352,16 @@ class BBRL(Learner):
         self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol)
         self._mean = self.policy_actions(self.center[None])[0]
         self._asked = None
+        if self.value is not None:
+            self._fit_value()
+
+    def _fit_value(self) -> None:
+        """Fit the baseline network to the cost-to-go of the last ``history`` batches (for the next update)."""
+        recent = self._buffer[-self.config.history:]
+        contexts = torch.as_tensor(np.concatenate([b["contexts"] for b in recent]))
+        targets = np.concatenate([value_targets(b["costs"], b["traces"], self.time_weights is not None)
+                                  for b in recent])
+        self.value.fit(contexts, torch.as_tensor(targets), self.config.value_epochs, self.config.learning_rate)
 
     def _maximise_likelihood(self, contexts: torch.Tensor, samples: torch.Tensor, per_dimension: torch.Tensor,
                              episode: torch.Tensor, old_mean: torch.Tensor) -> None:
@@ -330,7 +405,9 @@ class BBRL(Learner):
         return {"parameters": {name: value.detach().numpy().copy() for name, value in self.policy.state_dict().items()},
                 "context_center": self.center.copy(), "context_scale": self.scale.copy(), **buffer,
                 "active": self.active.copy(), "fixed": self.fixed.copy(),
-                "min_sigma": float(self.config.min_sigma)}
+                "min_sigma": float(self.config.min_sigma),
+                **({} if self.value is None else {"value_parameters": {
+                    name: value.detach().numpy().copy() for name, value in self.value.state_dict().items()}})}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
         if not np.array_equal(state["active"], self.active) or np.asarray(state["fixed"]).shape != self.fixed.shape:
@@ -339,9 +416,16 @@ class BBRL(Learner):
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
         self.policy.load_state_dict(parameters)
+        if (self.value is None) != ("value_parameters" not in state):
+            raise ValueError(f"state.value_parameters: the state's baseline is not this learner's "
+                             f"({self.config.baseline!r})")
+        if self.value is not None:
+            self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
+                                        for name, value in state["value_parameters"].items()})
         columns = [state[f"buffer_{key}"] for key in _BUFFER]
-        if len({len(c) for c in columns}) != 1 or len(columns[0]) > self.config.reuse:
-            raise ValueError("state.buffer_contexts: expected as many batches in every buffer field, at most reuse")
+        if len({len(c) for c in columns}) != 1 or len(columns[0]) > self._kept:
+            raise ValueError("state.buffer_contexts: expected as many batches in every buffer field, at most "
+                             "reuse (or history)")
         self._buffer = [{key: np.asarray(value, dtype=np.float64) for key, value in zip(_BUFFER, batch, strict=True)}
                         for batch in zip(*columns, strict=True)]
         self._asked = None
