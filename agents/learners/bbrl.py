@@ -23,8 +23,8 @@ One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k
    dimension ``i`` gets ``d_ik = sum_t a_i(t) P_k(t) / sum_t a_i(t)`` from its activation ``a_i(t)`` over time (the
    env's ``action_time_weights``), so a weight that acts early is judged by what happened from then on. Dimensions
    that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights.
-   With ``baseline="network"`` a second MLP ``V(s)`` of the cost-to-go, fitted to the last ``history`` batches
-   before this one, is subtracted first (the ridge then removes what is left, e.g. the drift of the policy): a
+   With ``baseline="network"`` a second MLP ``V(s)`` of the cost-to-go, fitted to the ``history`` batches before
+   the reused ones (never to the samples it judges), is subtracted first (the ridge then removes what is left, e.g. the drift of the policy): a
    context whose cost no linear function of the context predicts (a cup right on the approach) is then judged
    against what such contexts usually cost, not against every other context;
 2. **weighted maximum likelihood** (the M-step of MPO, Abdolmaleki et al. 2018): ``epochs`` Adam steps on
@@ -82,7 +82,7 @@ class BBRLConfig:
             at the start action. Choosing them is task structure, like ``cpi2``'s gain groups.
         baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
             ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
-        history: batches the ``"network"`` baseline is fitted to.
+        history: batches the ``"network"`` baseline is fitted to (those before the ``reuse`` batches it judges).
         value_epochs: Adam steps of the baseline network per update.
     """
 
@@ -268,7 +268,7 @@ class BBRL(Learner):
         #: the samples of the last ``reuse`` (and ``history``) batches: contexts [N, o], samples [N, n], costs [N],
         #: traces [N, T]
         self._buffer: list[dict[str, np.ndarray]] = []
-        self._kept = max(self.config.reuse, self.config.history) if self.value is not None else self.config.reuse
+        self._kept = self.config.reuse + (self.config.history - 1 if self.value is not None else 0)
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
 
@@ -356,11 +356,14 @@ class BBRL(Learner):
             self._fit_value()
 
     def _fit_value(self) -> None:
-        """Fit the baseline network to the cost-to-go of the last ``history`` batches (for the next update)."""
-        recent = self._buffer[-self.config.history:]
-        contexts = torch.as_tensor(np.concatenate([b["contexts"] for b in recent]))
+        """Fit the baseline network, for the next update, to the cost-to-go of ``history`` batches older than the
+        next update's samples (a network fitted to a sample would explain its own cost away)."""
+        older = self._buffer[: len(self._buffer) - (self.config.reuse - 1)][-self.config.history:]
+        if not older:
+            return
+        contexts = torch.as_tensor(np.concatenate([b["contexts"] for b in older]))
         targets = np.concatenate([value_targets(b["costs"], b["traces"], self.time_weights is not None)
-                                  for b in recent])
+                                  for b in older])
         self.value.fit(contexts, torch.as_tensor(targets), self.config.value_epochs, self.config.learning_rate)
 
     def _maximise_likelihood(self, contexts: torch.Tensor, samples: torch.Tensor, per_dimension: torch.Tensor,
