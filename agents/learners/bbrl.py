@@ -24,9 +24,9 @@ One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k
    env's ``action_time_weights``), so a weight that acts early is judged by what happened from then on. Dimensions
    that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights.
    With ``baseline="network"`` a second MLP ``V(s)`` of the cost-to-go, fitted to the ``history`` batches before
-   the reused ones (never to the samples it judges), is subtracted first (the ridge then removes what is left, e.g. the drift of the policy): a
-   context whose cost no linear function of the context predicts (a cup right on the approach) is then judged
-   against what such contexts usually cost, not against every other context;
+   the reused ones (never to the samples it judges), is subtracted first (the ridge then removes what is left,
+   e.g. the drift of the policy): a context whose cost no linear function of the context predicts (a cup right on
+   the approach) is then judged against what such contexts usually cost, not against every other context;
 2. **weighted maximum likelihood** (the M-step of MPO, Abdolmaleki et al. 2018): ``epochs`` Adam steps on
    ``1/2 sum_ik d_ik ((u_ki - mu_i(s_k)) / sigma_i)^2 / n`` for the mean network and the episode-weighted
    negative log-likelihood of the samples around the old means for ``sigma`` and ``U``;
