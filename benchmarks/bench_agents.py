@@ -200,23 +200,27 @@ def _store_run(config: TrainConfig, path: Path, test_seeds: np.ndarray, run: dic
     path.write_text(json.dumps({"key": _cache_key(config, test_seeds), "run": run}))
 
 
+def _same_protocol(saved: dict, config: TrainConfig, test_seeds: np.ndarray) -> bool:
+    """Whether a results document's ``settings`` trained and tested as ``config`` on ``test_seeds`` does."""
+    return (saved["env_id"] == config.env_id and saved["env_kwargs"] == config.env_kwargs
+            and saved["budget"] // saved["rollouts"] == config.updates and saved["rollouts"] == config.rollouts
+            and saved["val_contexts"] == config.eval_episodes and saved["eval_every"] == config.eval_every
+            and saved["final_test_seeds"] == test_seeds.tolist())
+
+
 def reusable_runs(documents: list[dict], configs: list[TrainConfig], names: list[str],
                   test_seeds: np.ndarray) -> dict[tuple[str, int], dict]:
     """``{(label, seed): run}`` from earlier results documents for the configs they match in every setting
     (learner, budget, rollouts, validation protocol, env, test contexts and the learner's options)."""
     found: dict[tuple[str, int], dict] = {}
     for document in documents:
-        saved = document["settings"]
-        learners = _labels(saved["agents"])
+        learners = _labels(document["settings"]["agents"])
+        runs = {(run["agent"], run["seed"]): run for run in document["runs"]}
         for name, config in zip(names, configs, strict=True):
-            same = (learners.get(name) == config.agent and saved["env_id"] == config.env_id
-                    and saved["budget"] // saved["rollouts"] == config.updates
-                    and saved["rollouts"] == config.rollouts and saved["val_contexts"] == config.eval_episodes
-                    and saved["eval_every"] == config.eval_every and saved["env_kwargs"] == config.env_kwargs
-                    and saved["final_test_seeds"] == test_seeds.tolist())
-            for run in document["runs"] if same else []:
-                if run["agent"] == name and run["seed"] == config.seed and run["options"] == config.options:
-                    found.setdefault((name, config.seed), run)
+            run = runs.get((name, config.seed))
+            if (run is not None and learners.get(name) == config.agent and run["options"] == config.options
+                    and _same_protocol(document["settings"], config, test_seeds)):
+                found.setdefault((name, config.seed), run)
     return found
 
 

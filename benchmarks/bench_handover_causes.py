@@ -40,7 +40,7 @@ from scipy.interpolate import BSpline
 from rdmp_gym import RhythmicDMP, segment
 from rdmp_gym.fitting import FADE_BEFORE_T, fit_rhythmic, trajectory_design
 from rdmp_gym.segmentation import Segmentation
-from rdmp_gym.smoothness import draw_test_demonstrations, finite_derivatives, handover_figures
+from rdmp_gym.smoothness import draw_test_demonstrations, handover_figures, motion_metrics
 
 RATE = 500.0
 ORACLE_SMOOTHNESS = tuple(float(value) for value in np.logspace(-3.0, 1.0, 9))
@@ -99,19 +99,17 @@ def start_error(signal, lead: float) -> float:
 
 def transient_error(signal, Y: np.ndarray, t: np.ndarray, begin: float = 0.0) -> float:
     """Acceleration error of ``Y [len(t), d]`` over ``[begin, T)`` relative to the truth's RMS there."""
-    acceleration = signal.derivatives(t)[2]
+    position, _, acceleration, jerk = signal.derivatives(t)
     span = (t >= begin) & (t < signal.transient_length)
-    error = finite_derivatives(Y, t[1] - t[0])[1] - acceleration
-    return float(np.sqrt(np.sum(error[span] ** 2) / np.sum(acceleration[span] ** 2)))
+    return motion_metrics(Y, (position, acceleration, jerk), t[1] - t[0], span)["acceleration"]
 
 
 def best_penalty(signal, demo) -> dict:
     """The fit of least transient acceleration error over :data:`ORACLE_SMOOTHNESS` x :data:`ORACLE_RIDGE`."""
     t = np.arange(0.0, signal.transient_length + 0.5, 1e-3)
-    fits = [(transient_error(signal, dmp.rollout(t), t), value, ridge, dmp)
-            for value in ORACLE_SMOOTHNESS for ridge in ORACLE_RIDGE
-            for dmp in [RhythmicDMP.fit(demo, smoothness=("auto", value), regularization=ridge)]]
-    _, value, ridge, dmp = min(fits, key=lambda fit: fit[0])
+    fits = ((RhythmicDMP.fit(demo, smoothness=("auto", value), regularization=ridge), value, ridge)
+            for value in ORACLE_SMOOTHNESS for ridge in ORACLE_RIDGE)
+    dmp, value, ridge = min(fits, key=lambda fit: transient_error(signal, fit[0].rollout(t), t))
     figures = handover_figures(signal, dmp, demo.duration)
     return {"smoothness": value, "ridge": ridge, **{key: figures[key] for key in
                                                     ("transient acceleration", "transient jerk", "off-path peak")}}
@@ -153,12 +151,13 @@ def main() -> None:
         spread, narrowest, widest = centre_timing(before)
         grid = np.arange(0.0, signal.transient_length + 0.5, 1e-3)
         smoother, order = best_smoother(signal, demo)
+        default = RhythmicDMP.fit(demo)
         rows.append({
             "join": index, "T": signal.transient_length, "T estimated": estimated.transient_length,
             "capacity before": capacity(signal, FADE_BEFORE_T), "capacity default": capacity(signal, {}),
             "before": handover_figures(signal, before, demo.duration)["transient acceleration"],
             "before, true T": handover_figures(signal, given, demo.duration)["transient acceleration"],
-            "default": handover_figures(signal, RhythmicDMP.fit(demo), demo.duration)["transient acceleration"],
+            "default": handover_figures(signal, default, demo.duration)["transient acceleration"],
             "default, true T": handover_figures(signal, RhythmicDMP.fit(demo, segmentations=[truth]),
                                                 demo.duration)["transient acceleration"],
             "default, clean": handover_figures(signal, RhythmicDMP.fit(clean), demo.duration)["transient acceleration"],
@@ -168,7 +167,7 @@ def main() -> None:
             "start error, lead 0": start_error(signal, 0.0), "start error, lead 1": start_error(signal, 1.0),
             "best penalty": best_penalty(signal, demo), "best smoother, from 0.3 s": smoother,
             "best smoother order": order,
-            "default, from 0.3 s": transient_error(signal, RhythmicDMP.fit(demo).rollout(grid), grid, SMOOTHER_FROM)})
+            "default, from 0.3 s": transient_error(signal, default.rollout(grid), grid, SMOOTHER_FROM)})
     print(f"{'join':>4} {'T / est (s)':>12} {'capacity % before/default':>26} {'before % est/true T':>20} "
           f"{'default % noisy/true T/clean/no penalty':>39} {'spacing spread':>14} {'width s min/max':>16} "
           f"{'start m/s2 lead 0/1':>20} {'best penalty % (jerk x, off-path x)':>36} "

@@ -221,8 +221,7 @@ def cross_validation_score(normal_matrix: np.ndarray, gram: np.ndarray, moments:
 def _smoothness_grids(smoothness: float | Sequence, n_operators: int) -> list[tuple[float, ...]]:
     """Per penalty operator, the candidate weights: a number applies to every operator; a sequence gives each
     operator a number or a sequence of candidates."""
-    if not isinstance(smoothness, (Sequence, np.ndarray)) or (isinstance(smoothness, np.ndarray)
-                                                               and smoothness.ndim == 0):
+    if np.isscalar(smoothness) or getattr(smoothness, "ndim", 1) == 0:
         return [(float(smoothness),)] * n_operators
     if len(smoothness) != n_operators:
         raise ValueError(f"smoothness: expected a number or {n_operators} entries, got {len(smoothness)}")

@@ -419,10 +419,7 @@ class BBRL(Learner):
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
         self.policy.load_state_dict(parameters)
-        if (self.value is None) != ("value_parameters" not in state):
-            raise ValueError(f"state.value_parameters: the state's baseline is not this learner's "
-                             f"({self.config.baseline!r})")
-        if self.value is not None:
+        if self.value is not None:             # a state of the other baseline fails check_state_like's keys
             self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                                         for name, value in state["value_parameters"].items()})
         columns = [state[f"buffer_{key}"] for key in _BUFFER]
