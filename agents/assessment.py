@@ -111,7 +111,8 @@ def _summary(scores: PolicyScores) -> dict[str, Any]:
             "success_rate": mean(scores.success), "jerk_ratio_mean": mean(scores.jerk_ratio),
             "intervals": intervals, "returns": clean(scores.returns), "coverage": clean(scores.coverage),
             "force_in_band": clean(scores.force_in_band), "valid": [bool(v) for v in scores.valid],
-            "success": [bool(v) for v in scores.success], "jerk_ratio": clean(scores.jerk_ratio)}
+            "success": [bool(v) for v in scores.success], "jerk_ratio": clean(scores.jerk_ratio),
+            "failures": None if scores.failures is None else [str(v) for v in scores.failures]}
 
 
 def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, policy: str = "last",

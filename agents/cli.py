@@ -347,6 +347,19 @@ def _print_comparison(result: dict[str, Any]) -> None:
 
     print(f"paired gain over the imitation on the same {len(result['trained']['success'])} test contexts (mean, "
           f"95 % CI): coverage {paired_gain('coverage')}, success {paired_gain('success')}")
+    for name in ("imitation", "trained"):
+        if result[name].get("failures") is not None:
+            print(f"{name} fails on: {_failure_text(result[name]['failures'])}")
+
+
+def _failure_text(failures: list[str]) -> str:
+    """``"cup 2 (contexts 3, 7), coverage 1 (context 3)"``: each missed success criterion, where it was missed."""
+    where: dict[str, list[int]] = {}
+    for index, entry in enumerate(failures):
+        for cause in filter(None, entry.split("+")):
+            where.setdefault(cause, []).append(index)
+    return ", ".join(f"{cause} {len(found)} (context{'s' if len(found) > 1 else ''} "
+                     f"{', '.join(map(str, found))})" for cause, found in where.items()) or "none"
 
 
 def _command_main(args: argparse.Namespace) -> None:

@@ -153,7 +153,9 @@ class Evaluator:
                             force_in_band=np.array([r["force_in_band"] for r in results]),
                             valid=np.array([r["valid"] for r in results]), seeds=seeds,
                             success=None if any(r["success"] is None for r in results)
-                            else np.array([r["success"] for r in results]))
+                            else np.array([r["success"] for r in results]),
+                            failures=None if any(r.get("failures") is None for r in results)
+                            else np.array([r["failures"] for r in results]))
 
     def close(self) -> None:
         """Stop the workers and close the environment."""

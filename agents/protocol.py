@@ -111,6 +111,8 @@ class PolicyScores:
     valid: np.ndarray
     success: np.ndarray
     jerk_ratio: np.ndarray
+    #: the success criteria missed in each context (``"cup+coverage"``, ``""`` for a success), or None
+    failures: np.ndarray | None = None
 
     def means(self) -> dict[str, float]:
         """Mean of every metric over the contexts (the numbers one seed contributes to a table)."""
@@ -136,7 +138,7 @@ def evaluate_actions(evaluator: Any, actions: np.ndarray, seeds: np.ndarray, ref
         reference_jerk = np.array([path_jerk(env, np.zeros(actions.shape[1]), s, options) for s in seeds])
     return PolicyScores(seeds=seeds, returns=batch.returns, coverage=batch.coverage, force_in_band=batch.force_in_band,
                         valid=batch.valid.astype(bool), success=success(batch),
-                        jerk_ratio=jerk / np.maximum(reference_jerk, 1e-300))
+                        jerk_ratio=jerk / np.maximum(reference_jerk, 1e-300), failures=batch.failures)
 
 
 def iqm(values: np.ndarray) -> float:

@@ -113,7 +113,9 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
     """The numbers the agents use from one episodic ``step``: return, cost trace ``[T]`` and task metrics.
 
     ``coverage`` and ``force_in_band_fraction`` are NaN for tasks that have no dirt or contact;
-    ``success`` is ``info["is_success"]``, None where the env does not give it.
+    ``success`` is ``info["is_success"]``, None where the env does not give it; ``failures`` the success
+    criteria the episode missed (``info["failure_causes"]`` joined by ``"+"``, ``""`` for a success), None where
+    the env does not name them.
     """
     if "cost_trace" not in info:
         raise ValueError("info: the env returned no 'cost_trace' (per-control-step cost), which the agents need")
@@ -122,7 +124,8 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
             "coverage": float(info.get("coverage", np.nan)),
             "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
             "valid": bool(info.get("valid", True)),
-            "success": None if "is_success" not in info else bool(info["is_success"])}
+            "success": None if "is_success" not in info else bool(info["is_success"]),
+            "failures": None if "failure_causes" not in info else "+".join(info["failure_causes"])}
 
 
 def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None

@@ -341,6 +341,12 @@ def _report(document: dict, folder: Path, name: str, markdown: bool = False) -> 
     field = write_field_report(document, folder, name, title)
     if markdown:
         print(markdown_table(document["summary"], field))
+    for agent, entry in field["agents"].items():
+        counts = entry["failure_causes"]
+        if counts["runs"]:
+            causes = ", ".join(f"{cause} {n}" for cause, n in counts["causes"].items()) or "none"
+            print(f"{agent}: {counts['failures']} failed (seed, test context) pairs in {counts['runs']} run(s) that "
+                  f"name their causes: {causes}")
     hardest = ", ".join(f"{h['index']} ({h['success']:.2f})" for h in field["hardest"]) or "none"
     print(f"test contexts that {field['best']} solves in fewer than half of its seeds (index, share): {hardest}")
 

@@ -8,6 +8,9 @@
 - the probability that a run of the best learner succeeds on a test context where a run of another does not
   (``P(X > Y)`` on per-context success, ties one half);
 - episodes until the validation success rate first reaches 0.5, 0.8 and 0.9 (median over the seeds that do);
+- why the final policies fail: per learner, how many (seed, test context) pairs miss each success criterion
+  (the env's ``failure_causes``: coverage, force, cup, collisions, joint acceleration or limit), from the runs
+  that recorded them;
 - the best learner's hardest test contexts: those it solves in fewer than half of its seeds, with their context
   vectors (where the document holds them), to read what they share.
 
@@ -82,6 +85,17 @@ def hardest_contexts(success: np.ndarray, test_seeds: list[int], contexts: list 
              "context": None if contexts is None else [round(float(v), 4) for v in contexts[i]]} for i in order]
 
 
+def failure_counts(runs: list[dict]) -> dict:
+    """``{"runs": R, "failures": F, "causes": {cause: pairs}}`` over the runs whose test results name the missed
+    criteria (a pair may miss several, so the causes can sum to more than ``F``), most frequent first."""
+    named = [r["test"]["failures"] for r in runs if r["test"].get("failures") is not None]
+    causes: dict[str, int] = {}
+    for cause in (c for failures in named for entry in failures if entry for c in entry.split("+")):
+        causes[cause] = causes.get(cause, 0) + 1
+    return {"runs": len(named), "failures": sum(bool(entry) for failures in named for entry in failures),
+            "causes": dict(sorted(causes.items(), key=lambda item: -item[1]))}
+
+
 def field_summary(document: dict) -> dict:
     """Every number of the module docstring, per agent; ``best`` is the agent with the highest IQM test success."""
     runs, agents = document["runs"], _agents(document["runs"])
@@ -101,6 +115,7 @@ def field_summary(document: dict) -> dict:
             "test_coverage": stratified_interval(coverage).to_dict(),
             "curve_episodes": episodes.tolist(), "curve": curve_intervals(values).tolist(),
             "coverage_profile": performance_profile(coverage, THRESHOLDS).tolist(),
+            "failure_causes": failure_counts(group),
             "episodes_to": {t: {"reached": sum(e is not None for e in v),
                                 "median": float(np.median([e for e in v if e is not None])) if any(
                                     e is not None for e in v) else None} for t, v in reached.items()}}

@@ -25,7 +25,7 @@ env cannot: the bounded action keeps the path within ``max_shift`` of the imitat
 target is clipped to the workspace. A penetration of the robot's body or the table beyond the episodic
 limit ends the episode (``terminated``) with the episodic ``invalid`` reward as its return; a diverged
 simulation ends it with the ``unstable`` charge. The last step's info has the episodic statistics,
-``is_success`` (same thresholds) and the cost traces (``cost_trace``, ``cost_terms``).
+``is_success`` (same thresholds), ``failure_causes`` and the cost traces (``cost_trace``, ``cost_terms``).
 
 Observation (float32, 26): ``cos phi, sin phi, r`` of the canonical system, the sponge position (nominal
 table frame, m), its face normal (table frame), its velocity (m/s), the wrist force along the control
@@ -46,7 +46,7 @@ from rdmp_gym import DMPStepper
 from .context import SIZE as CONTEXT_SIZE
 from .controller import ForceAdaptation
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .wipe_env import WORKSPACE_HIGH, WORKSPACE_LOW, ArmarWipeEnv, episode_success
+from .wipe_env import WORKSPACE_HIGH, WORKSPACE_LOW, ArmarWipeEnv, outcome
 from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
 __all__ = ["ArmarWipeStepEnv"]
@@ -310,10 +310,11 @@ class ArmarWipeStepEnv(gym.Env):
         if last:
             stats = task._statistics(trace, smooth)
             valid = not penetrated
+            success, causes = outcome(stats, valid, unstable, task.success_joint_accel)
             info.update(stats)
             info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
-                         "is_success": valid and not unstable and episode_success(stats, task.success_joint_accel)})
+                         "is_success": success, "failure_causes": causes})
         return terms, info
 
     def _sponge_position(self) -> np.ndarray:

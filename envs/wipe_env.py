@@ -18,7 +18,8 @@ One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
    ``info["cost_trace"]`` gives the per-control-step cost for PI² (it sums to ``-reward``;
    ``info["cost_terms"]`` splits it by term);
    ``info["is_success"]``: coverage >= 0.95, force in band >= 90 % of the wiping phase, no collision
-   (arm on the table, arm on the robot's body), the cup neither touched nor moved, a valid episode.
+   (arm on the table, arm on the robot's body), the cup neither touched nor moved, a valid episode;
+   ``info["failure_causes"]`` names the criteria an episode misses (:func:`failure_causes`, empty for a success).
 
 Rendering: ``render_mode="rgb_array"`` renders offscreen with ``mujoco.Renderer``; on a headless
 machine set ``MUJOCO_GL=egl`` (or ``osmesa``) before importing mujoco. Because an episode is a single
@@ -58,7 +59,7 @@ from .versions import TASK_VERSIONS, TaskVersion
 from .viewer import HumanViewer
 from .wiping import DirtField, WipeTrace, simulate_wipe
 
-__all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success"]
+__all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes", "outcome"]
 
 logger = logging.getLogger(__name__)
 
@@ -75,17 +76,33 @@ DEFAULT_GROUPS = ("periodic", "transient", "initial", "amplitude", "approach")
 SWEEP_END_MARGIN = 0.5
 
 
+def failure_causes(stats: Mapping[str, Any], max_joint_accel: float | None = None) -> tuple[str, ...]:
+    """The ``is_success`` criteria that an episode's statistics (``ArmarWipeEnv``'s info) miss, in the order
+    ``"coverage"``, ``"force"``, ``"arm collision"``, ``"self-collision"``, ``"cup"`` (touched or moved), and with
+    ``max_joint_accel`` (rad/s², executable success) ``"joint acceleration"`` (the peak above it) and
+    ``"joint limit"``; empty for a success (validity is checked apart)."""
+    met = {"coverage": stats["coverage"] >= SUCCESS_COVERAGE,
+           "force": stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND,
+           "arm collision": stats["arm_collision_fraction"] == 0.0,
+           "self-collision": stats["self_collision_fraction"] == 0.0,
+           "cup": stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT}
+    if max_joint_accel is not None:
+        met["joint acceleration"] = stats["peak_joint_accel"] <= max_joint_accel
+        met["joint limit"] = stats["joint_limit_fraction"] == 0.0
+    return tuple(name for name, ok in met.items() if not ok)
+
+
 def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = None) -> bool:
-    """Whether an episode's statistics (``ArmarWipeEnv``'s info) meet the ``is_success`` thresholds: coverage,
-    force in band, no arm or self-collision, the cup neither touched nor moved (validity is checked apart);
-    with ``max_joint_accel`` (rad/s²) also executable: the peak joint acceleration within it, no joint at its
-    limit."""
-    wiped = bool(stats["coverage"] >= SUCCESS_COVERAGE and stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND
-                 and stats["arm_collision_fraction"] == 0.0 and stats["self_collision_fraction"] == 0.0
-                 and stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT)
-    if max_joint_accel is None:
-        return wiped
-    return wiped and stats["peak_joint_accel"] <= max_joint_accel and stats["joint_limit_fraction"] == 0.0
+    """Whether an episode's statistics meet the ``is_success`` thresholds: no :func:`failure_causes`."""
+    return not failure_causes(stats, max_joint_accel)
+
+
+def outcome(stats: Mapping[str, Any], valid: bool, unstable: bool, max_joint_accel: float | None
+            ) -> tuple[bool, tuple[str, ...]]:
+    """``(is_success, causes)`` of an episode: ``("invalid",)`` or ``("unstable",)`` first, else
+    :func:`failure_causes`."""
+    causes = ("invalid",) if not valid else ("unstable",) if unstable else failure_causes(stats, max_joint_accel)
+    return not causes, causes
 
 
 @lru_cache(maxsize=16)
@@ -631,9 +648,10 @@ class ArmarWipeEnv(gym.Env):
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool) -> tuple[float, dict]:
         reward = sum(terms.values())
-        success = valid and not unstable and episode_success(info, self.success_joint_accel)
+        success, causes = outcome(info, valid, unstable, self.success_joint_accel)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
-                     "unstable": unstable, "is_success": bool(success), "n_cells": len(self._cells_world)})
+                     "unstable": unstable, "is_success": success, "failure_causes": causes,
+                     "n_cells": len(self._cells_world)})
         return float(reward), info
 
     # ------------------------------------------------------------------ helpers

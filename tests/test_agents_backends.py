@@ -186,3 +186,5 @@ def test_bench_agents_on_ray_writes_the_result_file_of_the_local_run(tmp_path):
     assert len(runs["local"]) == 2 and runs["ray"] == runs["local"]
     assert documents["ray"]["summary"] == documents["local"]["summary"]
     assert runs["local"][0]["curve"] != runs["local"][1]["curve"]          # two seeds, two real runs
+    for run in runs["ray"]:                                                # each test context says why it failed
+        assert [cause == "" for cause in run["test"]["failures"]] == run["test"]["success"]

@@ -46,6 +46,8 @@ def test_imitation_rollouts_wipe_and_are_repeatable():
         batch = evaluator.run(np.zeros((3, n)), np.array([0, 1, 0]))
         assert evaluator.env.unwrapped.action_time_weights().shape == (batch.cost_traces.shape[1], n)
     assert batch.valid.all()
+    assert [cause == "" for cause in batch.failures] == batch.success.tolist()
+    assert all(cause in ("", "coverage", "force") for cause in batch.failures)      # no cup, no collision here
     assert np.all(batch.coverage > 0.6) and np.all(batch.force_in_band > 0.8)
     assert batch.returns[0] == batch.returns[2]                  # same seed, same context, same episode
     np.testing.assert_allclose(-batch.cost_traces.sum(axis=1), batch.returns, atol=1e-6)
@@ -89,6 +91,7 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
             "--env-option", "n_periods=2", "--env-option", "control_rate=25", "--env-option", "frame_stride=25",
             "--env-option", "width=64", "--env-option", "height=64"]
     assert main(["main", "--out", str(out), "--episodes", "2", "--video", *tiny]) == 0
+    assert "trained fails on: " in capsys.readouterr().out
     for name in ("fit.png", "summary.json", "train/log.jsonl", "train/learning_curve.png", "train/evaluation.png",
                  "train/best_episode.mp4", "train/best_params.json"):
         assert (out / name).exists(), name

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from field_report import episodes_to, field_summary, hardest_contexts, write
+from field_report import episodes_to, failure_counts, field_summary, hardest_contexts, write
 
 
 def _run(agent, seed, successes, rate):
@@ -49,3 +49,12 @@ def test_hardest_contexts_are_those_most_runs_fail_hardest_first():
     assert [h["index"] for h in hardest] == [1, 2]
     assert hardest[0] == {"index": 1, "seed": 11, "success": 0.0, "context": [0.5, 0.25]}
     assert hardest_contexts(success, [10, 11, 12, 13], None)[1]["context"] is None
+
+
+def test_failure_counts_add_each_missed_criterion_over_the_runs_that_name_them():
+    runs = [{"test": {"failures": ["", "cup", "cup+coverage"]}}, {"test": {"failures": ["coverage", "", ""]}},
+            {"test": {"success": [True]}}]
+    counts = failure_counts(runs)
+    assert counts == {"runs": 2, "failures": 3, "causes": {"cup": 2, "coverage": 2}}
+    assert failure_counts([]) == {"runs": 0, "failures": 0, "causes": {}}
+    assert field_summary(_document())["agents"]["good"]["failure_causes"]["runs"] == 0

@@ -269,4 +269,16 @@ def test_the_comparison_table_leaves_out_gains_a_task_does_not_measure(capsys):
 
     _print_comparison({"imitation": scores([False, True]), "trained": scores([True, True])})
     printed = capsys.readouterr().out
-    assert "coverage -," in printed and "success 0.500 [" in printed
+    assert "coverage -," in printed and "success 0.500 [" in printed and "fails on" not in printed
+
+
+def test_the_comparison_says_which_criteria_each_policy_misses_and_where(capsys):
+    from rdmp_gym.agents.cli import _print_comparison
+
+    def scores(failures: list[str]) -> dict:
+        return {"intervals": {}, "success": [not f for f in failures], "coverage": [0.9] * 3, "failures": failures}
+
+    _print_comparison({"imitation": scores(["coverage+cup", "", "cup"]), "trained": scores(["", "", ""])})
+    printed = capsys.readouterr().out
+    assert "imitation fails on: coverage 1 (context 0), cup 2 (contexts 0, 2)" in printed
+    assert "trained fails on: none" in printed

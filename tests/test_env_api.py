@@ -131,6 +131,7 @@ def test_invalid_parameters_get_a_graded_penalty_without_simulation():
         _, reward, terminated, truncated, info = environment.step(action)
         assert terminated is True and truncated is False
         assert info["valid"] is False and info["invalid_reason"] == "r0"
+        assert info["failure_causes"] == ("invalid",) and info["is_success"] is False
         assert info["steps"] == 0
         assert reward == sum(info["reward_terms"].values()) and reward <= -1.0
         assert info["cost_trace"].sum() == pytest.approx(-reward)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from rdmp_gym.envs import ENV_ID, ENV_ID_V2, STEP_ID_V2
 from rdmp_gym.envs.coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from rdmp_gym.envs.reward import Smoothness
-from rdmp_gym.envs.wipe_env import episode_success
+from rdmp_gym.envs.wipe_env import episode_success, failure_causes
 
 from rdmp_gym import Sweep, save_dmp
 
@@ -156,6 +156,22 @@ def test_success_needs_an_executable_motion():
     assert episode_success({**stats, "peak_joint_accel": 10.5})             # v1 does not check it
     assert gym.make(ENV_ID_V2, **FAST).unwrapped.success_joint_accel == 10.0
     assert gym.make(ENV_ID, **FAST).unwrapped.success_joint_accel is None
+
+
+def test_failure_causes_name_each_missed_criterion_and_only_a_success_has_none(env):
+    stats = {"coverage": 0.99, "force_in_band_fraction": 1.0, "arm_collision_fraction": 0.0,
+             "self_collision_fraction": 0.0, "obstacle_touch_steps": 0, "obstacle_shift": 0.0,
+             "peak_joint_accel": 4.0, "joint_limit_fraction": 0.0}
+    assert failure_causes(stats, 10.0) == ()
+    missed = {**stats, "coverage": 0.9, "obstacle_shift": 0.006, "self_collision_fraction": 0.1,
+              "peak_joint_accel": float("nan")}
+    assert failure_causes(missed, 10.0) == ("coverage", "self-collision", "cup", "joint acceleration")
+    assert failure_causes(missed) == ("coverage", "self-collision", "cup")
+    for seed, cup in ((0, False), (3, True)):          # seed 3: the imitation's approach runs into the cup
+        env.reset(seed=seed)
+        info = env.step(np.zeros(env.action_space.shape, np.float32))[4]
+        assert info["is_success"] == (info["failure_causes"] == ())
+        assert ("cup" in info["failure_causes"]) == cup == (info["obstacle_touch_steps"] > 0)
 
 
 def test_a_refined_dmp_with_its_sweep_is_the_imitation_of_a_new_env(env, tmp_path):

@@ -77,6 +77,7 @@ def test_given_the_episodic_joint_path_the_return_is_the_episodic_reward_exactly
     np.testing.assert_allclose(step_info["force_trace"], info["force_trace"], atol=1e-4)
     assert step_info["coverage"] == pytest.approx(info["coverage"], abs=1e-6)
     assert step_info["is_success"] == info["is_success"]
+    assert step_info["failure_causes"] == info["failure_causes"]
 
 
 @pytest.mark.parametrize("seed", [3, 5])

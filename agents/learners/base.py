@@ -30,6 +30,8 @@ class EpisodeBatch:
         valid: ``[K]`` whether each episode was simulated (an invalid plan gets a penalty instead).
         seeds: ``[K]`` the reset seeds.
         success: ``[K]`` the env's ``info["is_success"]``, or None where the env does not give it.
+        failures: ``[K]`` the success criteria each episode missed (``"cup+coverage"``, ``""`` for a success),
+            or None where the env does not name them.
     """
 
     actions: np.ndarray
@@ -40,6 +42,7 @@ class EpisodeBatch:
     valid: np.ndarray
     seeds: np.ndarray
     success: np.ndarray | None = None
+    failures: np.ndarray | None = None
 
     @property
     def size(self) -> int:
