@@ -167,9 +167,11 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
 
 
 def _code(run: RunDirectory) -> dict:
-    """The rdmp-gym commit that trained ``run`` (``{"commit", "dirty"}``; the cache does not key on it, so a
-    document can hold runs of several commits: :func:`code_versions` lists them)."""
-    return run.read_provenance()["sessions"][-1]["rdmp_gym"]
+    """The rdmp-gym commit and the package versions that trained ``run`` (``{"commit", "dirty", "packages"}``;
+    the cache does not key on them, so a document can hold runs of several commits: :func:`code_versions` lists
+    them; the same seed gives the same numbers only with the same numerical packages)."""
+    session = run.read_provenance()["sessions"][-1]
+    return {**session["rdmp_gym"], "packages": session["packages"]}
 
 
 def code_versions(runs: list[dict]) -> dict[str, list[str]]:

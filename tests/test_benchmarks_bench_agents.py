@@ -12,6 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from bench_agents import (
     _cache_key,
+    _code,
     _labels,
     _parse,
     _seed_counts,
@@ -54,6 +55,15 @@ def test_code_versions_group_the_runs_by_the_commit_that_trained_them():
             {"agent": "cpi2", "seed": 0, "code": {"commit": "abc", "dirty": False}},
             {"agent": "random", "seed": 0}]
     assert code_versions(runs) == {"abc": ["bbrl-0", "cpi2-0"], "abc-dirty": ["bbrl-1"], "unrecorded": ["random-0"]}
+
+
+def test_a_run_records_the_commit_and_package_versions_of_its_last_session():
+    class Run:
+        def read_provenance(self):
+            return {"sessions": [{"rdmp_gym": {"commit": "old", "dirty": False}, "packages": {"numpy": "1"}},
+                                 {"rdmp_gym": {"commit": "new", "dirty": True}, "packages": {"numpy": "2"}}]}
+
+    assert _code(Run()) == {"commit": "new", "dirty": True, "packages": {"numpy": "2"}}
 
 
 def _document(options: dict, budget: int = 4) -> dict:
