@@ -354,12 +354,10 @@ def _print_comparison(result: dict[str, Any]) -> None:
 
 def _failure_text(failures: list[str]) -> str:
     """``"cup 2 (contexts 3, 7), coverage 1 (context 3)"``: each missed success criterion, where it was missed."""
-    where: dict[str, list[int]] = {}
-    for index, entry in enumerate(failures):
-        for cause in filter(None, entry.split("+")):
-            where.setdefault(cause, []).append(index)
+    from .tasks import failure_contexts
+
     return ", ".join(f"{cause} {len(found)} (context{'s' if len(found) > 1 else ''} "
-                     f"{', '.join(map(str, found))})" for cause, found in where.items()) or "none"
+                     f"{', '.join(map(str, found))})" for cause, found in failure_contexts(failures).items()) or "none"
 
 
 def _command_main(args: argparse.Namespace) -> None:

@@ -154,7 +154,7 @@ class Evaluator:
                             valid=np.array([r["valid"] for r in results]), seeds=seeds,
                             success=None if any(r["success"] is None for r in results)
                             else np.array([r["success"] for r in results]),
-                            failures=None if any(r.get("failures") is None for r in results)
+                            failures=None if any(r["failures"] is None for r in results)
                             else np.array([r["failures"] for r in results]))
 
     def close(self) -> None:

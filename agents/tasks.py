@@ -12,7 +12,7 @@ import numpy as np
 from .imitation import load_demonstration
 
 __all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID",
-           "ResetOptions", "TaskSpec", "episode_metrics", "run_episode", "task_options"]
+           "ResetOptions", "TaskSpec", "episode_metrics", "failure_contexts", "run_episode", "task_options"]
 
 WIPE_ID = "rdmp_gym/ArmarWipe-v1"
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
@@ -125,7 +125,21 @@ def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
             "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
             "valid": bool(info.get("valid", True)),
             "success": None if "is_success" not in info else bool(info["is_success"]),
-            "failures": None if "failure_causes" not in info else "+".join(info["failure_causes"])}
+            "failures": None if "failure_causes" not in info else _FAILURE_JOIN.join(info["failure_causes"])}
+
+
+#: joins an episode's ``info["failure_causes"]`` into the one string per episode the evaluation keeps
+_FAILURE_JOIN = "+"
+
+
+def failure_contexts(failures: list[str]) -> dict[str, list[int]]:
+    """``{cause: [index, ...]}``: where each success criterion was missed, from per-episode failures ``[E]``
+    (:func:`episode_metrics`' ``failures``: ``"cup+coverage"``, ``""`` for a success), causes in first-seen order."""
+    where: dict[str, list[int]] = {}
+    for index, entry in enumerate(failures):
+        for cause in filter(None, entry.split(_FAILURE_JOIN)):
+            where.setdefault(cause, []).append(index)
+    return where
 
 
 def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None

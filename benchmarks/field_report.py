@@ -36,6 +36,7 @@ from rdmp_gym.agents.field_metrics import (
     probability_of_improvement,
     stratified_interval,
 )
+from rdmp_gym.agents.tasks import failure_contexts
 
 TARGETS = (0.5, 0.8, 0.9)
 THRESHOLDS = np.linspace(0.8, 1.0, 41)
@@ -90,8 +91,9 @@ def failure_counts(runs: list[dict]) -> dict:
     criteria (a pair may miss several, so the causes can sum to more than ``F``), most frequent first."""
     named = [r["test"]["failures"] for r in runs if r["test"].get("failures") is not None]
     causes: dict[str, int] = {}
-    for cause in (c for failures in named for entry in failures if entry for c in entry.split("+")):
-        causes[cause] = causes.get(cause, 0) + 1
+    for failures in named:
+        for cause, found in failure_contexts(failures).items():
+            causes[cause] = causes.get(cause, 0) + len(found)
     return {"runs": len(named), "failures": sum(bool(entry) for failures in named for entry in failures),
             "causes": dict(sorted(causes.items(), key=lambda item: -item[1]))}
 
