@@ -174,6 +174,7 @@ class ESAgent:
         seeds = np.broadcast_to(self.episode_rng.integers(TRAIN_SEED_LIMIT, size=count), (rollouts,)).copy()
         observations = None
         if self.learner.uses_context:
+            seeds = self.learner.choose_seeds(seeds)
             observations = context_observations(self.evaluator.env, seeds, self.evaluator.spec.options())
         actions = self.learner.ask(observations)
         batch = self.evaluator.run(actions, seeds)

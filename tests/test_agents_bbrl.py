@@ -185,3 +185,56 @@ def test_the_network_baseline_learns_a_cost_no_linear_function_of_the_context_gi
         values = learner.value(torch.as_tensor(probe)).numpy()[:, 0]
     outer = np.abs(probe[:, 0]) > 0.6
     assert values[outer].mean() - values[~outer].mean() > 3.0            # the jump is 5; a linear fit sees ~0
+
+
+def _seeded_batch(actions, returns, seeds):
+    k = len(returns)
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
+                        np.full(k, np.nan), np.ones(k, dtype=bool), np.asarray(seeds, dtype=np.int64))
+
+
+def test_replay_revisits_the_contexts_the_policy_did_worst_in():
+    """Context seed 3 cost far more than its context predicts: of 10 fresh seeds, 3 (replay 0.3) are replaced
+    by distinct earlier ones, seed 3 almost always among them; without replay the fresh seeds stay."""
+    contexts = np.random.default_rng(1).uniform(-1, 1, (10, 2))
+    fresh = np.arange(100, 110)
+    assert np.array_equal(_learner().choose_seeds(fresh), fresh)
+    hits = 0
+    for seed in range(20):
+        learner = _learner(seed, replay=0.3)
+        actions = learner.ask(contexts)
+        learner.tell(_seeded_batch(actions, np.where(np.arange(10) == 3, -10.0, 0.0), np.arange(10)))
+        seeds = learner.choose_seeds(fresh)
+        replayed = seeds[~np.isin(seeds, fresh)]
+        assert replayed.size == 3 and np.unique(replayed).size == 3 and np.all(replayed < 10)
+        hits += 3 in replayed
+    assert hits >= 18
+
+
+def test_the_replay_keeps_the_most_recent_contexts_once_each():
+    learner = _learner(replay=0.5, replay_size=15)
+    rng = np.random.default_rng(2)
+    for update in range(4):
+        contexts = rng.uniform(-1, 1, (10, 2))
+        seeds = learner.choose_seeds(np.arange(10) + 10 * update)
+        learner.tell(_seeded_batch(learner.ask(contexts), rng.standard_normal(10), seeds))
+        assert learner._replay_seeds.size == min(15, np.unique(learner._replay_seeds).size)
+    assert learner._replay_seeds.size == 15 and np.array_equal(np.sort(learner._replay_seeds[-10:]), np.sort(seeds))
+
+
+def test_resume_with_replay_chooses_the_same_contexts():
+    learner = _learner(replay=0.3)
+    rng = np.random.default_rng(3)
+    for update in range(3):
+        seeds = learner.choose_seeds(np.arange(10) + 10 * update)
+        learner.tell(_seeded_batch(learner.ask(rng.uniform(-1, 1, (10, 2))), rng.standard_normal(10), seeds))
+    twin = _learner(seed=99, replay=0.3)
+    twin.load_state_dict(learner.state_dict())
+    np.testing.assert_array_equal(twin.choose_seeds(np.arange(50, 60)), learner.choose_seeds(np.arange(50, 60)))
+    state = learner.state_dict()
+    state["replay_scores"] = state["replay_scores"][:-1]
+    with pytest.raises(ValueError, match="replay_seeds"):
+        twin.load_state_dict(state)
+    for bad in ({"replay": 1.0}, {"replay": -0.1}, {"replay_temperature": 0.0}, {"replay_size": 0}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            _learner(**bad)

@@ -263,3 +263,21 @@ def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_th
     assert TrainConfig(agent="amplitude").options == {}
     assert TrainConfig(agent="cpi2", env_kwargs={"groups": ["periodic"]}).options == {}
     assert TrainConfig(agent="cpi2", env_id=TRACKING_ID).options == {}
+
+
+def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
+    """With ``replay=0.5`` half of the second update's rollouts revisit contexts of the first (tracking task)."""
+    from rdmp_gym.agents.evaluation import Evaluator
+    from rdmp_gym.agents.protocol import context_observations
+    from rdmp_gym.agents.tasks import TaskSpec
+    from rdmp_gym.agents.training import ESAgent
+
+    spec = TaskSpec(TRACKING_ID, {"n_periodic": 8, "n_transient": 8, "duration": 2.0, "context_range": 0.03})
+    with Evaluator(spec, 1) as evaluator:
+        space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, np.arange(8), spec.options()))
+        n = evaluator.env.action_space.shape[0]
+        learner = make_learner("bbrl", np.zeros(n), 4, np.random.default_rng(0), {"replay": 0.5}, space=space)
+        agent = ESAgent(learner, evaluator, np.random.default_rng(1), shared_context=False)
+        first, second = agent.train_update(), agent.train_update()
+    assert np.unique(first.seeds).size == 4
+    assert np.sum(np.isin(second.seeds, first.seeds)) == 2

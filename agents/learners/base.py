@@ -189,6 +189,11 @@ class Learner(ABC):
         """``[E, n]`` the policy's action for contexts ``observations [E, o]`` (here: the mean for all)."""
         return np.repeat(self._mean[None], len(observations), axis=0)
 
+    def choose_seeds(self, fresh: np.ndarray) -> np.ndarray:
+        """``[K]`` the reset seeds of the next rollouts, given ``fresh [K]`` new ones (here: those); a contextual
+        learner may replace some with the seeds of earlier training contexts to revisit them."""
+        return fresh
+
     @abstractmethod
     def _update(self, batch: EpisodeBatch) -> None:
         """Update the search distribution from the results of the asked actions."""

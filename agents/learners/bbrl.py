@@ -84,6 +84,11 @@ class BBRLConfig:
             ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
         history: batches the ``"network"`` baseline is fitted to (those before the ``reuse`` batches it judges).
         value_epochs: Adam steps of the baseline network per update.
+        replay: share of each update's rollouts that revisit earlier training contexts, those the policy did
+            worst in against the context baseline (prioritised context replay, Jiang et al. 2021); 0 = none.
+        replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
+            with probability proportional to ``k^(-1/replay_temperature)``.
+        replay_size: the most recently seen training contexts that the replay chooses from.
     """
 
     sigma: float = 0.3
@@ -103,6 +108,9 @@ class BBRLConfig:
     baseline: str = "ridge"
     history: int = 20
     value_epochs: int = 50
+    replay: float = 0.0
+    replay_temperature: float = 0.3
+    replay_size: int = 100
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
@@ -121,6 +129,9 @@ class BBRLConfig:
         check_choice(self.baseline, "baseline", BASELINES)
         check_range(self.history, "history", 1, None)
         check_range(self.value_epochs, "value_epochs", 1, None)
+        check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
+        check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
+        check_range(self.replay_size, "replay_size", 1, None)
 
 
 def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.ndarray,
@@ -140,8 +151,7 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     """
     hat = ridge_hat(np.c_[np.ones(len(costs)), contexts], ridge)
     offset = np.zeros((len(costs), 1)) if predicted is None else np.asarray(predicted, dtype=np.float64)
-    residual = costs - offset[:, 0]
-    episode = cost_weights(residual - hat @ residual, h)
+    episode = cost_weights(cost_advantage(costs, hat, offset[:, 0]), h)
     if traces is None or time_weights is None:
         return episode[None], episode
     to_go = cost_to_go(costs, traces) - offset                                          # [N, T]
@@ -149,6 +159,13 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     norm = time_weights.sum(axis=0)                                                     # [n]
     per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
     return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
+
+
+def cost_advantage(costs: np.ndarray, hat: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    """``[N]`` how much more each sample cost than its context predicts: ``costs [N]`` minus the baseline
+    ``predicted [N]``, minus the ridge fit ``hat [N, N]`` of what is left on the context."""
+    residual = costs - predicted
+    return residual - hat @ residual
 
 
 def value_targets(costs: np.ndarray, traces: np.ndarray | None, credit: bool) -> np.ndarray:
@@ -271,6 +288,9 @@ class BBRL(Learner):
         self._kept = self.config.reuse + (self.config.history - 1 if self.value is not None else 0)
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
+        #: the replay's table: reset seeds of recent training contexts [M] (oldest first) and their last advantage [M]
+        self._replay_seeds = np.zeros(0, dtype=np.int64)
+        self._replay_scores = np.zeros(0)
 
     def _active_dims(self, space: SearchSpace) -> np.ndarray:
         if not self.config.groups:
@@ -321,6 +341,29 @@ class BBRL(Learner):
         self._asked = (x, u)
         return squash(self._full(u))
 
+    def choose_seeds(self, fresh: np.ndarray) -> np.ndarray:
+        """``[K]`` ``fresh`` with ``replay`` of its seeds replaced by earlier training contexts, drawn without
+        replacement by the rank of their last advantage (the worst first)."""
+        seeds = np.array(fresh, dtype=np.int64)
+        count = min(round(self.config.replay * seeds.size), self._replay_seeds.size)
+        if count == 0:
+            return seeds
+        ranks = np.empty(self._replay_scores.size)
+        ranks[np.argsort(-self._replay_scores, kind="stable")] = np.arange(1, ranks.size + 1)
+        priority = ranks ** (-1.0 / self.config.replay_temperature)
+        chosen = self.rng.choice(ranks.size, size=count, replace=False, p=priority / priority.sum())
+        seeds[:count] = self._replay_seeds[chosen]
+        return seeds
+
+    def _remember_contexts(self, seeds: np.ndarray, advantages: np.ndarray) -> None:
+        """Record the last advantage ``[K]`` of each context ``seeds [K]``; keep the ``replay_size`` most recent."""
+        _, last = np.unique(seeds[::-1], return_index=True)             # a seed twice in the batch: its last result
+        latest = np.sort(seeds.size - 1 - last)
+        seeds, advantages = seeds[latest], advantages[latest]
+        keep = ~np.isin(self._replay_seeds, seeds)
+        self._replay_seeds = np.concatenate([self._replay_seeds[keep], seeds])[-self.config.replay_size:]
+        self._replay_scores = np.concatenate([self._replay_scores[keep], advantages])[-self.config.replay_size:]
+
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         with torch.no_grad():
             return squash(self._full(self.policy.mean(torch.as_tensor(self._features(observations))).numpy()))
@@ -342,6 +385,11 @@ class BBRL(Learner):
                 predicted = self.value(torch.as_tensor(data["contexts"])).numpy()
         per_dimension, episode = sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights,
                                                 self.config.h, self.config.value_ridge, predicted)
+        if self.config.replay > 0:
+            hat = ridge_hat(np.c_[np.ones(len(data["costs"])), data["contexts"]], self.config.value_ridge)
+            offset = np.zeros(len(data["costs"])) if predicted is None else predicted[:, 0]
+            advantages = cost_advantage(data["costs"], hat, offset)[-batch.size:]
+            self._remember_contexts(np.asarray(batch.seeds, dtype=np.int64), advantages)
         torch.manual_seed(int(self.rng.integers(2**31)))
         contexts, samples = torch.as_tensor(data["contexts"]), torch.as_tensor(data["samples"])
         old = [p.detach().clone() for p in self.policy.parameters()]
@@ -409,10 +457,15 @@ class BBRL(Learner):
                 "context_center": self.center.copy(), "context_scale": self.scale.copy(), **buffer,
                 "active": self.active.copy(), "fixed": self.fixed.copy(),
                 "min_sigma": float(self.config.min_sigma),
+                "replay_seeds": self._replay_seeds.copy(), "replay_scores": self._replay_scores.copy(),
                 **({} if self.value is None else {"value_parameters": {
                     name: value.detach().numpy().copy() for name, value in self.value.state_dict().items()}})}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
+        seeds, scores = np.asarray(state["replay_seeds"]), np.asarray(state["replay_scores"], dtype=np.float64)
+        if seeds.dtype.kind not in "iu" or seeds.ndim != 1 or scores.shape != seeds.shape \
+                or seeds.size > self.config.replay_size:
+            raise ValueError("state.replay_seeds: expected integer seeds [M] and scores [M], M <= replay_size")
         if not np.array_equal(state["active"], self.active) or np.asarray(state["fixed"]).shape != self.fixed.shape:
             raise ValueError("state.active: the state sets other action dimensions than this learner (groups)")
         self.fixed = np.asarray(state["fixed"], dtype=np.float64).copy()
@@ -428,6 +481,7 @@ class BBRL(Learner):
                              "reuse (or history)")
         self._buffer = [{key: np.asarray(value, dtype=np.float64) for key, value in zip(_BUFFER, batch, strict=True)}
                         for batch in zip(*columns, strict=True)]
+        self._replay_seeds, self._replay_scores = seeds.astype(np.int64), scores.copy()
         self._asked = None
 
 
