@@ -11,7 +11,7 @@ import pytest
 import torch
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
 from rdmp_gym.agents.learners.bbrl import sample_weights
-from rdmp_gym.agents.learners.smooth import squash
+from rdmp_gym.agents.learners.smooth import squash, unsquash
 
 torch.set_num_threads(1)
 N = 12
@@ -238,3 +238,52 @@ def test_resume_with_replay_chooses_the_same_contexts():
     for bad in ({"replay": 1.0}, {"replay": -0.1}, {"replay_temperature": 0.0}, {"replay_size": 0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
             _learner(**bad)
+
+
+def test_antithetic_sampling_mirrors_each_perturbation_on_a_shared_context():
+    learner = _learner(antithetic=True)
+    np.testing.assert_array_equal(learner.choose_seeds(np.arange(100, 110)), np.repeat(np.arange(100, 105), 2))
+    contexts = np.repeat(np.random.default_rng(2).uniform(-1, 1, (5, 2)), 2, axis=0)
+    u = unsquash(learner.ask(contexts))
+    mean = unsquash(learner.policy_actions(contexts))
+    np.testing.assert_allclose(u[0::2] + u[1::2], 2 * mean[0::2], atol=1e-9)
+    assert np.all(np.abs(u[0::2] - mean[0::2]) > 0)
+    with pytest.raises(ValueError, match="observations"):
+        learner.ask(np.random.default_rng(3).uniform(-1, 1, (10, 2)))
+    with pytest.raises(ValueError, match="rollouts"):
+        make_learner("bbrl", np.zeros(N), 9, np.random.default_rng(0), {"antithetic": True}, space=_space())
+    with pytest.raises(ValueError, match="antithetic"):
+        _learner(antithetic=True, replay=0.3)
+
+
+def test_a_pairs_mean_cost_judges_its_samples_whatever_the_context_costs():
+    """Pair 0 (a context that costs 10 more) and pair 1 differ by the same 2 between their samples: paired, the
+    better sample of each gets the same, largest weight; over the ridge alone the expensive pair gets none."""
+    contexts = np.array([[0.0], [0.0], [0.5], [0.5]])
+    costs = np.array([10.0, 12.0, 0.0, 2.0])
+    paired, _ = sample_weights(costs, None, contexts, None, h=10.0, ridge=1.0, paired=True)
+    ridge_only, _ = sample_weights(costs, None, contexts, None, h=10.0, ridge=1.0)
+    assert paired[0, 0] == pytest.approx(paired[0, 2]) and paired[0, 0] == paired[0].max()
+    assert ridge_only[0, 0] < 1e-3
+    with pytest.raises(ValueError, match="pairs"):
+        sample_weights(costs[:3], None, contexts[:3], None, h=10.0, ridge=1.0, paired=True)
+
+
+def test_antithetic_learns_the_contextual_quadratic_and_resumes_exactly():
+    learner = _learner(antithetic=True, length=0.0, epsilon=0.2)
+    rng = np.random.default_rng(11)
+    held_out = rng.uniform(-1, 1, (50, 2))
+
+    def loss():
+        return np.mean(np.sum((learner.policy_actions(held_out) - _target(held_out)) ** 2, axis=1))
+
+    before = loss()
+    for _ in range(40):
+        contexts = np.repeat(rng.uniform(-1, 1, (5, 2)), 2, axis=0)
+        actions = learner.ask(contexts)
+        learner.tell(_batch(actions, -np.sum((actions - _target(contexts)) ** 2, axis=1)))
+    assert loss() < 0.4 * before
+    twin = _learner(seed=5, antithetic=True, length=0.0, epsilon=0.2)
+    twin.load_state_dict(learner.state_dict())
+    contexts = np.repeat(held_out[:5], 2, axis=0)
+    np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))

@@ -89,6 +89,9 @@ class BBRLConfig:
         replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
             with probability proportional to ``k^(-1/replay_temperature)``.
         replay_size: the most recently seen training contexts that the replay chooses from.
+        antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
+            context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
+            ridge regression on the context; needs an even number of rollouts.
     """
 
     sigma: float = 0.3
@@ -111,6 +114,7 @@ class BBRLConfig:
     replay: float = 0.0
     replay_temperature: float = 0.3
     replay_size: int = 100
+    antithetic: bool = False
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
@@ -132,11 +136,14 @@ class BBRLConfig:
         check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
         check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
         check_range(self.replay_size, "replay_size", 1, None)
+        if self.antithetic and self.replay > 0:
+            raise ValueError("antithetic: a pair's own mean judges each sample, which leaves the replay no context "
+                             "to rank; use antithetic with replay = 0")
 
 
 def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.ndarray,
                    time_weights: np.ndarray | None, h: float, ridge: float,
-                   predicted: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   predicted: np.ndarray | None = None, paired: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per-dimension and episode-level weights of ``N`` samples (step 1 of the module docstring).
 
     Args:
@@ -146,10 +153,12 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
         h: eliteness; ridge: ridge of the baselines.
         predicted: ``[N, T]`` (``[N, 1]`` without traces) a baseline of the cost-to-go subtracted before the
             ridge (column 0: of the episode cost), or None.
+        paired: the samples are antithetic pairs (rows 2i, 2i + 1 share a context): each pair's mean is the
+            baseline, in place of the ridge.
     Returns:
         ``([n, N] or [1, N], [N])``: each row sums to 1 (``[1, N]``, the episode weights, without per-step credit).
     """
-    hat = ridge_hat(np.c_[np.ones(len(costs)), contexts], ridge)
+    hat = pair_hat(len(costs)) if paired else ridge_hat(np.c_[np.ones(len(costs)), contexts], ridge)
     offset = np.zeros((len(costs), 1)) if predicted is None else np.asarray(predicted, dtype=np.float64)
     episode = cost_weights(cost_advantage(costs, hat, offset[:, 0]), h)
     if traces is None or time_weights is None:
@@ -159,6 +168,13 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     norm = time_weights.sum(axis=0)                                                     # [n]
     per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
     return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
+
+
+def pair_hat(n: int) -> np.ndarray:
+    """``[n, n]`` the matrix that replaces each of ``n`` (even) values by the mean of its pair (rows 2i, 2i + 1)."""
+    if n % 2:
+        raise ValueError(f"n: antithetic samples come in pairs, got {n} samples")
+    return np.kron(np.eye(n // 2), np.full((2, 2), 0.5))
 
 
 def cost_advantage(costs: np.ndarray, hat: np.ndarray, predicted: np.ndarray) -> np.ndarray:
@@ -265,6 +281,8 @@ class BBRL(Learner):
                  config: BBRLConfig | None = None) -> None:
         super().__init__(initial_mean, rollouts, rng)
         self.config = config or BBRLConfig()
+        if self.config.antithetic and rollouts % 2:
+            raise ValueError(f"rollouts: antithetic sampling needs an even number of rollouts, got {rollouts}")
         self.space = space
         self.center, self.scale = np.asarray(space.context_center), np.asarray(space.context_scale)
         #: ``[m]`` the action dimensions the policy sets, and ``[n]`` the start action (unbounded) of the others
@@ -334,17 +352,30 @@ class BBRL(Learner):
         x = self._features(observations)
         if x.shape[0] != self.rollouts:
             raise ValueError(f"observations: expected {self.rollouts} rows, got {x.shape[0]}")
+        if self.config.antithetic and not np.array_equal(x[0::2], x[1::2]):
+            raise ValueError("observations: antithetic sampling needs rows 2i and 2i + 1 to be the same context "
+                             "(choose_seeds pairs the reset seeds)")
         with torch.no_grad():
             mean = self.policy.mean(torch.as_tensor(x)).numpy()
             chol = self._chol().numpy()
-        u = mean + self.rng.standard_normal((self.rollouts, self.active.size)) @ chol.T
+        u = mean + self._noise() @ chol.T
         self._asked = (x, u)
         return squash(self._full(u))
 
+    def _noise(self) -> np.ndarray:
+        """``[K, m]`` standard normal perturbations; antithetic: rows ``2i`` and ``2i + 1`` opposite."""
+        if not self.config.antithetic:
+            return self.rng.standard_normal((self.rollouts, self.active.size))
+        half = self.rng.standard_normal((self.rollouts // 2, self.active.size))
+        return np.stack([half, -half], axis=1).reshape(self.rollouts, self.active.size)
+
     def choose_seeds(self, fresh: np.ndarray) -> np.ndarray:
         """``[K]`` ``fresh`` with ``replay`` of its seeds replaced by earlier training contexts, drawn without
-        replacement by the rank of their last advantage (the worst first)."""
+        replacement by the rank of their last advantage (the worst first); antithetic: the first ``K / 2`` of
+        ``fresh``, each twice in a row."""
         seeds = np.array(fresh, dtype=np.int64)
+        if self.config.antithetic:
+            return np.repeat(seeds[: seeds.size // 2], 2)
         count = min(round(self.config.replay * seeds.size), self._replay_seeds.size)
         if count == 0:
             return seeds
@@ -384,7 +415,8 @@ class BBRL(Learner):
             with torch.no_grad():
                 predicted = self.value(torch.as_tensor(data["contexts"])).numpy()
         per_dimension, episode = sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights,
-                                                self.config.h, self.config.value_ridge, predicted)
+                                                self.config.h, self.config.value_ridge, predicted,
+                                                paired=self.config.antithetic)
         if self.config.replay > 0:
             hat = ridge_hat(np.c_[np.ones(len(data["costs"])), data["contexts"]], self.config.value_ridge)
             offset = np.zeros(len(data["costs"])) if predicted is None else predicted[:, 0]
