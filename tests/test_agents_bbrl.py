@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
-from rdmp_gym.agents.learners.bbrl import sample_weights
+from rdmp_gym.agents.learners.bbrl import gaussian_kl, sample_weights
 from rdmp_gym.agents.learners.smooth import squash, unsquash
 
 torch.set_num_threads(1)
@@ -287,3 +287,47 @@ def test_antithetic_learns_the_contextual_quadratic_and_resumes_exactly():
     twin.load_state_dict(learner.state_dict())
     contexts = np.repeat(held_out[:5], 2, axis=0)
     np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
+
+
+def test_the_kl_with_per_context_scales_matches_the_full_covariances():
+    rng = np.random.default_rng(4)
+    n, k = 4, 3
+    factors = [rng.standard_normal((n, n)) + 3 * np.eye(n) for _ in range(2)]
+    covs = [f @ f.T for f in factors]
+    means = [rng.standard_normal((k, n)) for _ in range(2)]
+    scales = [rng.uniform(-0.5, 0.5, k) for _ in range(2)]
+    got = gaussian_kl(*[torch.as_tensor(x) for x in (means[0], np.linalg.cholesky(covs[0]), means[1],
+                                                      np.linalg.cholesky(covs[1]), scales[0], scales[1])]).numpy()
+    for row in range(k):
+        old, new = np.exp(2 * scales[0][row]) * covs[0], np.exp(2 * scales[1][row]) * covs[1]
+        diff = means[1][row] - means[0][row]
+        expected = 0.5 * (np.trace(np.linalg.solve(new, old)) + diff @ np.linalg.solve(new, diff) - n
+                          + np.log(np.linalg.det(new) / np.linalg.det(old)))
+        assert got[row] == pytest.approx(expected, rel=1e-9)
+
+
+def test_a_per_context_scale_narrows_the_exploration_where_the_cost_is_sharp():
+    """Where s_0 < 0 the cost punishes every step from the target; where s_0 > 0 every action costs the same:
+    the exploration narrows in the first half of the contexts and not in the second, within the trust region."""
+    learner = _learner(context_scale=True, length=0.0, epsilon=0.2)
+    rng = np.random.default_rng(9)
+    kls = []
+    for _ in range(30):
+        contexts = rng.uniform(-1, 1, (10, 2))
+        actions = learner.ask(contexts)
+        sharp = np.sum((actions - _target(contexts)) ** 2, axis=1)
+        learner.tell(_batch(actions, -np.where(contexts[:, 0] < 0, sharp, 0.0)))
+        kls.append(learner.last_kl)
+    probe = np.random.default_rng(2).uniform(-1, 1, (200, 2))
+    with torch.no_grad():
+        log_scale = learner.policy.log_scale(torch.as_tensor(probe)).numpy()
+    assert log_scale[probe[:, 0] < -0.3].mean() < log_scale[probe[:, 0] > 0.3].mean() - 0.1
+    assert np.all(np.array(kls) <= 0.2 + 1e-9)
+    contexts = rng.uniform(-1, 1, (10, 2))
+    np.testing.assert_allclose(policy_from_state(learner.state_dict(), contexts), learner.policy_actions(contexts),
+                               atol=1e-12)
+    twin = _learner(seed=3, context_scale=True, length=0.0, epsilon=0.2)
+    twin.load_state_dict(learner.state_dict())
+    np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
+    with pytest.raises(ValueError, match="state"):
+        _learner().load_state_dict(learner.state_dict())

@@ -7,7 +7,8 @@ The policy maps the raw context ``s`` (every field, standardised) to a Gaussian 
     Sigma = D C D + U U^T,  D = diag(sigma),  C = (1 - rough) C_smooth + rough I,
 
 ``C_smooth`` the correlation of neighbouring DMP weights (:mod:`.smooth`), the per-dimension scales ``sigma``
-and the low-rank factor ``U [n, r]`` learned, shared by all contexts; ``L`` is the Cholesky factor of ``C`` and
+and the low-rank factor ``U [n, r]`` learned, shared by all contexts (``context_scale``: times ``scale(s)^2``, a
+further output of the network); ``L`` is the Cholesky factor of ``C`` and
 ``sigma0`` the initial ``sigma``, so the network works in whitened coordinates: an optimiser step of equal size
 in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
 well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
@@ -89,6 +90,9 @@ class BBRLConfig:
         replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
             with probability proportional to ``k^(-1/replay_temperature)``.
         replay_size: the most recently seen training contexts that the replay chooses from.
+        context_scale: the network also gives each context a scale ``s(s)`` of the exploration
+            (``Sigma(s) = s(s)^2 Sigma``, 1 at the start), fitted with the covariance, so that the exploration can
+            stay wide where wide samples pay and narrow where they do not.
         antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
             context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
             ridge regression on the context; needs an even number of rollouts.
@@ -115,6 +119,7 @@ class BBRLConfig:
     replay_temperature: float = 0.3
     replay_size: int = 100
     antithetic: bool = False
+    context_scale: bool = False
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
@@ -223,11 +228,13 @@ class _Policy(torch.nn.Module):
     """``mu(s) = u0 + MLP(s)`` and ``Sigma = D C D + U U^T`` (see the module docstring)."""
 
     def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: float,
-                 rank: int) -> None:
+                 rank: int, context_scale: bool = False) -> None:
         super().__init__()
         n = u0.size
+        self.n = n
         self.net = torch.nn.Sequential(torch.nn.Linear(n_context, hidden), torch.nn.Tanh(),
-                                       torch.nn.Linear(hidden, hidden), torch.nn.Tanh(), torch.nn.Linear(hidden, n))
+                                       torch.nn.Linear(hidden, hidden), torch.nn.Tanh(),
+                                       torch.nn.Linear(hidden, n + int(context_scale)))
         torch.nn.init.zeros_(self.net[-1].weight)
         torch.nn.init.zeros_(self.net[-1].bias)
         self.register_buffer("u0", torch.as_tensor(u0))
@@ -239,7 +246,12 @@ class _Policy(torch.nn.Module):
 
     def mean(self, contexts: torch.Tensor) -> torch.Tensor:
         """``[K, n]`` means for standardised contexts ``[K, o]``."""
-        return self.u0 + self.net(contexts) @ self.shape.T
+        return self.u0 + self.net(contexts)[:, : self.n] @ self.shape.T
+
+    def log_scale(self, contexts: torch.Tensor) -> torch.Tensor:
+        """``[K]`` the log exploration scale of each context (0 without ``context_scale``)."""
+        out = self.net(contexts)
+        return out[:, self.n] if out.shape[1] > self.n else torch.zeros(len(contexts), dtype=_DTYPE)
 
     def covariance(self, min_sigma: float) -> torch.Tensor:
         """``[n, n]`` the shared covariance."""
@@ -247,20 +259,26 @@ class _Policy(torch.nn.Module):
         return sigma[:, None] * self.correlation * sigma[None, :] + self.low_rank @ self.low_rank.T
 
 
-def _log_prob(u: torch.Tensor, mean: torch.Tensor, chol: torch.Tensor) -> torch.Tensor:
-    """``[K]`` Gaussian log densities of ``u [K, n]`` (up to the constant) under means ``[K, n]``, ``chol`` of Sigma."""
-    white = torch.linalg.solve_triangular(chol, (u - mean).T, upper=False)
-    return -0.5 * torch.sum(white**2, dim=0) - torch.sum(torch.log(torch.diagonal(chol)))
+def _log_prob(u: torch.Tensor, mean: torch.Tensor, chol: torch.Tensor, log_scale: torch.Tensor) -> torch.Tensor:
+    """``[K]`` Gaussian log densities of ``u [K, n]`` (up to the constant) under means ``[K, n]`` and covariances
+    ``exp(2 log_scale_k) Sigma`` (``log_scale [K]``, ``chol`` of Sigma)."""
+    white = torch.linalg.solve_triangular(chol, (u - mean).T, upper=False) * torch.exp(-log_scale)
+    return (-0.5 * torch.sum(white**2, dim=0) - torch.sum(torch.log(torch.diagonal(chol)))
+            - mean.shape[1] * log_scale)
 
 
-def gaussian_kl(mean_old: torch.Tensor, chol_old: torch.Tensor, mean_new: torch.Tensor,
-                chol_new: torch.Tensor) -> torch.Tensor:
-    """``[K]`` ``KL(N(mean_old, Sigma_old) || N(mean_new, Sigma_new))`` per row of the means ``[K, n]``."""
+def gaussian_kl(mean_old: torch.Tensor, chol_old: torch.Tensor, mean_new: torch.Tensor, chol_new: torch.Tensor,
+                scale_old: torch.Tensor | None = None, scale_new: torch.Tensor | None = None) -> torch.Tensor:
+    """``[K]`` ``KL(N(mean_old, a^2 Sigma_old) || N(mean_new, b^2 Sigma_new))`` per row of the means ``[K, n]``,
+    ``a``, ``b`` the log scales ``[K]`` ``scale_old``, ``scale_new`` (None: 0)."""
     n = mean_old.shape[1]
-    trace = torch.sum(torch.linalg.solve_triangular(chol_new, chol_old, upper=False) ** 2)
-    white = torch.linalg.solve_triangular(chol_new, (mean_new - mean_old).T, upper=False)
+    zeros = torch.zeros(mean_old.shape[0], dtype=mean_old.dtype)
+    a = zeros if scale_old is None else scale_old
+    b = zeros if scale_new is None else scale_new
+    trace = torch.sum(torch.linalg.solve_triangular(chol_new, chol_old, upper=False) ** 2) * torch.exp(2.0 * (a - b))
+    white = torch.linalg.solve_triangular(chol_new, (mean_new - mean_old).T, upper=False) * torch.exp(-b)
     log_det = 2.0 * (torch.sum(torch.log(torch.diagonal(chol_new))) - torch.sum(torch.log(torch.diagonal(chol_old))))
-    return 0.5 * (trace + torch.sum(white**2, dim=0) - n + log_det)
+    return 0.5 * (trace + torch.sum(white**2, dim=0) - n + log_det + 2.0 * n * (b - a))
 
 
 class BBRL(Learner):
@@ -293,7 +311,7 @@ class BBRL(Learner):
         correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.active.size)
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
-                              self.config.sigma, self.config.rank)
+                              self.config.sigma, self.config.rank, self.config.context_scale)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         #: the cost-to-go baseline network (``baseline="network"``), else None
         self.value = (_Value(self.center.size, self.config.hidden,
@@ -343,8 +361,10 @@ class BBRL(Learner):
 
     @property
     def exploration(self) -> float:
+        """Mean standard deviation of the exploration over the dimensions, at the centre of the contexts."""
         with torch.no_grad():
-            return float(torch.mean(torch.sqrt(torch.diagonal(self.policy.covariance(self.config.min_sigma)))))
+            scale = torch.exp(self.policy.log_scale(torch.zeros(1, self.center.size, dtype=_DTYPE)))[0]
+            return float(scale * torch.mean(torch.sqrt(torch.diagonal(self.policy.covariance(self.config.min_sigma)))))
 
     def ask(self, observations: np.ndarray | None = None) -> np.ndarray:
         if observations is None:
@@ -357,8 +377,9 @@ class BBRL(Learner):
                              "(choose_seeds pairs the reset seeds)")
         with torch.no_grad():
             mean = self.policy.mean(torch.as_tensor(x)).numpy()
+            scale = torch.exp(self.policy.log_scale(torch.as_tensor(x))).numpy()
             chol = self._chol().numpy()
-        u = mean + self._noise() @ chol.T
+        u = mean + scale[:, None] * (self._noise() @ chol.T)
         self._asked = (x, u)
         return squash(self._full(u))
 
@@ -427,9 +448,10 @@ class BBRL(Learner):
         old = [p.detach().clone() for p in self.policy.parameters()]
         with torch.no_grad():
             old_mean, old_chol = self.policy.mean(contexts), self._chol()
+            old_scale = self.policy.log_scale(contexts)
         self._maximise_likelihood(contexts, samples, torch.as_tensor(per_dimension), torch.as_tensor(episode),
                                   old_mean)
-        self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol)
+        self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol, old_scale)
         self._mean = self.policy_actions(self.center[None])[0]
         self._asked = None
         if self.value is not None:
@@ -456,21 +478,24 @@ class BBRL(Learner):
             scale = torch.sqrt(torch.sum(chol**2, dim=1)).detach()                       # [n] marginal sigmas
             residual = ((samples - self.policy.mean(contexts)) / scale) ** 2             # [N, n]
             mean_loss = 0.5 * torch.sum(per_dimension.T * residual) / samples.shape[1]
-            cov_loss = -torch.sum(episode * _log_prob(samples, old_mean, chol)) / samples.shape[1]
+            log_prob = _log_prob(samples, old_mean, chol, self.policy.log_scale(contexts))
+            cov_loss = -torch.sum(episode * log_prob) / samples.shape[1]
             (mean_loss + cov_loss).backward()
             optimizer.step()
 
-    def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor) -> float:
+    def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor,
+            old_scale: torch.Tensor) -> float:
         with torch.no_grad():
-            return float(torch.mean(gaussian_kl(old_mean, old_chol, self.policy.mean(contexts), self._chol())))
+            return float(torch.mean(gaussian_kl(old_mean, old_chol, self.policy.mean(contexts), self._chol(),
+                                                old_scale, self.policy.log_scale(contexts))))
 
     def _enforce_trust_region(self, old: list[torch.Tensor], contexts: torch.Tensor, old_mean: torch.Tensor,
-                              old_chol: torch.Tensor) -> float:
+                              old_chol: torch.Tensor, old_scale: torch.Tensor) -> float:
         """Shrink the step until the mean KL is within ``epsilon`` (or drop it); returns the final mean KL."""
         new = [p.detach().clone() for p in self.policy.parameters()]
         fraction = 1.0
         for _ in range(20):
-            kl = self._kl(contexts, old_mean, old_chol)
+            kl = self._kl(contexts, old_mean, old_chol, old_scale)
             if np.isfinite(kl) and kl <= self.config.epsilon:
                 return kl
             fraction *= 0.5
@@ -503,6 +528,10 @@ class BBRL(Learner):
         self.fixed = np.asarray(state["fixed"], dtype=np.float64).copy()
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
+        shapes = {name: tuple(value.shape) for name, value in self.policy.state_dict().items()}
+        if {name: tuple(value.shape) for name, value in parameters.items()} != shapes:
+            raise ValueError("state.parameters: the state's policy network has other shapes than this learner's "
+                             "(hidden, rank, groups or context_scale differ)")
         self.policy.load_state_dict(parameters)
         if self.value is not None:             # a state of the other baseline fails check_state_like's keys
             self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
@@ -529,7 +558,9 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     x = np.where(scale > 0, (obs - center) / np.where(scale > 0, scale, 1.0), 0.0)
     hidden = np.tanh(x @ params["net.0.weight"].T + params["net.0.bias"])
     hidden = np.tanh(hidden @ params["net.2.weight"].T + params["net.2.bias"])
-    policy = params["u0"] + (hidden @ params["net.4.weight"].T + params["net.4.bias"]) @ params["shape"].T
+    n = params["u0"].size                                   # a context_scale network has one more output
+    out = hidden @ params["net.4.weight"][:n].T + params["net.4.bias"][:n]
+    policy = params["u0"] + out @ params["shape"].T
     full = np.repeat(np.asarray(state["fixed"], dtype=np.float64)[None], len(obs), axis=0)
     full[:, np.asarray(state["active"], dtype=np.int64)] = policy
     return squash(full)
