@@ -331,3 +331,16 @@ def test_a_per_context_scale_narrows_the_exploration_where_the_cost_is_sharp():
     np.testing.assert_array_equal(twin.ask(contexts), learner.ask(contexts))
     with pytest.raises(ValueError, match="state"):
         _learner().load_state_dict(learner.state_dict())
+
+
+def test_sigma_factors_widen_the_named_groups_exploration():
+    learner = _learner(sigma_factors="amplitude=3")
+    with torch.no_grad():
+        sigma = torch.sqrt(torch.diagonal(learner.policy.covariance(learner.config.min_sigma))).numpy()
+    np.testing.assert_allclose(sigma[N - 2:], 0.9, rtol=1e-9)
+    np.testing.assert_allclose(sigma[: N - 2], 0.3, rtol=1e-9)
+    samples = unsquash(learner.ask(np.zeros((10, 2))))
+    assert np.std(samples[:, N - 2:]) > 2 * np.std(samples[:, : N - 2])
+    for bad in ("amplitude=0", "amplitude", "sweep=2"):
+        with pytest.raises(ValueError, match="sigma_factors"):
+            _learner(sigma_factors=bad)

@@ -3,13 +3,13 @@
 The policy maps the raw context ``s`` (every field, standardised) to a Gaussian over the unbounded search vector
 ``u`` (executed as ``squash(u)``, :mod:`.smooth`):
 
-    u ~ N(mu(s), Sigma),   mu(s) = u0 + sigma0 L MLP(s)   (the last layer starts at 0: the first policy is u0),
+    u ~ N(mu(s), Sigma),   mu(s) = u0 + D0 L MLP(s)   (the last layer starts at 0: the first policy is u0),
     Sigma = D C D + U U^T,  D = diag(sigma),  C = (1 - rough) C_smooth + rough I,
 
 ``C_smooth`` the correlation of neighbouring DMP weights (:mod:`.smooth`), the per-dimension scales ``sigma``
 and the low-rank factor ``U [n, r]`` learned, shared by all contexts (``context_scale``: times ``scale(s)^2``, a
 further output of the network); ``L`` is the Cholesky factor of ``C`` and
-``sigma0`` the initial ``sigma``, so the network works in whitened coordinates: an optimiser step of equal size
+``D0`` the initial ``D``, so the network works in whitened coordinates: an optimiser step of equal size
 in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
 well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
 thousands (the conditional variances of a smooth block are tiny) and the trust region would forbid it.
@@ -50,7 +50,7 @@ import torch
 
 from ..options import check_choice, check_range
 from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
-from .contextual import SearchSpace, select_groups
+from .contextual import SearchSpace, group_factors, select_groups
 from .smooth import smooth_factor, squash, unsquash
 
 __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
@@ -79,6 +79,8 @@ class BBRLConfig:
         reuse: batches (this one and earlier ones) whose samples enter each update.
         value_ridge: ridge of the context baselines of the cost (and cost-to-go).
         min_sigma: floor of each dimension's standard deviation.
+        sigma_factors: per-group factors of the initial ``sigma``, ``"group=factor,..."`` (e.g. ``"approach=3"``);
+            choosing them is task structure, like ``cpi2``'s.
         groups: comma-separated action groups that the policy sets (``""`` = every dimension); the others stay
             at the start action. Choosing them is task structure, like ``cpi2``'s gain groups.
         baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
@@ -112,6 +114,7 @@ class BBRLConfig:
     value_ridge: float = 1.0
     min_sigma: float = 0.01
     groups: str = ""
+    sigma_factors: str = ""
     baseline: str = "ridge"
     history: int = 20
     value_epochs: int = 50
@@ -227,7 +230,7 @@ class _Value(torch.nn.Module):
 class _Policy(torch.nn.Module):
     """``mu(s) = u0 + MLP(s)`` and ``Sigma = D C D + U U^T`` (see the module docstring)."""
 
-    def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: float,
+    def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: np.ndarray,
                  rank: int, context_scale: bool = False) -> None:
         super().__init__()
         n = u0.size
@@ -239,8 +242,9 @@ class _Policy(torch.nn.Module):
         torch.nn.init.zeros_(self.net[-1].bias)
         self.register_buffer("u0", torch.as_tensor(u0))
         self.register_buffer("correlation", torch.as_tensor(correlation))
-        self.register_buffer("shape", sigma * torch.linalg.cholesky(torch.as_tensor(correlation)))
-        self.log_sigma = torch.nn.Parameter(torch.full((n,), float(np.log(sigma)), dtype=_DTYPE))
+        sigma = torch.as_tensor(np.broadcast_to(sigma, (n,)).copy(), dtype=_DTYPE)
+        self.register_buffer("shape", sigma[:, None] * torch.linalg.cholesky(torch.as_tensor(correlation)))
+        self.log_sigma = torch.nn.Parameter(torch.log(sigma))
         self.low_rank = torch.nn.Parameter(torch.zeros(n, rank, dtype=_DTYPE))
         self.to(_DTYPE)
 
@@ -311,7 +315,7 @@ class BBRL(Learner):
         correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.active.size)
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
-                              self.config.sigma, self.config.rank, self.config.context_scale)
+                              self._initial_sigma(space), self.config.rank, self.config.context_scale)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         #: the cost-to-go baseline network (``baseline="network"``), else None
         self.value = (_Value(self.center.size, self.config.hidden,
@@ -333,6 +337,13 @@ class BBRL(Learner):
             return np.arange(self.n_params)
         chosen = select_groups(space.slices, self.config.groups, "groups").values()
         return np.unique(np.concatenate([np.arange(self.n_params)[part] for part in chosen]))
+
+    def _initial_sigma(self, space: SearchSpace) -> np.ndarray:
+        """``[m]`` the initial standard deviation of each of the policy's dimensions (``sigma`` x its factor)."""
+        sigma = np.full(self.n_params, self.config.sigma)
+        for group, factor in group_factors(space.slices, self.config.sigma_factors):
+            sigma[group] = self.config.sigma * factor
+        return sigma[self.active]
 
     def _time_weights(self, space: SearchSpace) -> np.ndarray | None:
         if space.time_weights is None:

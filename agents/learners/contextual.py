@@ -205,9 +205,10 @@ def select_groups(slices: Mapping[str, slice], spec: str, argument: str) -> dict
     return chosen
 
 
-def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice], spec: str) -> np.ndarray:
-    """``[B]`` the ``sigma_factors`` of each exploration block (1 where none is given)."""
-    factors = np.ones(len(blocks))
+def group_factors(slices: Mapping[str, slice], spec: str, argument: str = "sigma_factors"
+                  ) -> list[tuple[slice, float]]:
+    """``(group slice, factor)`` pairs of a ``"group=factor,..."`` spec (factors > 0), in the spec's order."""
+    pairs = []
     for item in _items(spec):
         name, _, text = item.partition("=")
         try:
@@ -215,11 +216,18 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
         except ValueError:
             factor = float("nan")
         if not np.isfinite(factor) or factor <= 0:
-            raise ValueError(f"sigma_factors: {item!r} is not 'group=factor' with a factor > 0")
-        for group in select_groups(slices, name, "sigma_factors").values():
-            for index, (part, _) in enumerate(blocks):
-                if group.start <= part.start < group.stop:
-                    factors[index] = factor
+            raise ValueError(f"{argument}: {item!r} is not 'group=factor' with a factor > 0")
+        pairs.extend((group, factor) for group in select_groups(slices, name, argument).values())
+    return pairs
+
+
+def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice], spec: str) -> np.ndarray:
+    """``[B]`` the ``sigma_factors`` of each exploration block (1 where none is given)."""
+    factors = np.ones(len(blocks))
+    for group, factor in group_factors(slices, spec):
+        for index, (part, _) in enumerate(blocks):
+            if group.start <= part.start < group.stop:
+                factors[index] = factor
     return factors
 
 
