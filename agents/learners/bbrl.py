@@ -253,9 +253,10 @@ class _Policy(torch.nn.Module):
         return self.u0 + self.net(contexts)[:, : self.n] @ self.shape.T
 
     def log_scale(self, contexts: torch.Tensor) -> torch.Tensor:
-        """``[K]`` the log exploration scale of each context (0 without ``context_scale``)."""
-        out = self.net(contexts)
-        return out[:, self.n] if out.shape[1] > self.n else torch.zeros(len(contexts), dtype=_DTYPE)
+        """``[K]`` the log exploration scale of each context (0 without ``context_scale``, with no network pass)."""
+        if self.net[-1].out_features == self.n:
+            return torch.zeros(len(contexts), dtype=_DTYPE)
+        return self.net(contexts)[:, self.n]
 
     def covariance(self, min_sigma: float) -> torch.Tensor:
         """``[n, n]`` the shared covariance."""
