@@ -82,9 +82,8 @@ def performance_profile(scores: np.ndarray, thresholds: np.ndarray, seed: int = 
 
 def _improvement(x: np.ndarray, y: np.ndarray) -> float:
     """``P(X > Y)`` averaged over tasks (ties count one half): the Mann-Whitney statistic over ``m n``."""
-    per_task = [np.mean((x[:, t, None] > y[None, :, t]) + 0.5 * (x[:, t, None] == y[None, :, t]))
-                for t in range(x.shape[1])]
-    return float(np.mean(per_task))
+    pairs = x[:, None, :], y[None, :, :]                 # [R, 1, M], [1, R', M]: every task has R R' pairs
+    return float(np.mean((pairs[0] > pairs[1]) + 0.5 * (pairs[0] == pairs[1])))
 
 
 def probability_of_improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, resamples: int = 1000) -> Interval:

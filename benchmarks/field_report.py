@@ -5,14 +5,15 @@
   ``bench_solvable``) drawn on the same axes;
 - final scores: the IQM over seeds of the test success rate with its interval;
 - performance profiles: the fraction of (seed, test context) pairs whose coverage exceeds each threshold;
-- the probability that a run of the best learner succeeds on a test context where a run of another does not
-  (``P(X > Y)`` on per-context success, ties one half);
+- the probability that a run of one learner succeeds on a test context where a run of another does not
+  (``P(X > Y)`` on per-context success, ties one half), for every pair (the figure: the best learner's);
 - episodes until the validation success rate first reaches 0.5, 0.8 and 0.9 (median over the seeds that do);
 - why the final policies fail: per learner, how many (seed, test context) pairs miss each success criterion
   (the env's ``failure_causes``: coverage, force, cup, collisions, joint acceleration or limit), from the runs
   that recorded them;
-- the best learner's hardest test contexts: those it solves in fewer than half of its seeds, with their context
-  vectors (where the document holds them), to read what they share.
+- each learner's hardest test contexts (the figure and the top-level ``hardest``: the best learner's): those it
+  solves in fewer than half of its seeds, with their context vectors (where the document holds them), to read
+  what they share.
 
 Writes ``<name>_field.json`` and ``<name>_field.png`` beside the document:
 
@@ -120,13 +121,15 @@ def field_summary(document: dict) -> dict:
             "failure_causes": failure_counts(group),
             "episodes_to": {t: {"reached": sum(e is not None for e in v),
                                 "median": float(np.median([e for e in v if e is not None])) if any(
-                                    e is not None for e in v) else None} for t, v in reached.items()}}
+                                    e is not None for e in v) else None} for t, v in reached.items()},
+            "hardest": hardest_contexts(success[agent], document["settings"]["final_test_seeds"],
+                                        document.get("test_contexts")),
+            "improvement": {other: probability_of_improvement(success[agent], success[other]).to_dict()
+                            for other in agents if other != agent}}
     best = max(agents, key=lambda a: result["agents"][a]["test_success"]["estimate"])
     result["best"] = best
-    result["hardest"] = hardest_contexts(success[best], document["settings"]["final_test_seeds"],
-                                         document.get("test_contexts"))
-    result["improvement"] = {other: probability_of_improvement(success[best], success[other]).to_dict()
-                             for other in agents if other != best}
+    result["hardest"] = result["agents"][best]["hardest"]
+    result["improvement"] = result["agents"][best]["improvement"]
     return result
 
 

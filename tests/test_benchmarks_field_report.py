@@ -20,7 +20,7 @@ def _document():
     runs = [_run("good", s, [0.2, 0.6, 0.9, 0.95], 0.9) for s in range(4)]
     runs += [_run("weak", s, [0.2, 0.3, 0.5, 0.5], 0.4) for s in range(4)]
     return {"runs": runs, "baselines": {"imitation": {"success": [0.0, 1.0, 0.0, 0.0]}},
-            "settings": {"final_test_seeds": [1, 2], "env_id": "not-a-solved-env"}}
+            "settings": {"final_test_seeds": list(range(100, 120)), "env_id": "not-a-solved-env"}}
 
 
 def test_episodes_to_a_target_is_the_first_evaluation_that_reaches_it():
@@ -37,6 +37,8 @@ def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_t
     assert weak["episodes_to"]["0.9"]["reached"] == 0 and weak["episodes_to"]["0.5"]["median"] == 200.0
     assert good["test_success"]["estimate"] > weak["test_success"]["estimate"]
     assert summary["improvement"]["weak"]["estimate"] > 0.5
+    assert summary["agents"]["weak"]["improvement"]["good"]["estimate"] < 0.5
+    assert summary["agents"]["good"]["improvement"] == summary["improvement"]
     assert summary["imitation_success"] == 0.25
     assert (tmp_path / "bench_field.json").is_file() and (tmp_path / "bench_field.png").stat().st_size > 10_000
     assert field_summary(_document())["agents"]["good"]["curve"][-1][0] == 0.95
