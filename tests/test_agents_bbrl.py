@@ -81,6 +81,16 @@ def test_the_covariance_stays_positive_definite_and_smooth():
     assert np.corrcoef(weights[:, 0], weights[:, 1])[0, 1] > 0.5
 
 
+def test_the_low_rank_factor_learns_from_its_small_random_start():
+    """At ``U = 0`` the gradient of ``U U^T`` vanishes, so the factor starts small but not at zero, and moves."""
+    learner = _learner(rank=2)
+    start = learner.policy.low_rank.detach().clone()
+    assert 0 < torch.linalg.norm(start) < 0.05 * learner.config.sigma * np.sqrt(N * 2)
+    _run(learner, 5)
+    assert torch.linalg.norm(learner.policy.low_rank.detach() - start) > torch.linalg.norm(start)
+    assert _learner().policy.low_rank.shape == (N, 0)           # the default: no factor
+
+
 @pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}])
 def test_resume_is_exact_and_the_state_gives_the_policy(options):
     learner = _learner(**options)

@@ -13,8 +13,8 @@ further output of the network); ``L`` is the Cholesky factor of ``C`` and
 in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
 well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
 thousands (the conditional variances of a smooth block are tiny) and the trust region would forbid it.
-Exploration is therefore smooth in time from the first update on, and the low-rank part can learn which
-directions to explore together.
+Exploration is therefore smooth in time from the first update on, and the low-rank part (``rank`` > 0; none
+by default) can learn which directions to explore together.
 
 One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k(t))`` (``J`` the episode cost,
 ``c(t)`` its per-control-step part):
@@ -56,6 +56,8 @@ from .smooth import smooth_factor, squash, unsquash
 __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
 
 _DTYPE = torch.float64
+#: the low-rank factor's entries start at this share of each dimension's sigma (times a standard normal draw)
+LOW_RANK_START = 0.01
 CREDITS = ("step", "episode")
 BASELINES = ("ridge", "network")
 _BUFFER = ("contexts", "samples", "costs", "traces")
@@ -69,7 +71,7 @@ class BBRLConfig:
         sigma: initial per-dimension standard deviation of the exploration (action units).
         length: correlation length of the exploration in neighbouring weights (0 = independent).
         rough: share of independent (not smooth) exploration in the correlation.
-        rank: columns of the learned low-rank covariance factor ``U`` (0 = none).
+        rank: columns of the learned low-rank covariance factor ``U`` (0 = none; it starts at small random values).
         hidden: width of the two hidden layers of the mean network.
         epsilon: trust region: the largest mean KL divergence of one update.
         h: eliteness of the sample weights ``exp(-h Â)`` (``Â`` the advantage scaled to [0, 1]).
@@ -103,7 +105,7 @@ class BBRLConfig:
     sigma: float = 0.3
     length: float = 5.0
     rough: float = 0.1
-    rank: int = 4
+    rank: int = 0
     hidden: int = 64
     epsilon: float = 0.2
     h: float = 10.0
@@ -245,7 +247,8 @@ class _Policy(torch.nn.Module):
         sigma = torch.as_tensor(np.broadcast_to(sigma, (n,)).copy(), dtype=_DTYPE)
         self.register_buffer("shape", sigma[:, None] * torch.linalg.cholesky(torch.as_tensor(correlation)))
         self.log_sigma = torch.nn.Parameter(torch.log(sigma))
-        self.low_rank = torch.nn.Parameter(torch.zeros(n, rank, dtype=_DTYPE))
+        # a small random start: at U = 0 the gradient of U U^T is zero, so U would never move
+        self.low_rank = torch.nn.Parameter(LOW_RANK_START * sigma[:, None] * torch.randn(n, rank, dtype=_DTYPE))
         self.to(_DTYPE)
 
     def mean(self, contexts: torch.Tensor) -> torch.Tensor:
