@@ -82,8 +82,8 @@ def performance_profile(scores: np.ndarray, thresholds: np.ndarray, seed: int = 
 
 def _improvement(x: np.ndarray, y: np.ndarray) -> float:
     """``P(X > Y)`` averaged over tasks (ties count one half): the Mann-Whitney statistic over ``m n``."""
-    pairs = x[:, None, :], y[None, :, :]                 # [R, 1, M], [1, R', M]: every task has R R' pairs
-    return float(np.mean((pairs[0] > pairs[1]) + 0.5 * (pairs[0] == pairs[1])))
+    runs_x, runs_y = x[:, None, :], y[None, :, :]        # [R, 1, M], [1, R', M]: every task has R R' pairs
+    return float(np.mean((runs_x > runs_y) + 0.5 * (runs_x == runs_y)))
 
 
 def probability_of_improvement(x: np.ndarray, y: np.ndarray, seed: int = 0, resamples: int = 1000) -> Interval:
