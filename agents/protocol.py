@@ -87,12 +87,14 @@ def success(batch: EpisodeBatch) -> np.ndarray:
 
 
 def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] | None = None) -> float:
-    """The task's jerk measure of the path commanded by ``action [n]`` in the context of ``seed``: integrated
-    squared jerk (m²/s⁵), or per integrated squared speed (1/s⁴, size-independent) where the task's smoothness
-    term uses that (``task_version.speed_normalised_jerk``, ``ArmarWipe-v2``)."""
+    """The task's jerk measure of the path executed for ``action [n]`` in the context of ``seed`` (with the
+    env's clearance term where it has one on): integrated squared jerk (m²/s⁵), or per integrated squared speed
+    (1/s⁴, size-independent) where the task's smoothness term uses that (``task_version.speed_normalised_jerk``,
+    ``ArmarWipe-v2``)."""
     env.reset(seed=int(seed), options=None if options is None else dict(options))
     base = env.unwrapped
-    path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
+    params = base.action_to_params(np.asarray(action, dtype=np.float64))
+    path = base.executed_path(params) if hasattr(base, "executed_path") else base.rollout_path(params)
     dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
     version = getattr(base, "task_version", None)
     if version is not None and version.speed_normalised_jerk:

@@ -45,6 +45,7 @@ from rdmp_gym.validation import check_positive
 
 from .action import ActionMap
 from .approach import approach_direction, lift_profile
+from .clearance import Cup, CupClearance, HandPoints
 from .context import SIZE as CONTEXT_SIZE
 from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
@@ -126,6 +127,22 @@ def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> Rhyt
     return dmp.with_sweep(covering_sweep(transient, end - SWEEP_END_MARGIN, dmp.n_dims))
 
 
+def _workspace_excess(path: np.ndarray) -> float:
+    """How far (m) ``path [T, 3]`` leaves the workspace box at most (0 inside)."""
+    return float(np.max(np.maximum(WORKSPACE_LOW - path, 0.0) + np.maximum(path - WORKSPACE_HIGH, 0.0)))
+
+
+def _cup_clearance(value: float | CupClearance | None) -> CupClearance | None:
+    """The env's clearance term from its ``cup_clearance`` argument (a margin in metres, a term, or None)."""
+    if value is None or isinstance(value, CupClearance):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ValueError(f"cup_clearance: expected None, a margin in metres or a CupClearance, got {value!r}")
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"cup_clearance: expected a margin > 0 (m), got {value!r}")
+    return CupClearance(margin=float(value))
+
+
 def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
     """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against the workspace."""
     if not isinstance(dmp, RhythmicDMP):
@@ -188,6 +205,10 @@ class ArmarWipeEnv(gym.Env):
             many control steps.
         version: the task version, 1 or 2 (:mod:`rdmp_gym.envs.versions`); ``gym.make`` of
             ``rdmp_gym/ArmarWipe-v2`` sets 2.
+        cup_clearance: execute every path with a clearance term that keeps the hand (fingers, thumb, palm,
+            sponge) this many metres from the cup's side (:class:`~rdmp_gym.envs.clearance.CupClearance`, or one
+            given); ``None`` (default): the path as commanded. The reward and the success criteria are the same;
+            ``info["clearance_push"]`` gives the largest push of the path (m).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
@@ -231,6 +252,7 @@ class ArmarWipeEnv(gym.Env):
         record_frames: bool = False,
         frame_stride: int = 4,
         version: int = 1,
+        cup_clearance: float | CupClearance | None = None,
     ):
         super().__init__()
         if isinstance(version, bool) or version not in TASK_VERSIONS:
@@ -351,6 +373,9 @@ class ArmarWipeEnv(gym.Env):
                                      bodies=("torso", "r_underarm_link"))
         clearance = BodyClearance(model, kinematics, "torso", ("r_forearm",))
         self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY, clearance=clearance)
+        #: the clearance term that keeps the hand away from the cup (None: off)
+        self.cup_clearance = _cup_clearance(cup_clearance)
+        self._hand_points = HandPoints(model, self.scene.qpos_adr) if self.cup_clearance is not None else None
         self._lead = self.scene.servo_lead()
         self._engage = self.adaptation_settings.engage_height
 
@@ -525,6 +550,14 @@ class ArmarWipeEnv(gym.Env):
         shift = np.r_[self.context.sponge_start, self.context.patch_centre]
         return base + np.tensordot(shift, unit, axes=1)
 
+    def executed_path(self, theta: np.ndarray) -> np.ndarray:
+        """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that :meth:`step` executes for parameters
+        ``theta``: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
+        path = self.rollout_path(theta)
+        if self.cup_clearance is None or not np.all(np.isfinite(path)) or _workspace_excess(path) > 0:
+            return path
+        return self._clear_cup(path, self._solve(path), {})[0]
+
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,
         bypassing the DMP (for tests and hand-made motions). Returns (reward, info)."""
@@ -539,6 +572,20 @@ class ArmarWipeEnv(gym.Env):
         world = self.scene.to_world(path)
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
         return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
+
+    def _clear_cup(self, path: np.ndarray, solution: IKResult, info: dict) -> tuple[np.ndarray, IKResult]:
+        """``path [T, 3]`` and its IK solution with :attr:`cup_clearance`'s push (unchanged without a cup);
+        records the largest push (m) in ``info["clearance_push"]``."""
+        info["clearance_push"] = 0.0
+        if self.context is None or not self.context.obstacle:
+            return path, solution
+        origin, rot = self.scene.table_frame(actual=True)
+        base = origin + rot @ np.r_[self.context.obstacle_position, 0.0]
+        cup = Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+        path, solution, push = self.cup_clearance.apply(path, solution, self._solve, self._hand_points, cup,
+                                                        self.scene.control_frame()[1])
+        info["clearance_push"] = push
+        return path, solution
 
     def _smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
         """Jerk of the commanded path relative to the imitation's in this context (v2: per unit of squared speed,
@@ -561,10 +608,13 @@ class ArmarWipeEnv(gym.Env):
         assert path is not None
         if not np.all(np.isfinite(path)):
             return self._invalid(info, "nonfinite_path", 1.0)
-        excess = np.maximum(WORKSPACE_LOW - path, 0.0) + np.maximum(path - WORKSPACE_HIGH, 0.0)
-        if np.any(excess > 0):
-            return self._invalid(info, "workspace", float(excess.max()) / 0.1)
+        if _workspace_excess(path) > 0:
+            return self._invalid(info, "workspace", _workspace_excess(path) / 0.1)
         solution = self._solve(path)
+        if self.cup_clearance is not None:
+            path, solution = self._clear_cup(path, solution, info)
+            if _workspace_excess(path) > 0:
+                return self._invalid(info, "workspace", _workspace_excess(path) / 0.1)
         flat = path[:, 2] <= self._engage
         bad = (solution.pos_error > self.ik_tolerance[0]) | (flat & (solution.rot_error > self.ik_tolerance[1]))
         if np.any(bad):
