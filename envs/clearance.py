@@ -74,7 +74,8 @@ class CupClearance:
             neighbours; the spread push is then scaled by one factor so that it gives every step at least what
             it needs along its own direction (so the push is as smooth as the Gaussian).
         iterations: plan, check and push rounds (the posture changes a little with the pushed path).
-        max_push: largest push (m) of one round at any step.
+        max_push: largest push (m) of one round at any step (where the needs disagree, e.g. with the hand
+            above the cup's centre, the round's push is this at most).
     """
 
     margin: float = 0.01
@@ -111,7 +112,8 @@ class CupClearance:
         spread = gaussian_filter1d(raw, self.smoothing, axis=0, mode="nearest")
         needed = need > 0
         reach = np.sum(spread[needed] * raw[needed], axis=1) / need[needed] ** 2   # spread push along each need
-        return spread / max(float(np.min(reach)), 1e-3)
+        largest = float(np.max(np.linalg.norm(spread, axis=1)))
+        return spread * min(1.0 / max(float(np.min(reach)), 1e-12), self.max_push / largest)
 
     def apply(self, path: np.ndarray, solution, solve: Callable, hand: HandPoints, cup: Cup,
               rotation: np.ndarray) -> tuple[np.ndarray, object, float]:
