@@ -24,6 +24,7 @@ if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
 
 import gymnasium as gym
 
+from .clearance import CupClearance
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .reward import TERMS, RewardWeights
 from .scene import ARM_JOINTS, TablePose, WipeScene
@@ -44,6 +45,7 @@ __all__ = [
     "ArmarWipeEnv",
     "Context",
     "ContextSpec",
+    "CupClearance",
     "RecordEpisodeVideo",
     "RewardWeights",
     "TablePose",

@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-__all__ = ["CupClearance", "HandPoints"]
+__all__ = ["Cup", "CupClearance", "HandPoints"]
 
 #: The geoms of the hand that the clearance keeps away from the cup (the sponge included).
 HAND_GEOMS = ("fingers", "thumb", "palm", "sponge")
