@@ -34,6 +34,7 @@ class HandPoints:
         missing = [name for name, i in zip(geoms, ids, strict=True) if i < 0]
         if missing:
             raise ValueError(f"geoms: {missing} are not geoms of the model")
+        self.names = tuple(geoms)
         self.model, self.qpos_adr, self.ids = model, np.asarray(qpos_adr), np.array(ids)
         self._data = mujoco.MjData(model)
         unit = np.array(np.meshgrid(*[[-1.0, 0.0, 1.0]] * 3, indexing="ij")).reshape(3, -1).T   # [27, 3]
@@ -51,6 +52,14 @@ class HandPoints:
             rot = data.geom_xmat[self.ids].reshape(-1, 3, 3)
             out[t] = data.geom_xpos[self.ids][:, None] + np.einsum("gij,gkj->gki", rot, self._local)
         return out.reshape(len(q), -1, 3)
+
+    def gaps(self, q: np.ndarray, cup: Cup) -> np.ndarray:
+        """``[T, G]``: per geom, the smallest horizontal gap (m) between its points below ``cup``'s top and the
+        cup's side at joint positions ``q [T, n]`` (negative: inside the cup's footprint; inf: all above it)."""
+        points = self(q).reshape(len(q), len(self.ids), -1, 3)
+        gap = np.linalg.norm(points[..., :2] - cup.base[:2], axis=-1) - cup.radius
+        gap[points[..., 2] > cup.top] = np.inf
+        return gap.min(axis=-1)
 
 
 @dataclass(frozen=True)

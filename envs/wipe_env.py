@@ -573,15 +573,34 @@ class ArmarWipeEnv(gym.Env):
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
         return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
 
+    def _cup(self) -> Cup | None:
+        """The episode's cup as it stands before the wipe (world frame), or None without one."""
+        if self.context is None or not self.context.obstacle:
+            return None
+        origin, rot = self.scene.table_frame(actual=True)
+        base = origin + rot @ np.r_[self.context.obstacle_position, 0.0]
+        return Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+
+    def hand_cup_gaps(self, path: np.ndarray) -> dict[str, np.ndarray]:
+        """``{part: [T]}``: for each part of the hand (fingers, thumb, palm, sponge), the horizontal gap (m)
+        between its points below the cup's top and the cup's side at every control step of ``path [T, 3]``
+        (nominal table frame) as planned (inverse kinematics, no simulation); inf where the part is above the
+        cup. Empty without a cup."""
+        cup = self._cup()
+        if cup is None:
+            return {}
+        if self._hand_points is None:
+            self._hand_points = HandPoints(self.scene.model, self.scene.qpos_adr)
+        gaps = self._hand_points.gaps(self._solve(np.asarray(path, dtype=np.float64)).q, cup)
+        return dict(zip(self._hand_points.names, gaps.T, strict=True))
+
     def _clear_cup(self, path: np.ndarray, solution: IKResult, info: dict) -> tuple[np.ndarray, IKResult]:
         """``path [T, 3]`` and its IK solution with :attr:`cup_clearance`'s push (unchanged without a cup);
         records the largest push (m) in ``info["clearance_push"]``."""
         info["clearance_push"] = 0.0
-        if self.context is None or not self.context.obstacle:
+        cup = self._cup()
+        if cup is None:
             return path, solution
-        origin, rot = self.scene.table_frame(actual=True)
-        base = origin + rot @ np.r_[self.context.obstacle_position, 0.0]
-        cup = Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
         path, solution, push = self.cup_clearance.apply(path, solution, self._solve, self._hand_points, cup,
                                                         self.scene.control_frame()[1])
         info["clearance_push"] = push
