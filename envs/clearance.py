@@ -79,7 +79,7 @@ class CupClearance:
     Attributes:
         margin: smallest horizontal gap (m) between the hand's points below the cup's top (plus ``margin``) and
             the cup's side.
-        smoothing: standard deviation (control steps) of the Gaussian that spreads each step's push over its
+        smoothing: standard deviation (s) of the Gaussian that spreads each control step's push over its
             neighbours; the spread push is then scaled by one factor so that it gives every step at least what
             it needs along its own direction (so the push is as smooth as the Gaussian).
         iterations: plan, check and push rounds (the posture changes a little with the pushed path).
@@ -88,7 +88,7 @@ class CupClearance:
     """
 
     margin: float = 0.01
-    smoothing: float = 25.0
+    smoothing: float = 0.25
     iterations: int = 3
     max_push: float = 0.05
 
@@ -100,10 +100,10 @@ class CupClearance:
         if isinstance(self.iterations, bool) or not isinstance(self.iterations, int) or self.iterations < 1:
             raise ValueError(f"iterations: expected an int >= 1, got {self.iterations!r}")
 
-    def push(self, points: np.ndarray, cup: Cup, rotation: np.ndarray) -> np.ndarray:
+    def push(self, points: np.ndarray, cup: Cup, rotation: np.ndarray, dt: float) -> np.ndarray:
         """The smooth push ``[T, 3]`` (control frame, zero along the table normal) that the hand's world points
-        ``points [T, K, 3]`` need to keep ``margin`` from ``cup``; ``rotation [3, 3]``: the control frame's axes
-        (columns) in the world."""
+        ``points [T, K, 3]`` (one row per control step of ``dt`` s) need to keep ``margin`` from ``cup``;
+        ``rotation [3, 3]``: the control frame's axes (columns) in the world."""
         rel = points[..., :2] - cup.base[:2]
         dist = np.linalg.norm(rel, axis=-1)
         dist[points[..., 2] > cup.top + self.margin] = np.inf
@@ -118,20 +118,20 @@ class CupClearance:
         world[:, :2] = need[:, None] * away
         raw = world @ rotation
         raw[:, 2] = 0.0
-        spread = gaussian_filter1d(raw, self.smoothing, axis=0, mode="nearest")
+        spread = gaussian_filter1d(raw, self.smoothing / dt, axis=0, mode="nearest")
         needed = need > 0
         reach = np.sum(spread[needed] * raw[needed], axis=1) / need[needed] ** 2   # spread push along each need
         largest = float(np.max(np.linalg.norm(spread, axis=1)))
         return spread * min(1.0 / max(float(np.min(reach)), 1e-12), self.max_push / largest)
 
     def apply(self, path: np.ndarray, solution, solve: Callable, hand: HandPoints, cup: Cup,
-              rotation: np.ndarray) -> tuple[np.ndarray, object, float]:
+              rotation: np.ndarray, dt: float) -> tuple[np.ndarray, object, float]:
         """``(path [T, 3], its IK solution, largest total push (m))``: ``path`` (control frame) with the pushes
         of up to ``iterations`` rounds, each planned with ``solve(path)`` (the IK ``solution`` of ``path`` is
         reused for the first check)."""
         total = np.zeros_like(path)
         for _ in range(self.iterations):
-            push = self.push(hand(solution.q), cup, rotation)
+            push = self.push(hand(solution.q), cup, rotation, dt)
             if not np.any(push):
                 break
             total += push

@@ -602,7 +602,7 @@ class ArmarWipeEnv(gym.Env):
         if cup is None:
             return path, solution
         path, solution, push = self.cup_clearance.apply(path, solution, self._solve, self._hand_points, cup,
-                                                        self.scene.control_frame()[1])
+                                                        self.scene.control_frame()[1], self.dt)
         info["clearance_push"] = push
         return path, solution
 

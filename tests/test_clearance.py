@@ -9,6 +9,7 @@ from rdmp_gym.envs import ENV_ID_V2
 from rdmp_gym.envs.clearance import Cup, CupClearance
 
 CUP = Cup(base=np.zeros(3), radius=0.035, top=0.08)
+DT = 0.01                                      # s per control step of the synthetic paths
 #: a reset seed of ArmarWipe-v2 whose imitation knocks the cup beside its patch (40 control steps)
 TOUCHING_SEED = 13
 
@@ -24,29 +25,29 @@ def _gaps(points: np.ndarray) -> np.ndarray:
 
 
 def test_push_keeps_the_margin_and_is_smooth():
-    clearance = CupClearance(margin=0.01, smoothing=25.0)
+    clearance = CupClearance(margin=0.01, smoothing=0.25)
     points = _line(0.03)
-    push = clearance.push(points, CUP, np.eye(3))
+    push = clearance.push(points, CUP, np.eye(3), DT)
     assert np.all(push[:, 2] == 0.0)
     assert _gaps(points + push[:, None]).min() >= CUP.radius + clearance.margin - 1e-6
     assert np.linalg.norm(push, axis=1).max() <= clearance.max_push
     # a Gaussian spread: far from the steps that need a push there is none, and the push has no kinks
     needing = np.flatnonzero(_gaps(points) < CUP.radius + clearance.margin)
-    far = np.abs(np.arange(len(points))[:, None] - needing[None]).min(axis=1) > 6 * clearance.smoothing
+    far = np.abs(np.arange(len(points))[:, None] - needing[None]).min(axis=1) > 6 * clearance.smoothing / DT
     assert np.abs(push[far]).max() < 1e-6
     second = np.abs(np.diff(push[:, 1], 2)).max()
-    assert second < 4 * np.abs(push[:, 1]).max() / clearance.smoothing ** 2
+    assert second < 4 * np.abs(push[:, 1]).max() / (clearance.smoothing / DT) ** 2
 
 
 def test_no_push_where_the_hand_is_clear_or_above_the_cup():
     clearance = CupClearance()
-    assert not np.any(clearance.push(_line(0.2), CUP, np.eye(3)))
-    assert not np.any(clearance.push(_line(0.0, height=CUP.top + 0.05), CUP, np.eye(3)))
+    assert not np.any(clearance.push(_line(0.2), CUP, np.eye(3), DT))
+    assert not np.any(clearance.push(_line(0.0, height=CUP.top + 0.05), CUP, np.eye(3), DT))
 
 
 def test_push_is_bounded_where_the_needs_disagree():
     clearance = CupClearance(max_push=0.03)
-    push = clearance.push(_line(0.0), CUP, np.eye(3))     # straight over the cup's centre: away flips sides
+    push = clearance.push(_line(0.0), CUP, np.eye(3), DT)     # straight over the cup's centre: away flips sides
     assert np.all(np.isfinite(push)) and np.linalg.norm(push, axis=1).max() <= 0.03 + 1e-12
 
 
