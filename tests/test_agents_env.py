@@ -97,6 +97,8 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
         assert (out / name).exists(), name
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["evaluation"]) == {"imitation", "trained"}
+    config = json.loads((out / "train" / "config.json").read_text())        # the main job's own defaults
+    assert config["env_kwargs"]["cup_clearance"] == 0.01 and config["options"]["sigma_factors"] == "approach=3"
     assert main(["fit", "--style", "3", "--plot", "--out", str(tmp_path / "fit")]) == 0
     assert (tmp_path / "fit" / "fit.png").exists() and (tmp_path / "fit" / "dmp.json").exists()
     assert main(["evaluate", str(out / "train"), "--episodes", "1", "--workers", "1"]) == 0
