@@ -57,9 +57,7 @@ class HandPoints:
         """``[T, G]``: per geom, the smallest horizontal gap (m) between its points below ``cup``'s top and the
         cup's side at joint positions ``q [T, n]`` (negative: inside the cup's footprint; inf: all above it)."""
         points = self(q).reshape(len(q), len(self.ids), -1, 3)
-        gap = np.linalg.norm(points[..., :2] - cup.base[:2], axis=-1) - cup.radius
-        gap[points[..., 2] > cup.top] = np.inf
-        return gap.min(axis=-1)
+        return (cup.horizontal(points)[1] - cup.radius).min(axis=-1)
 
 
 @dataclass(frozen=True)
@@ -69,6 +67,14 @@ class Cup:
     base: np.ndarray
     radius: float
     top: float
+
+    def horizontal(self, points: np.ndarray, headroom: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """``(offsets [..., 2], distances [...])`` of world ``points [..., 3]`` from the cup's axis in the
+        horizontal plane; the distance is inf for a point higher than the top plus ``headroom`` (m)."""
+        offsets = points[..., :2] - self.base[:2]
+        distances = np.linalg.norm(offsets, axis=-1)
+        distances[points[..., 2] > self.top + headroom] = np.inf
+        return offsets, distances
 
 
 @dataclass(frozen=True)
@@ -104,9 +110,7 @@ class CupClearance:
         """The smooth push ``[T, 3]`` (control frame, zero along the table normal) that the hand's world points
         ``points [T, K, 3]`` (one row per control step of ``dt`` s) need to keep ``margin`` from ``cup``;
         ``rotation [3, 3]``: the control frame's axes (columns) in the world."""
-        rel = points[..., :2] - cup.base[:2]
-        dist = np.linalg.norm(rel, axis=-1)
-        dist[points[..., 2] > cup.top + self.margin] = np.inf
+        rel, dist = cup.horizontal(points, self.margin)
         nearest = np.argmin(dist, axis=1)
         steps = np.arange(len(points))
         gap = dist[steps, nearest]

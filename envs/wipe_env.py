@@ -627,13 +627,15 @@ class ArmarWipeEnv(gym.Env):
         assert path is not None
         if not np.all(np.isfinite(path)):
             return self._invalid(info, "nonfinite_path", 1.0)
-        if _workspace_excess(path) > 0:
-            return self._invalid(info, "workspace", _workspace_excess(path) / 0.1)
+        excess = _workspace_excess(path)
+        if excess > 0:
+            return self._invalid(info, "workspace", excess / 0.1)
         solution = self._solve(path)
         if self.cup_clearance is not None:
             path, solution = self._clear_cup(path, solution, info)
-            if _workspace_excess(path) > 0:
-                return self._invalid(info, "workspace", _workspace_excess(path) / 0.1)
+            excess = _workspace_excess(path)
+            if excess > 0:
+                return self._invalid(info, "workspace", excess / 0.1)
         flat = path[:, 2] <= self._engage
         bad = (solution.pos_error > self.ik_tolerance[0]) | (flat & (solution.rot_error > self.ik_tolerance[1]))
         if np.any(bad):
