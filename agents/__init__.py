@@ -25,7 +25,7 @@ _EXPORTS = {
     "PPOConfig": "ppo_config",
     "RunDirectory": "runs",
     "WIPE_ID": "tasks", "TaskSpec": "tasks",
-    "TRACKING_ID": "rdmp_gym.envs.tracking", "TrackingEnv": "rdmp_gym.envs.tracking",
+    "TRACKING_ID": "rdmp_gym.envs.registration", "TrackingEnv": "rdmp_gym.envs.tracking",
     "AGENTS": "training", "TrainConfig": "training", "train": "training",
 }
 

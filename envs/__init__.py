@@ -22,13 +22,22 @@ import os
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
-import gymnasium as gym
-
 from .clearance import CupClearance
 from .context import CONTEXT_FIELDS, Context, ContextSpec
+from .registration import (
+    DEPRECATED_ENV_ID,
+    ENV_ID,
+    ENV_ID_V2,
+    LATEST_ENV_ID,
+    LATEST_STEP_ID,
+    STEP_ID,
+    STEP_ID_V2,
+    TRACKING_ID,
+    register_envs,
+)
 from .reward import TERMS, RewardWeights
 from .scene import ARM_JOINTS, TablePose, WipeScene
-from .tracking import TRACKING_ID, TrackingEnv
+from .tracking import TrackingEnv
 from .video import RecordEpisodeVideo
 from .wipe_env import ArmarWipeEnv
 
@@ -38,6 +47,8 @@ __all__ = [
     "DEPRECATED_ENV_ID",
     "ENV_ID",
     "ENV_ID_V2",
+    "LATEST_ENV_ID",
+    "LATEST_STEP_ID",
     "STEP_ID",
     "STEP_ID_V2",
     "TERMS",
@@ -53,28 +64,4 @@ __all__ = [
     "WipeScene",
 ]
 
-ENV_ID = "rdmp_gym/ArmarWipe-v1"
-#: Deprecated: v0's reward could be gamed (dirt off the table, touching counted as wiping, no self-collision).
-#: It now makes the v1 env without the obstacle, with a DeprecationWarning, and will be removed.
-DEPRECATED_ENV_ID = "rdmp_gym/ArmarWipe-v0"
-
-if ENV_ID not in gym.registry:
-    gym.register(id=ENV_ID, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv", kwargs={"obstacle": True})
-if DEPRECATED_ENV_ID not in gym.registry:
-    gym.register(id=DEPRECATED_ENV_ID, entry_point="rdmp_gym.envs.wipe_env:deprecated_v0")
-if TRACKING_ID not in gym.registry:
-    gym.register(id=TRACKING_ID, entry_point="rdmp_gym.envs.tracking:TrackingEnv")
-STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
-if STEP_ID not in gym.registry:
-    gym.register(id=STEP_ID, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv")
-#: The pattern travels across the patch (``sweep_x``, ``sweep_y``), every drawn context is solvable, smoothness
-#: does not charge a pattern for its size, and ``is_success`` needs an executable motion
-#: (:mod:`rdmp_gym.envs.versions`).
-ENV_ID_V2 = "rdmp_gym/ArmarWipe-v2"
-STEP_ID_V2 = "rdmp_gym/ArmarWipeStep-v2"
-if ENV_ID_V2 not in gym.registry:
-    gym.register(id=ENV_ID_V2, entry_point="rdmp_gym.envs.wipe_env:ArmarWipeEnv", kwargs={"obstacle": True,
-                                                                                       "version": 2})
-if STEP_ID_V2 not in gym.registry:
-    gym.register(id=STEP_ID_V2, entry_point="rdmp_gym.envs.step_env:ArmarWipeStepEnv",
-                 kwargs={"version": 2, "max_shift": (0.06, 0.06, 0.02)})
+register_envs()

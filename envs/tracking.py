@@ -24,9 +24,8 @@ import numpy as np
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
 from rdmp_gym.fitting import FADE_BEFORE_T
 
-__all__ = ["TRACKING_ID", "TrackingEnv"]
+__all__ = ["TrackingEnv"]
 
-TRACKING_ID = "rdmp_gym/DMPTracking-v0"
 _ERROR_UNIT = 0.01  # m
 
 

@@ -1,0 +1,154 @@
+"""Digests of the numbers the package publishes, to check that a refactor changes none of them bit for bit.
+
+Each entry is a SHA-256 of the exact bytes of a result: the fitted DMPs of the built-in demonstrations (the
+library's defaults and the settings the environments pin), episodic returns and infos of the published task
+versions (v1, v2, v2 with the cup clearance, the step twins) on fixed reset seeds and actions, and short
+learner runs (a few updates of every learner, one worker).
+
+    python benchmarks/bit_for_bit.py --out runs/bit_for_bit.json            # write the digests
+    python benchmarks/bit_for_bit.py --check benchmarks/results/bit_for_bit.json   # compare, exit 1 on a change
+
+``--only fits,envs,learners`` restricts the groups (the learners take a few minutes on 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+GROUPS = ("fits", "envs", "learners")
+RESET_SEEDS = (7000, 7003, 7010, 7021)
+LEARNERS = ("pi2", "cpi2", "pibb", "creps", "cmaes", "bbrl")
+
+
+def _digest(*arrays: Any) -> str:
+    h = hashlib.sha256()
+    for value in arrays:
+        h.update(np.ascontiguousarray(np.asarray(value, dtype=np.float64)).tobytes())
+    return h.hexdigest()[:16]
+
+
+def _info_numbers(info: dict) -> list[float]:
+    keys = sorted(k for k, v in info.items() if isinstance(v, (int, float, np.floating, np.integer, bool)))
+    return [float(info[k]) for k in keys] + [float(v) for k in sorted(info.get("reward_terms", {}))
+                                             for v in [info["reward_terms"][k]]]
+
+
+def fits() -> dict[str, str]:
+    """The DMPs fitted to the four built-in demonstrations, with the library's defaults and the envs' settings."""
+    from rdmp_gym import RhythmicDMP, wiping_demonstration
+
+    out = {}
+    for style in (1, 2, 3, 4):
+        demo = wiping_demonstration(style=style, rng=0)
+        dmp = RhythmicDMP.fit(demo)
+        out[f"fit/default/style{style}"] = _digest(dmp.rollout(demo.t))
+    import rdmp_gym.envs.wipe_env as wipe_env
+
+    for style in (1, 2):
+        dmp = wipe_env._fit_style(style, 40, 40, "trajectory")
+        out[f"fit/env/style{style}"] = _digest(dmp.rollout(np.arange(0, 12, 0.01)))
+    return out
+
+
+def _episodes(env_id: str, **kwargs: Any) -> str:
+    import gymnasium as gym
+
+    env = gym.make(env_id, **kwargs)
+    numbers = []
+    rng = np.random.default_rng(0)
+    for seed in RESET_SEEDS:
+        for scale in (0.0, 0.3):
+            obs, _ = env.reset(seed=seed)
+            action = scale * rng.uniform(-1, 1, env.action_space.shape)
+            _, reward, _, _, info = env.step(action.astype(np.float32))
+            numbers += [reward, *obs, *_info_numbers(info)]
+    env.close()
+    return _digest(numbers)
+
+
+def _step_episodes(env_id: str) -> str:
+    import gymnasium as gym
+
+    env = gym.make(env_id)
+    numbers = []
+    for seed in RESET_SEEDS[:2]:
+        obs, _ = env.reset(seed=seed)
+        rng = np.random.default_rng(seed)
+        done = False
+        total = 0.0
+        while not done:
+            obs, reward, terminated, truncated, info = env.step(0.3 * rng.uniform(-1, 1, 3))
+            total += reward
+            done = terminated or truncated
+        numbers += [total, *obs, *_info_numbers(info)]
+    env.close()
+    return _digest(numbers)
+
+
+def envs() -> dict[str, str]:
+    """Returns, observations and info figures of the published task versions."""
+    import rdmp_gym.envs  # noqa: F401  (registers the ids)
+
+    return {"env/v1": _episodes("rdmp_gym/ArmarWipe-v1"),
+            "env/v2": _episodes("rdmp_gym/ArmarWipe-v2"),
+            "env/v2_clearance": _episodes("rdmp_gym/ArmarWipe-v2", cup_clearance=0.01),
+            "env/step_v1": _step_episodes("rdmp_gym/ArmarWipeStep-v1"),
+            "env/step_v2": _step_episodes("rdmp_gym/ArmarWipeStep-v2")}
+
+
+def learners() -> dict[str, str]:
+    """Three updates of every learner on ArmarWipe-v2 (one worker, seed 0): the saved state's numbers."""
+    from rdmp_gym.agents.learners import CONTEXTUAL
+    from rdmp_gym.agents.training import TrainConfig, train
+
+    out = {}
+    for agent in LEARNERS:
+        with tempfile.TemporaryDirectory() as tmp:
+            config = TrainConfig(agent=agent, updates=3, rollouts=6, seed=0, workers=1,
+                                 env_id="rdmp_gym/ArmarWipe-v2", eval_episodes=2, eval_every=3,
+                                 shared_context=agent not in CONTEXTUAL)
+            train(config, Path(tmp) / "run")
+            rows = [json.loads(line) for line in (Path(tmp) / "run" / "metrics.jsonl").read_text().splitlines()]
+            numbers = [float(v) for row in rows for k, v in sorted(row.items())
+                       if isinstance(v, (int, float)) and not k.startswith(("time", "wall", "elapsed"))]
+            out[f"learner/{agent}"] = _digest(numbers)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=Path, help="write the digests to this JSON file")
+    parser.add_argument("--check", type=Path, help="compare with the digests in this JSON file")
+    parser.add_argument("--only", default=",".join(GROUPS), help="comma-separated groups: " + ", ".join(GROUPS))
+    args = parser.parse_args(argv)
+    chosen = [g for g in args.only.split(",") if g]
+    unknown = set(chosen) - set(GROUPS)
+    if unknown:
+        parser.error(f"--only: unknown groups {sorted(unknown)}")
+    digests: dict[str, str] = {}
+    for group in chosen:
+        digests.update(globals()[group]())
+        print(f"{group}: done", flush=True)
+    for key, value in digests.items():
+        print(f"{key:28s} {value}")
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(digests, indent=1) + "\n")
+    if args.check:
+        expected = json.loads(args.check.read_text())
+        changed = [k for k, v in digests.items() if k in expected and expected[k] != v]
+        print("changed: " + (", ".join(changed) if changed else "none"))
+        return 1 if changed else 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
