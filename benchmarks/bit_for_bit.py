@@ -116,7 +116,7 @@ def learners() -> dict[str, str]:
                                  env_id="rdmp_gym/ArmarWipe-v2", eval_episodes=2, eval_every=3,
                                  shared_context=agent not in CONTEXTUAL)
             train(config, Path(tmp) / "run")
-            rows = [json.loads(line) for line in (Path(tmp) / "run" / "metrics.jsonl").read_text().splitlines()]
+            rows = [json.loads(line) for line in (Path(tmp) / "run" / "log.jsonl").read_text().splitlines()]
             numbers = [float(v) for row in rows for k, v in sorted(row.items())
                        if isinstance(v, (int, float)) and not k.startswith(("time", "wall", "elapsed"))]
             out[f"learner/{agent}"] = _digest(numbers)
@@ -137,14 +137,17 @@ def main(argv: list[str] | None = None) -> int:
     for group in chosen:
         digests.update(globals()[group]())
         print(f"{group}: done", flush=True)
+        if args.out:
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            args.out.write_text(json.dumps(digests, indent=1) + "\n")
     for key, value in digests.items():
         print(f"{key:28s} {value}")
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps(digests, indent=1) + "\n")
     if args.check:
         expected = json.loads(args.check.read_text())
         changed = [k for k, v in digests.items() if k in expected and expected[k] != v]
+        missing = [k for k in digests if k not in expected]
+        if missing:
+            print("not in the baseline: " + ", ".join(missing))
         print("changed: " + (", ".join(changed) if changed else "none"))
         return 1 if changed else 0
     return 0
