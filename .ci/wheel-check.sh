@@ -31,6 +31,7 @@ BIN="$WORK/venv/bin"
 "$BIN/pip" install --quiet --no-compile "$WHEEL" 2>&1 | grep -v "Location '" || true
 cd "$WORK"
 "$BIN/rdmp-gym" --help >/dev/null
+"$BIN/python" -c "import sys, rdmp_gym; assert not {'gymnasium', 'mujoco', 'matplotlib'} & set(sys.modules)"
 "$BIN/rdmp-gym" fit --style 1 --n-periodic 20 --n-transient 20 --out "$WORK/fit"
 test -s "$WORK/fit/dmp.json"
 if "$BIN/rdmp-gym" train --out "$WORK/core-train" 2>"$WORK/err.txt"; then
@@ -47,7 +48,7 @@ step "same venv, agents extra (CPU torch)"
 import gymnasium as gym
 import torch
 
-import rdmp_gym
+import rdmp_gym.envs  # registers the env ids
 
 assert "+cpu" in torch.__version__ or not torch.cuda.is_available(), torch.__version__
 assert "site-packages" in rdmp_gym.__file__, rdmp_gym.__file__

@@ -47,6 +47,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from field_report import episodes_to
 from field_report import write as write_field_report
 from output import SCRATCH, add_save_argument, results_dir
@@ -64,8 +65,6 @@ from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from tqdm import tqdm
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 SUCCESS_TARGET = 0.9
 METRICS = ("success", "coverage", "jerk_ratio", "returns")

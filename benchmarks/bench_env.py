@@ -33,11 +33,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID, probes
 from rdmp_gym.envs.controller import JointTargetPlan
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 RESULTS = Path(__file__).resolve().parent / "results"
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],

@@ -30,12 +30,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import cma
 import gymnasium as gym
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.protocol import final_test_seeds, interval
 from rdmp_gym.agents.tasks import WIPE_ID, run_episode
 from rdmp_gym.envs.context import CONTEXT_FIELDS
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 GRID = (-0.3, 0.0, 0.3, 0.6, 0.9)
 

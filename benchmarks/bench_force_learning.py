@@ -24,6 +24,7 @@ import json
 
 import gymnasium as gym
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs import wipe_env as wipe_env_module
@@ -34,8 +35,6 @@ from rdmp_gym.envs.force_learning import (
     period_force_errors,
     wavy_contact,
 )
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 NAME = "force_learning.json"
 DT, PERIOD = 0.01, 1.5           # the synthetic contact's control period and period (s)

@@ -20,6 +20,7 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the envs)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.assessment import trained_actions
 from rdmp_gym.agents.evaluation import Evaluator
@@ -29,8 +30,6 @@ from rdmp_gym.agents.tasks import TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs import TRACKING_ID
 from tqdm import tqdm
-
-import rdmp_gym  # noqa: F401  (registers the envs)
 
 
 def _parse() -> argparse.Namespace:

@@ -32,13 +32,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import cma
 import gymnasium as gym
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the envs)
 from output import SCRATCH, add_save_argument, results_dir
 from rdmp_gym.agents.protocol import final_test_seeds, interval
 from rdmp_gym.agents.tasks import run_episode
 from rdmp_gym.envs import ENV_ID_V2
 from rdmp_gym.envs.context import CONTEXT_FIELDS
-
-import rdmp_gym  # noqa: F401  (registers the envs)
 
 COMPACT = ("amplitude_x", "amplitude_y", "approach", "sweep_x", "sweep_y")
 #: The first episodes of the search: equal amplitudes along both table axes x equal sweep half-extents.

@@ -42,11 +42,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 _TICK = os.sysconf("SC_CLK_TCK")
 

@@ -5,9 +5,8 @@ scene, cup, controller and reward, one control step per ``step``; the action is 
 """
 
 import gymnasium as gym
+import rdmp_gym.envs  # noqa: F401  (registers the envs)
 from stable_baselines3 import SAC
-
-import rdmp_gym  # noqa: F401  (registers the envs)
 
 env = gym.make("rdmp_gym/ArmarWipeStep-v1", n_periods=2)
 model = SAC("MlpPolicy", env, learning_starts=500, device="cpu", seed=0).learn(total_timesteps=2_000)

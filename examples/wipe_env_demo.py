@@ -14,8 +14,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import gymnasium as gym
 import numpy as np
-
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
+import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 
 def summary(name: str, reward: float, info: dict) -> str:

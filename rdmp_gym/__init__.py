@@ -1,8 +1,10 @@
 """rdmp-gym: rhythmic DMPs that encode a periodic motion and its transient start (Ernesti et al. 2012).
 
-The core (this package) depends on numpy and scipy only. ``rdmp_gym.envs`` (gymnasium + MuJoCo) and
-``rdmp_gym.agents`` (learners) are separate layers; importing ``rdmp_gym`` registers the environments
-when gymnasium and mujoco are installed.
+The core (this package) depends on numpy and scipy only: ``import rdmp_gym`` loads neither gymnasium, MuJoCo,
+matplotlib nor torch, and sets no environment variable. ``rdmp_gym.envs`` (gymnasium + MuJoCo) and
+``rdmp_gym.agents`` (learners) are separate layers; ``import rdmp_gym.envs`` (or
+``gym.register_envs(rdmp_gym.envs)``) registers the environments. The figures (:mod:`rdmp_gym.plots`,
+:mod:`rdmp_gym.figures`) need matplotlib, the ``plots`` extra.
 """
 
 from .basis import BasisSet, Fading
@@ -38,8 +40,3 @@ __all__ = [
     "segment",
     "wiping_demonstration",
 ]
-
-try:  # the environment layer is optional: it needs gymnasium and mujoco
-    from . import envs as _envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
-except ImportError:  # pragma: no cover - exercised only without the extras
-    pass

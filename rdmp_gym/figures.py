@@ -1,6 +1,7 @@
 """Write the paper's figures (2, 6, 7, 8, 9, 12) for the built-in demonstrations as PNG files.
 
-Run ``python -m rdmp_gym.figures --out figures/``.
+Run ``python -m rdmp_gym.figures --out figures/`` (needs matplotlib, the ``plots`` extra). Everything here is the core
+alone; the figures that need the MuJoCo environment are in ``benchmarks/env_figures.py``.
 """
 
 from __future__ import annotations
@@ -8,41 +9,47 @@ from __future__ import annotations
 import argparse
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration, multi_transient_demonstrations, wiping_demonstration
 from .dmp import PAPER_SETTINGS, RhythmicDMP
+from .frequency import follow_rhythm
 from .plots import (
     plot_basis_activations,
     plot_canonical_system,
     plot_generalisation,
     plot_multiple_transients,
     plot_reproductions,
+    pyplot,
 )
 from .smoothness import finite_derivatives
 from .stopping import ending_demonstration, fit_ending, plan_stop
 
-__all__ = ["BEYOND_PAPER_FIGURES", "write_force_figure", "write_obstacle_figure", "write_paper_figures",
-           "write_rhythm_figure", "write_stop_figure"]
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["BEYOND_PAPER_FIGURES", "save_figure", "write_paper_figures", "write_rhythm_figure", "write_stop_figure"]
 
 logger = logging.getLogger(__name__)
 
 STYLE_NAMES = {1: "1: simple + circle", 2: "2: complex + circle", 3: "3: simple + eight", 4: "4: complex + eight"}
 
 
-def _save(fig: plt.Figure, path: Path) -> Path:
+def save_figure(fig: Figure, path: Path) -> Path:
+    """Write ``fig`` to ``path`` (110 dpi), close it and log the path."""
     fig.savefig(path, dpi=110)
-    plt.close(fig)
+    pyplot().close(fig)
     logger.info("wrote %s", path)
     return path
 
 
-def _convergence_figure(demo: Demonstration) -> plt.Figure:
+def _convergence_figure(demo: Demonstration) -> Figure:
     """Fig. 8 with what a robot executes: position (the paper's plot) and acceleration at 1 kHz of the x
     coordinate for N = M = 10 ... 40, the defaults beside the paper's settings at N = M = 40."""
+    plt = pyplot()
     signal = Demonstration(demo.t, demo.Y[:, :1])
     fine = wiping_demonstration(4, rng=0, rate=1000, noise=0.0)
     t = fine.t
@@ -71,38 +78,39 @@ def write_paper_figures(out_dir: str | Path, seed: int = 0) -> list[Path]:
     """Fit the built-in demonstrations and write ``fig02_canonical.png`` ... ``fig12_transients.png``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = [_save(plot_canonical_system(CanonicalSystem(period=1.0), [(0.0, 0.2), (np.pi / 2, 0.6),
-                                                                        (np.pi, 3.0), (1.5 * np.pi, 8.5)]),
-                     out / "fig02_canonical.png")]
+    canonical_starts = [(0.0, 0.2), (np.pi / 2, 0.6), (np.pi, 3.0), (1.5 * np.pi, 8.5)]
+    written = [save_figure(plot_canonical_system(CanonicalSystem(period=1.0), canonical_starts),
+                           out / "fig02_canonical.png")]
 
     demos = {style: wiping_demonstration(style, rng=seed + style) for style in STYLE_NAMES}
     dmps = {style: RhythmicDMP.fit(demo) for style, demo in demos.items()}
 
     # Fig. 6 as in the paper: M = 15, N = 30, period twice the transient length.
     fig6 = RhythmicDMP.fit(demos[1], n_periodic=30, n_transient=15)
-    written.append(_save(plot_basis_activations(fig6, duration=fig6.transients[0].length + 2 * fig6.period),
-                         out / "fig06_basis.png"))
+    written.append(save_figure(plot_basis_activations(fig6, duration=fig6.transients[0].length + 2 * fig6.period),
+                               out / "fig06_basis.png"))
 
-    written.append(_save(plot_reproductions(list(demos.values()),
-                                            [dmps[s].rollout(demos[s].t) for s in STYLE_NAMES],
-                                            list(STYLE_NAMES.values())), out / "fig07_styles.png"))
+    written.append(save_figure(plot_reproductions(list(demos.values()),
+                                                  [dmps[s].rollout(demos[s].t) for s in STYLE_NAMES],
+                                                  list(STYLE_NAMES.values())), out / "fig07_styles.png"))
 
-    written.append(_save(_convergence_figure(demos[4]), out / "fig08_convergence.png"))
+    written.append(save_figure(_convergence_figure(demos[4]), out / "fig08_convergence.png"))
 
     dmp = dmps[1]
     offsets = np.array([[0.08, 0.05, 0.0], [-0.05, -0.08, 0.0], [0.1, -0.06, 0.0]])
     start_offsets = np.array([[0.05, -0.1, 0.0], [-0.05, 0.05, 0.02], [0.2, 0.05, 0.0]])
-    written.append(_save(plot_generalisation(dmp, demos[1].t, dmp.anchor + offsets, dmp.starts[0] + start_offsets),
-                         out / "fig09_generalisation.png"))
+    figure = plot_generalisation(dmp, demos[1].t, dmp.anchor + offsets, dmp.starts[0] + start_offsets)
+    written.append(save_figure(figure, out / "fig09_generalisation.png"))
 
     multi = multi_transient_demonstrations(3, rng=seed)
-    written.append(_save(plot_multiple_transients(RhythmicDMP.fit(multi, n_transient=30), multi),
-                         out / "fig12_transients.png"))
+    written.append(save_figure(plot_multiple_transients(RhythmicDMP.fit(multi, n_transient=30), multi),
+                               out / "fig12_transients.png"))
     return written
 
 
 def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
     """``beyond_stop.png``: start, wiping and stop from one DMP, with its canonical path."""
+    plt = pyplot()
     demo = ending_demonstration(1, rng=seed)
     dmp = fit_ending(demo)
     t = np.arange(0.0, demo.t[-1] + 1.0, 1e-3)
@@ -142,13 +150,12 @@ def write_stop_figure(out_dir: str | Path, seed: int = 0) -> Path:
     fig.tight_layout()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    return _save(fig, out / "beyond_stop.png")
+    return save_figure(fig, out / "beyond_stop.png")
 
 
 def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
     """``beyond_rhythm.png``: the DMP's frequency and phase lock onto a partner whose frequency steps by +-30 %."""
-    from .frequency import follow_rhythm
-
+    plt = pyplot()
     dmp = RhythmicDMP.fit(wiping_demonstration(1, rng=seed))
     dt, step = 2e-3, 10.0
     t = np.arange(round(30.0 / dt)) * dt
@@ -178,116 +185,12 @@ def write_rhythm_figure(out_dir: str | Path, seed: int = 0) -> Path:
     fig.tight_layout()
     out_path = Path(out_dir)
     out_path.mkdir(parents=True, exist_ok=True)
-    return _save(fig, out_path / "beyond_rhythm.png")
+    return save_figure(fig, out_path / "beyond_rhythm.png")
 
 
-def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
-    """``beyond_force.png``: force-profile learning in the MuJoCo env, the contact force at 500 Hz on a tilted and
-    on a curved table (needs the ``envs`` extra; returns ``None`` without it)."""
-    try:
-        import tempfile
-
-        import gymnasium as gym
-
-        from .envs import ENV_ID
-        from .envs.force_learning import curved_table_scene, period_force_errors
-    except ImportError:
-        logger.info("beyond_force.png skipped: gymnasium and mujoco are not installed")
-        return None
-    tilt = [-0.138, -0.145]
-    fig, (tilted, curved, bars) = plt.subplots(1, 3, figsize=(16, 4), gridspec_kw={"width_ratios": [3, 3, 2]})
-    errors, colors = {}, {}
-    with tempfile.TemporaryDirectory() as folder:
-        scene = str(curved_table_scene(folder))
-        runs = (("tilted", tilted, tilt, None, 0.02), ("curved", curved, [0.0, 0.0], scene, 0.02),
-                ("tilted", None, tilt, None, 0.004))
-        for table, axis, table_tilt, xml_file, gain in runs:
-            for flag, color in ((False, "tab:gray"), (True, "tab:red" if gain == 0.02 else "tab:purple")):
-                name = f"{table}, gain {gain}, " + ("+ learned profile" if flag else "admittance")
-                env = gym.make(ENV_ID, n_periods=10.0, force_learning=flag, admittance_gain=gain, xml_file=xml_file)
-                env.reset(seed=seed, options={"table_height": 0.0, "table_tilt": table_tilt, "patch_centre": [0.0, 0.0],
-                                              "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08],
-                                              "obstacle": 0})
-                inner = env.unwrapped
-                inner.fine_force = True
-                info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
-                fine_dt = inner.dt / inner.frame_skip
-                force = info["fine_force_trace"]
-                if axis is not None:
-                    axis.plot(np.arange(force.size) * fine_dt, force, color=color, lw=0.8,
-                              label=name.split(", ", 2)[2])
-                errors[name] = period_force_errors(force, fine_dt, inner.dmp.transients[0].length, inner.dmp.period,
-                                                   inner.reward_settings.target_force, smoothing=0.0)
-                colors[name] = color if gain == 0.02 or flag else "tab:blue"
-                env.close()
-    for axis, title in ((tilted, f"table tilted by ({tilt[0]}, {tilt[1]}) rad"),
-                        (curved, "curved table (ellipsoid top, crown 6 cm)")):
-        axis.axhline(18.0, color="k", lw=0.8, ls="--")
-        axis.set(xlabel="t [s]", ylabel="contact force at 500 Hz [N]", ylim=(14, 22),
-                 title=f"default admittance (0.02): {title}")
-        axis.legend(fontsize=8)
-    width = 0.8 / len(errors)
-    for index, (name, values) in enumerate(errors.items()):
-        hatch = "//" if name.startswith("curved") else None
-        bars.bar(np.arange(1, values.size + 1) + (index - (len(errors) - 1) / 2) * width, values, width,
-                 label=name, color=colors[name], hatch=hatch, edgecolor="white" if hatch else None)
-    bars.set(xlabel="period", ylabel="mean |F - 18 N| at 500 Hz [N]", title="force error period by period",
-             yscale="log")
-    bars.legend(fontsize=6)
-    fig.tight_layout()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    return _save(fig, out / "beyond_force.png")
-
-
-def write_obstacle_figure(out_dir: str | Path, seed: int = 0) -> Path | None:
-    """``beyond_obstacle.png``: the imitation and the coupling baseline that lifts it over the cup, in the first
-    ArmarWipe-v1 context from reset seed ``seed`` on with a cup (needs the ``envs`` extra; ``None`` without it)."""
-    try:
-        import gymnasium as gym
-
-        from .envs import ENV_ID
-        from .envs.obstacle_baseline import lift_term, lifting_path
-    except ImportError:
-        logger.info("beyond_obstacle.png skipped: gymnasium and mujoco are not installed")
-        return None
-    env = gym.make(ENV_ID)
-    inner = env.unwrapped
-    context_seed = next(s for s in range(seed, seed + 1000) if env.reset(seed=s)[0][10] > 0.5)
-    env.reset(seed=context_seed)
-    term = lift_term(env)
-    free = inner.rollout_path(inner.action_map.theta0)
-    lifted, conservative = lifting_path(env), lifting_path(env, adaptive=False)
-    env.close()
-    fig, (side, top) = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [3, 2]})
-    for path, name, color, style in ((free, "imitation", "tab:gray", "-"),
-                                     (conservative, "LiftOver alone (full lift)", "tab:orange", "--"),
-                                     (lifted, "coupling baseline (AdaptiveLift)", "tab:red", "-")):
-        side.plot(inner.times, path[:, 2], color=color, ls=style, label=name)
-        top.plot(path[:, 0], path[:, 1], color=color, ls=style, lw=0.8)
-    near = np.linalg.norm(free[:, :2] - term.centre, axis=1) < term.radius + term.reach
-    side.fill_between(inner.times, 0.0, term.top, where=near, color="tab:brown", alpha=0.3,
-                      label="cup's height where the sponge is over its footprint")
-    side.plot(inner.times, term.gate(inner.times) * term.lift, color="tab:blue", ls=":", lw=1,
-              label="gate x (top + clearance)")
-    side.set(xlabel="t [s]", ylabel="sponge height above the table [m]", xlim=(0, 3.5),
-             title=f"ArmarWipe-v1, reset seed {context_seed}")
-    side.legend(fontsize=8)
-    angles = np.linspace(0.0, 2.0 * np.pi, 100)
-    for radius, style in ((term.radius, "-"), (term.radius + term.reach, "--"),
-                          (term.radius + term.reach + term.ramp, ":")):
-        top.plot(term.centre[0] + radius * np.cos(angles), term.centre[1] + radius * np.sin(angles), "k", ls=style,
-                 lw=0.8)
-    top.set(xlabel="x [m]", ylabel="y [m]", title="cup, + sponge reach, + ramp (top view)")
-    top.set_aspect("equal")
-    fig.tight_layout()
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    return _save(fig, out / "beyond_obstacle.png")
-
-
-BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure, write_force_figure, write_obstacle_figure]
-"""Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's."""
+BEYOND_PAPER_FIGURES = [write_stop_figure, write_rhythm_figure]
+"""Figures of what the paper leaves open (each ``(out_dir, seed) -> Path``); ``main`` writes them after the paper's.
+The figures that need the MuJoCo environment (force learning, the cup) are written by ``benchmarks/env_figures.py``."""
 
 
 def main(argv: list[str] | None = None) -> None:

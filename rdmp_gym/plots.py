@@ -1,16 +1,23 @@
-"""Figures in the style of the paper (matplotlib; each function returns a ``Figure``)."""
+"""Figures in the style of the paper (matplotlib; each function returns a ``Figure``).
+
+matplotlib is an optional extra (``pip install "rdmp-gym[plots]"``): it is imported when a figure is drawn, so
+importing this module (or :mod:`rdmp_gym`) never loads it.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from types import ModuleType
+from typing import TYPE_CHECKING
 
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.figure import Figure
 
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "plot_basis_activations",
@@ -19,12 +26,24 @@ __all__ = [
     "plot_generalisation",
     "plot_multiple_transients",
     "plot_reproductions",
+    "pyplot",
 ]
+
+
+def pyplot() -> ModuleType:
+    """``matplotlib.pyplot``, imported on first use (the optional ``plots`` extra); a clear error without it."""
+    try:
+        import matplotlib.pyplot as plt  # optional extra: loaded only when a figure is drawn
+    except ModuleNotFoundError as error:
+        raise ModuleNotFoundError('the figures need matplotlib, the "plots" extra: pip install "rdmp-gym[plots]"',
+                                  name=error.name) from error
+    return plt
 
 
 def plot_canonical_system(canonical: CanonicalSystem, starts: Sequence[tuple[float, float]],
                           duration: float = 4.0) -> Figure:
     """Fig. 2: phase-plane paths and r(t) from several initial conditions ``(phi0, r0)``."""
+    plt = pyplot()
     t = np.linspace(0.0, duration, 2000)
     fig, (plane, radius) = plt.subplots(1, 2, figsize=(10, 4.5))
     for phi0, r0 in starts:
@@ -44,6 +63,7 @@ def plot_canonical_system(canonical: CanonicalSystem, starts: Sequence[tuple[flo
 
 def plot_basis_activations(dmp: RhythmicDMP, duration: float, transient: int = 0) -> Figure:
     """Fig. 6: every basis function's raw activation over time along one transient's path."""
+    plt = pyplot()
     start = dmp.transients[transient]
     t = np.linspace(0.0, duration, 3000)
     phi, r = dmp.canonical.state(t, start.phi0, start.r0)
@@ -66,6 +86,7 @@ def plot_basis_activations(dmp: RhythmicDMP, duration: float, transient: int = 0
 def plot_reproductions(demos: Sequence[Demonstration], reproductions: Sequence[np.ndarray],
                        titles: Sequence[str]) -> Figure:
     """Fig. 7: demonstrations (top) and DMP reproductions (bottom) in the table plane (dims 0, 1)."""
+    plt = pyplot()
     fig, axes = plt.subplots(2, len(demos), figsize=(3.2 * len(demos), 6.4), squeeze=False)
     for column, (demo, Y, title) in enumerate(zip(demos, reproductions, titles, strict=True)):
         for row, (data, label) in enumerate(((demo.Y, "demonstration"), (Y, "reproduction"))):
@@ -79,6 +100,7 @@ def plot_reproductions(demos: Sequence[Demonstration], reproductions: Sequence[n
 
 def plot_convergence(t: np.ndarray, signal: np.ndarray, fits: dict[int, np.ndarray]) -> Figure:
     """Fig. 8: a 1-D signal (thick) and reproductions for increasing N = M (thin)."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 4))
     ax.plot(t, signal, color="k", lw=3, label="signal")
     for n, Y in fits.items():
@@ -91,6 +113,7 @@ def plot_convergence(t: np.ndarray, signal: np.ndarray, fits: dict[int, np.ndarr
 
 def plot_generalisation(dmp: RhythmicDMP, t: np.ndarray, anchors: np.ndarray, starts: np.ndarray) -> Figure:
     """Fig. 9: reproductions for new anchors (left, dots) and new starts (right) in the table plane."""
+    plt = pyplot()
     original = dmp.rollout(t)
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.8))
     for ax, title in ((left, "New anchor points"), (right, "New start points")):
@@ -111,6 +134,7 @@ def plot_generalisation(dmp: RhythmicDMP, t: np.ndarray, anchors: np.ndarray, st
 
 def plot_multiple_transients(dmp: RhythmicDMP, demos: Sequence[Demonstration], dim: int = 0) -> Figure:
     """Fig. 12: K demonstrations (solid) sharing one pattern and their reproductions (dashed), one dimension."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 4))
     for k, demo in enumerate(demos):
         t = demo.t - demo.t[0]

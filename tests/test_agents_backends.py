@@ -16,14 +16,13 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator, WorkerError
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.tracking import TRACKING_ID
-
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
 TRACKING = {"n_periodic": 10, "n_transient": 10, "duration": 4.0}

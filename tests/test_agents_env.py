@@ -9,14 +9,13 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import numpy as np
 import pytest
+import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 import torch
 from rdmp_gym.agents.assessment import evaluate_run
 from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
-
-import rdmp_gym  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 
 torch.set_num_threads(1)
 

@@ -3,9 +3,9 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import DEPRECATED_ENV_ID, ENV_ID, TERMS, ArmarWipeEnv
 
-import rdmp_gym  # noqa: F401  (registers the env)
 from rdmp_gym import wiping_demonstration
 
 FAST = {"n_periods": 1.0}

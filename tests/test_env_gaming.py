@@ -8,9 +8,8 @@ The figures in the docstrings are measured with the smooth core (issue 7) and th
 import gymnasium as gym
 import numpy as np
 import pytest
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import ENV_ID, probes
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 MARGIN = 0.3
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.10, 0.10],

@@ -3,6 +3,7 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings
 from rdmp_gym.envs.force_learning import (
@@ -12,8 +13,6 @@ from rdmp_gym.envs.force_learning import (
     period_force_errors,
     wavy_contact,
 )
-
-import rdmp_gym  # noqa: F401  (registers the env)
 
 DT, PERIOD = 0.01, 1.5
 

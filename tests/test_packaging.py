@@ -56,7 +56,8 @@ _BLOCK_EXTRAS = """
 import sys
 class _Block:
     def find_spec(self, name, path=None, target=None):
-        if name.split(".")[0] in {"gymnasium", "mujoco", "cma", "tqdm", "stable_baselines3", "torch", "imageio"}:
+        if name.split(".")[0] in {"gymnasium", "mujoco", "cma", "tqdm", "stable_baselines3", "torch", "imageio",
+                                   "matplotlib"}:
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
 sys.meta_path.insert(0, _Block())
 from rdmp_gym.agents.cli import main
