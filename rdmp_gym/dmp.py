@@ -19,6 +19,7 @@ from .demonstrations import Demonstration
 from .ending import Ending, StopPlan, plan_stop
 from .fitting import PAPER_SETTINGS, fit_rhythmic
 from .parameters import ParameterLayout
+from .settings import DEFAULT_FIT, FitSettings
 from .start import TransientStart, settled_state, start_blend_profiles
 from .sweep import Sweep
 from .transformation import cached_system
@@ -98,7 +99,8 @@ class RhythmicDMP:
         weights: ``[d, D]`` weights, periodic ones first, then each transient's.
         transients: one :class:`TransientStart` per encoded transient.
         anchor: ``[d]`` anchor g, the centre of the periodic pattern.
-        alpha_z: damping gain of the transformation system (``beta_z = alpha_z / 4``).
+        alpha_z: damping gain of the transformation system (``beta_z = alpha_z / 4``; default the fit's,
+            :data:`~rdmp_gym.settings.DEFAULT_FIT`).
         amplitude: ``[d]`` factors that scale the movement about the anchor (forcing term and default
             start); ones by default. A learnable parameter group, like the weights.
         ending: the encoded end of the movement (:mod:`rdmp_gym.stopping`), or ``None``.
@@ -107,7 +109,7 @@ class RhythmicDMP:
     """
 
     def __init__(self, canonical: CanonicalSystem, basis: BasisSet, weights: np.ndarray,
-                 transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = 25.0,
+                 transients: Sequence[TransientStart], anchor: np.ndarray, alpha_z: float = DEFAULT_FIT.alpha_z,
                  amplitude: np.ndarray | None = None, ending: Ending | None = None, sweep: Sweep | None = None
                  ) -> None:
         self.canonical = canonical
@@ -154,14 +156,17 @@ class RhythmicDMP:
 
     # ------------------------------------------------------------------ fitting
     @classmethod
-    def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-            n_transient: int | Sequence[int] = 44, method: str = "trajectory", **settings: Any) -> RhythmicDMP:
+    def fit(cls, demos: Demonstration | Sequence[Demonstration], n_periodic: int | None = None,
+            n_transient: int | Sequence[int] | None = None, method: str | None = None, *,
+            settings: FitSettings | None = None, **keywords: Any) -> RhythmicDMP:
         """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
-        The fit is :func:`rdmp_gym.fitting.fit_rhythmic`, which documents the arguments and every keyword of
-        ``settings`` (``segmentations``, ``period``, ``alpha_z``, ``smoothness``, ``handover``, ...).
+        The fit is :func:`rdmp_gym.fitting.fit_rhythmic`: ``settings`` (a :class:`~rdmp_gym.settings.FitSettings`,
+        default :data:`~rdmp_gym.settings.DEFAULT_FIT`: N = 40, M = 44, ``"trajectory"``) with ``n_periodic``,
+        ``n_transient``, ``method`` and any setting by name over it; ``keywords`` also take ``segmentations`` and
+        ``period``.
         """
-        return cls(*fit_rhythmic(demos, n_periodic, n_transient, method, **settings))
+        return cls(*fit_rhythmic(demos, n_periodic, n_transient, method, settings=settings, **keywords))
 
     # ------------------------------------------------------------------ rollouts
     def _check_transient(self, transient: int) -> int:

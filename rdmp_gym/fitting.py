@@ -21,14 +21,13 @@ from __future__ import annotations
 import itertools
 import logging
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.signal import savgol_filter
 
 from .basis import (
     NORMALISATION_EPSILON,
-    SMOOTH_FLOOR,
     BasisSet,
     Fading,
     normalize,
@@ -40,18 +39,49 @@ from .basis import (
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
 from .segmentation import Segmentation, phase_shift, segment
+from .settings import (
+    DEFAULT_FIT,
+    FIT_METHODS,
+    HANDOVER_FLOOR,
+    HANDOVERS,
+    PAPER_FIT,
+    PRIORS,
+    PUBLISHED_ENV_FIT,
+    FitSettings,
+)
 from .start import TransientStart, settled_state, start_blend_profiles
 from .transformation import cached_system
 from .validation import check_count, check_nonnegative, check_positive
 
-__all__ = ["FADE_BEFORE_T", "FIT_METHODS", "HANDOVERS", "HANDOVER_FLOOR", "JOIN_FLOOR", "PAPER_SETTINGS", "PRIORS",
-           "SMOOTHNESS_CANDIDATES", "SMOOTHNESS_REFERENCE", "START_PRIOR", "FittedDMP", "cross_validation_score",
-           "fit_rhythmic", "fit_trajectory", "fit_weights", "forcing_target", "join_relief", "relative_to_pattern",
-           "second_differences", "smooth_derivatives", "trajectory_design"]
+__all__ = [
+    "DEFAULT_FIT",
+    "FADE_BEFORE_T",
+    "FIT_METHODS",
+    "HANDOVERS",
+    "HANDOVER_FLOOR",
+    "JOIN_FLOOR",
+    "PAPER_FIT",
+    "PAPER_SETTINGS",
+    "PRIORS",
+    "PUBLISHED_ENV_FIT",
+    "SMOOTHNESS_CANDIDATES",
+    "SMOOTHNESS_REFERENCE",
+    "START_PRIOR",
+    "FitSettings",
+    "FittedDMP",
+    "cross_validation_score",
+    "fit_rhythmic",
+    "fit_trajectory",
+    "fit_weights",
+    "forcing_target",
+    "join_relief",
+    "relative_to_pattern",
+    "second_differences",
+    "smooth_derivatives",
+    "trajectory_design",
+]
 
 logger = logging.getLogger(__name__)
-
-FIT_METHODS = ("lwr", "ridge", "trajectory")
 
 
 def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int = 5
@@ -233,17 +263,6 @@ def _smoothness_grids(smoothness: float | Sequence, n_operators: int) -> list[tu
 MIN_TRANSIENT = 0.05
 """The shortest transient :func:`fit_rhythmic` encodes, as a fraction of the period."""
 
-HANDOVERS = ("after", "before")
-"""Where :func:`fit_rhythmic` puts the fade between the transient and the periodic family (``handover``)."""
-
-PRIORS = ("pattern", "flat")
-"""What the smoothness penalty of :func:`fit_rhythmic` holds the transient weights to (``prior``)."""
-
-HANDOVER_FLOOR = 0.3
-"""The mixture's floor (:class:`~rdmp_gym.basis.Fading`) of :func:`fit_rhythmic`: during the fade after T neither
-family's activations sum to much, and a floor of 30 % of the sum on the encoded path makes the forcing term fade
-smoothly off it (canonical starts off the encoded path: peak acceleration within 3x the demonstration's)."""
-
 SMOOTHNESS_REFERENCE = 40
 """``smoothness`` is calibrated for this many periodic basis functions per period (the time spacing
 ``period / 40``); other spacings get the penalty on the same time curvature."""
@@ -266,20 +285,14 @@ transient near the hand-over (0.1: the worst 0.2 s window of one C2 join rose fr
 penalty for both families: the peak acceleration from canonical starts off the encoded path reached 7.7x the
 demonstration's on noise-free samples)."""
 
-PAPER_SETTINGS = {"method": "lwr", "n_transient": 40, "alpha_z": 25.0, "periodic_overlap": 0.5,
-                  "transient_overlap": 0.5, "smoothness": 0.0, "floor": NORMALISATION_EPSILON,
-                  "fading_fractions": (0.25, 0.25), "turn_height": 1e-3, "handover": "before", "transient_lead": 0.0,
-                  "prior": "flat", "start_prior": 0.0, "join_width": 0.0}
-"""Keywords of :func:`fit_rhythmic` that give the paper's formulation as first implemented here (LWR (11), a stiff
-spring, narrow basis functions, the bare mixture (5), the families' fade before T, the first transient centre at
-the start); roll out with ``start_blend=False`` for the paper's start. ``{**PAPER_SETTINGS, "method": "ridge"}``
-fits the same basis by global least squares."""
+PAPER_SETTINGS = PAPER_FIT.changes()
+"""Keywords of :func:`fit_rhythmic` that give :data:`~rdmp_gym.settings.PAPER_FIT` (the paper's formulation as first
+implemented here); ``{**PAPER_SETTINGS, "method": "ridge"}`` fits the same basis by global least squares."""
 
-FADE_BEFORE_T = {"handover": "before", "transient_lead": 0.0, "prior": "flat", "floor": SMOOTH_FLOOR,
-                 "smoothness": 0.3, "start_prior": 0.0, "join_width": 0.0}
+FADE_BEFORE_T = PUBLISHED_ENV_FIT.changes(exclude=("n_periodic", "n_transient", "method"))
 """Keywords of :func:`fit_rhythmic` for the fade over the ``t_f`` before T, the first transient centre at the start,
 a plain second-difference penalty of fixed weight 0.3, not relaxed about T, a free start velocity and the mixture's
-floor of 1 %. The environments fit their imitation DMP with these, so their tasks stay as published."""
+floor of 1 %: :data:`~rdmp_gym.settings.PUBLISHED_ENV_FIT` but for the numbers of basis functions and the method."""
 
 
 class FittedDMP(NamedTuple):
@@ -306,117 +319,72 @@ def relative_to_pattern(differences: np.ndarray, n_periodic: int, pattern: np.nd
     return relative
 
 
-def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int = 40,
-                 n_transient: int | Sequence[int] = 44, method: str = "trajectory", *,
-                 segmentations: Sequence[Segmentation] | None = None, period: float | None = None,
-                 alpha_z: float = 5.0, mu: float = 1.0, eta: float = 35.0, alpha: float = 1.0 / 6.0,
-                 beta: float = 1.0 / 1000.0, mu1_factor: float = 1.2, fading_time: float | None = None,
-                 delta: float = 1e-3, periodic_overlap: float = 0.8, transient_overlap: float = 0.8,
-                 smoothing: float = 0.15, regularization: float | None = None,
-                 smoothness: float | str | Sequence = "auto",
-                 floor: float = HANDOVER_FLOOR, substeps: int = 4, fading_fractions: tuple[float, float] = (0.5, 0.25),
-                 turn_height: float = 0.3, handover: str = "after", transient_lead: float = 2.0,
-                 prior: str = "pattern", start_prior: float | str = "auto", join_width: float = 0.1) -> FittedDMP:
+def fit_rhythmic(demos: Demonstration | Sequence[Demonstration], n_periodic: int | None = None,
+                 n_transient: int | Sequence[int] | None = None, method: str | None = None, *,
+                 settings: FitSettings | None = None, segmentations: Sequence[Segmentation] | None = None,
+                 period: float | None = None, **changes: Any) -> FittedDMP:
     """Fit a DMP to one or more demonstrations that share a periodic pattern (paper III-E, V-A).
 
     :meth:`RhythmicDMP.fit <rdmp_gym.dmp.RhythmicDMP.fit>` calls this and builds the DMP from its parts.
 
     Args:
         demos: a :class:`Demonstration` or K of them (one transient each), all with d dimensions.
-        n_periodic: periodic basis functions N.
-        n_transient: transient basis functions per transient (an int or K ints).
-        method: ``"trajectory"`` (default: weights and start state that make the rollout itself match the
-            samples, see :func:`fit_trajectory`), ``"lwr"`` (the paper's (11)/(12)) or ``"ridge"`` (global least
-            squares on the forcing target (10)).
+        n_periodic, n_transient, method: the most used settings, by position (``None``: as ``settings`` say).
+        settings: the fit's settings (:class:`~rdmp_gym.settings.FitSettings`, which documents each; default
+            :data:`~rdmp_gym.settings.DEFAULT_FIT`).
         segmentations: per demonstration; estimated with :func:`~rdmp_gym.segmentation.segment` when omitted.
         period: common period (s); the mean of the segmentations' periods when omitted.
-        alpha_z: transformation-system gain (default 5: a softer spring, see the docs' design rationale;
-            25 in :data:`PAPER_SETTINGS`).
-        mu, eta, alpha, beta: canonical-system constants (the paper's defaults).
-        mu1_factor: ``mu1 = mu1_factor * mu`` (1.2 in the paper).
-        fading_time: t_f (s), the overlap of transient and periodic basis; default
-            ``min(a period, b shortest transient)`` with ``(a, b) = fading_fractions``.
-        delta: support threshold of the fades.
-        periodic_overlap, transient_overlap: height at which neighbouring basis functions cross (0.8:
-            wide, overlapping functions whose normalised mixture has no ripple at the basis spacing).
-        smoothing: Savitzky-Golay window (s) for the demonstration's derivatives (``lwr``, ``ridge``).
-        regularization: relative ridge penalty (default 1e-4 for ``trajectory``: small weights, so the forcing term
-            stays gentle off the encoded paths; 1e-6 otherwise).
-        smoothness: relative penalty on second differences of neighbouring weights (``ridge``, ``trajectory``);
-            0 in :data:`PAPER_SETTINGS`. ``"auto"`` (default): for ``trajectory`` each family's penalty is chosen
-            among :data:`SMOOTHNESS_CANDIDATES` by generalised cross-validation (:func:`cross_validation_score`), so
-            it is as weak as the samples' noise allows and biases clean or well-determined parts little (C2 joins:
-            transient acceleration error 10.2 % median against 11.2 % with 0.3); 0.3 for ``lwr`` and ``ridge``. A
-            number fixes one penalty for both families: 0.3 holds the periodic acceleration error of a small pure
-            sinusoid under 0.35 mm noise below 10 % (0.1 gave 10.0 %); 1 smooths fast approaches (15-22 %). A pair
-            ``(periodic, transient)`` (``trajectory`` only), each a number or ``"auto"``, sets each family's own.
-        floor: added to the sum of activations in the mixture (5) (:class:`~rdmp_gym.basis.Fading`), so that the
-            forcing term fades to 0 where no basis function is active.
-        substeps: ``trajectory`` simulates each basis function's response this many times finer than the samples.
-        fading_fractions: ``(a, b)`` of the default ``fading_time``.
-        turn_height: the largest value a transient basis function may keep on the next turn of its spiral
-            (:func:`~rdmp_gym.basis.transient_basis_along_path`; 1e-3 in :data:`PAPER_SETTINGS`). Near the
-            hand-over of a short period the turns are close, and a lower height narrows the last functions
-            until gaps open between them: a ripple at the basis spacing (jerk up to 3x the true signal's).
-        handover: where the transient family fades out and the periodic one fades in: ``"after"`` (default) over
-            the ``t_f`` after T, where the demonstration is on its cycle; ``"before"`` over the ``t_f`` before T
-            (the paper), where the mixture cannot follow a demonstration that is still off its cycle.
-        transient_lead: spacings by which the first transient centre lies before the start
-            (:func:`~rdmp_gym.basis.transient_times`; 0 in :data:`PAPER_SETTINGS`).
-        prior: what the smoothness penalty holds the transient weights to: ``"pattern"`` (default) the periodic
-            forcing at the centre's phase, in the share that the start blend has handed over to the pattern by the
-            centre's time (0 at the start, 1 from T on), so the transient family can follow the pattern through
-            the hand-over; ``"flat"``: plain second differences (straight lines).
-        start_prior: ``trajectory`` only: a penalty pulling the fitted start velocity towards rest, relative to its
-            column of the normal matrix (0: free). ``"auto"`` (default): :data:`START_PRIOR` or none, whichever has
-            the lower generalised cross-validation score at the chosen smoothness: the pull on 28 of 36 C2 joins that
-            start at rest, none on 23 of 24 that start moving (cut 0.2-0.4 s after rest; pulled, their transient
-            acceleration error rose to 40-90 %).
-        join_width: the transient penalty's rows are relaxed about T (:func:`join_relief`, to :data:`JOIN_FLOOR`)
-            over this many seconds (0: not at all).
+        changes: settings by name, over ``settings`` (``alpha_z=25.0``, ``smoothness=0.3``, ...).
     """
     demos = _as_demos(demos)
-    regularization, smoothness = _check_settings(method, regularization, smoothness, smoothing, alpha_z, turn_height,
-                                                 handover, prior)
-    start_penalties = ([(0.0, 0.0), (0.0, START_PRIOR)] if isinstance(start_prior, str) and start_prior == "auto"
-                       else [(0.0, check_nonnegative(start_prior, "start_prior"))])
-    join_width = check_nonnegative(join_width, "join_width")
-    n_periodic = check_count(n_periodic, "n_periodic", 2)
-    sizes = ([check_count(n_transient, "n_transient", 1)] * len(demos) if np.ndim(n_transient) == 0
-             else [check_count(m, "n_transient", 1) for m in n_transient])
-    if len(sizes) != len(demos):
-        raise ValueError(f"n_transient: expected a positive int or {len(demos)} positive ints, got {n_transient!r}")
+    fit = FitSettings.resolve(settings, n_periodic=n_periodic, n_transient=n_transient, method=method, **changes)
+    regularization, smoothness = _check_settings(fit)
+    start_penalties = ([(0.0, 0.0), (0.0, START_PRIOR)] if isinstance(fit.start_prior, str)
+                       and fit.start_prior == "auto" else [(0.0, check_nonnegative(fit.start_prior, "start_prior"))])
+    join_width = check_nonnegative(fit.join_width, "join_width")
+    n_periodic = check_count(fit.n_periodic, "n_periodic", 2)
+    sizes = _transient_sizes(fit.n_transient, len(demos))
     segmentations, common_period = _segmentations(demos, segmentations, period)
-    canonical = CanonicalSystem(common_period, mu=mu, eta=eta, alpha=alpha, beta=beta)
+    canonical = CanonicalSystem(common_period, mu=fit.mu, eta=fit.eta, alpha=fit.alpha, beta=fit.beta)
     anchor = np.mean([seg.anchor for seg in segmentations], axis=0)
     lengths = [seg.transient_length for seg in segmentations]
     entrance = _entrance_phases(canonical, demos, segmentations)
-    mu1 = mu1_factor * mu
-    t_f = (check_positive(fading_time, "fading_time") if fading_time is not None
-           else min(fading_fractions[0] * common_period, fading_fractions[1] * min(lengths)))
+    mu1 = fit.mu1_factor * fit.mu
+    t_f = (check_positive(fit.fading_time, "fading_time") if fit.fading_time is not None
+           else min(fit.fading_fractions[0] * common_period, fit.fading_fractions[1] * min(lengths)))
     if t_f >= min(lengths):
         raise ValueError(f"fading_time: must be shorter than the shortest transient ({min(lengths):.3g} s)")
-    fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=delta, floor=floor)
-    late = t_f if handover == "after" else 0.0          # the canonical state reaches mu1 at T + late
+    fading = Fading(mu1=mu1, mu2=canonical.init_T(t_f, 0.0, mu1)[1], delta=fit.delta, floor=fit.floor)
+    late = t_f if fit.handover == "after" else 0.0          # the canonical state reaches mu1 at T + late
     inits = [canonical.init_T(length + late, phase + canonical.omega * late, mu1)
              for length, phase in zip(lengths, entrance, strict=True)]
     spans = [length + late - 0.5 * t_f for length in lengths]        # the last transient centre
-    times = [transient_times(span, m, transient_lead) for span, m in zip(spans, sizes, strict=True)]
-    paths = [transient_basis_along_path(canonical, phi0, r0, span, m, transient_overlap, turn_height, transient_lead)
+    times = [transient_times(span, m, fit.transient_lead) for span, m in zip(spans, sizes, strict=True)]
+    paths = [transient_basis_along_path(canonical, phi0, r0, span, m, fit.transient_overlap, fit.turn_height,
+                                        fit.transient_lead)
              for (phi0, r0), span, m in zip(inits, spans, sizes, strict=True)]
     basis = BasisSet(periodic_centres=2.0 * np.pi * np.arange(n_periodic) / n_periodic,
-                     periodic_widths=np.full(n_periodic, periodic_width(n_periodic, periodic_overlap)),
+                     periodic_widths=np.full(n_periodic, periodic_width(n_periodic, fit.periodic_overlap)),
                      transient_centres=np.concatenate([centres for centres, _ in paths]),
                      transient_widths=np.concatenate([widths for _, widths in paths]),
                      transient_sizes=tuple(sizes), fading=fading)
-    differences = _penalty(basis, times, lengths, common_period, prior, join_width)
-    weights, starts = _regression(method, demos, canonical, basis, inits, lengths, anchor, alpha_z, substeps,
-                                  smoothing, smoothness, regularization, differences, start_penalties)
+    differences = _penalty(basis, times, lengths, common_period, fit.prior, join_width)
+    weights, starts = _regression(fit, demos, canonical, basis, inits, lengths, anchor, smoothness, regularization,
+                                  differences, start_penalties)
     transients = [TransientStart(phi0, r0, length, phase, y0.copy(), yd0.copy())
                   for (phi0, r0), length, phase, (y0, yd0) in zip(inits, lengths, entrance, starts, strict=True)]
     logger.info("fitted %d transient(s), N=%d, M=%s, period %.4g s, method %s",
-                len(demos), n_periodic, sizes, common_period, method)
-    return FittedDMP(canonical, basis, weights.T, transients, anchor, alpha_z)
+                len(demos), n_periodic, sizes, common_period, fit.method)
+    return FittedDMP(canonical, basis, weights.T, transients, anchor, fit.alpha_z)
+
+
+def _transient_sizes(n_transient: int | Sequence[int], n_demos: int) -> list[int]:
+    """The transient basis functions per demonstration: an int for all, or one per demonstration."""
+    sizes = ([check_count(n_transient, "n_transient", 1)] * n_demos if np.ndim(n_transient) == 0
+             else [check_count(m, "n_transient", 1) for m in n_transient])
+    if len(sizes) != n_demos:
+        raise ValueError(f"n_transient: expected a positive int or {n_demos} positive ints, got {n_transient!r}")
+    return sizes
 
 
 def _as_demos(demos: Demonstration | Sequence[Demonstration]) -> list[Demonstration]:
@@ -431,11 +399,11 @@ def _as_demos(demos: Demonstration | Sequence[Demonstration]) -> list[Demonstrat
     return demos
 
 
-def _check_settings(method: str, regularization: float | None, smoothness: float | str, smoothing: float,
-                    alpha_z: float, turn_height: float, handover: str, prior: str
-                    ) -> tuple[float, float | tuple]:
-    """Refuse bad keywords of :func:`fit_rhythmic`; returns the regularization and the smoothness (or its
+def _check_settings(fit: FitSettings) -> tuple[float, float | tuple]:
+    """Refuse bad settings of :func:`fit_rhythmic`; returns the regularization and the smoothness (or its
     candidates), their defaults resolved per method."""
+    method, regularization, handover, prior, turn_height = (fit.method, fit.regularization, fit.handover, fit.prior,
+                                                            fit.turn_height)
     if method not in FIT_METHODS:
         raise ValueError(f"method: expected one of {FIT_METHODS}, got {method!r}")
     if handover not in HANDOVERS:
@@ -444,9 +412,9 @@ def _check_settings(method: str, regularization: float | None, smoothness: float
         raise ValueError(f"prior: expected one of {PRIORS}, got {prior!r}")
     if not 0.0 < turn_height < 1.0:
         raise ValueError(f"turn_height: must lie in (0, 1), got {turn_height!r}")
-    smoothness = _smoothness_setting(smoothness, method)
-    check_positive(smoothing, "smoothing")
-    check_positive(alpha_z, "alpha_z")
+    smoothness = _smoothness_setting(fit.smoothness, method)
+    check_positive(fit.smoothing, "smoothing")
+    check_positive(fit.alpha_z, "alpha_z")
     if regularization is None:
         regularization = 1e-4 if method == "trajectory" else 1e-6
     return check_nonnegative(regularization, "regularization"), smoothness
@@ -532,22 +500,23 @@ def join_relief(times: np.ndarray, length: float, width: float) -> np.ndarray:
     return 1.0 - (1.0 - JOIN_FLOOR) * np.exp(-0.5 * ((times - length) / width) ** 2)
 
 
-def _regression(method: str, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet, inits: list,
-                lengths: list[float], anchor: np.ndarray, alpha_z: float, substeps: int, smoothing: float,
-                smoothness: float | tuple, regularization: float, differences: list[np.ndarray],
-                start_penalties: list[tuple[float, float]]) -> tuple[np.ndarray, list]:
+def _regression(fit: FitSettings, demos: list[Demonstration], canonical: CanonicalSystem, basis: BasisSet,
+                inits: list, lengths: list[float], anchor: np.ndarray, smoothness: float | tuple, regularization: float,
+                differences: list[np.ndarray], start_penalties: list[tuple[float, float]]) -> tuple[np.ndarray, list]:
     """Weights ``[D, d]`` and per demonstration the start ``(y0 [d], yd0 [d])``, by ``method``: the trajectory fit
     (:func:`fit_trajectory`, the start pulled towards rest by one of ``start_penalties``), or ``lwr``/``ridge`` on
     the forcing target (10) (:func:`fit_weights`) with the smoothed start and the start velocity that best explains
-    the samples under the smooth start (a derivative estimate at the first noisy sample is off by up to 0.1 m/s)."""
+    the samples under the smooth start (a derivative estimate at the first noisy sample is off by up to 0.1 m/s).
+    ``smoothness`` and ``regularization``: ``fit``'s, resolved per method."""
+    method, alpha_z = fit.method, fit.alpha_z
     responses, start_columns, samples = trajectory_design(canonical, basis, demos, inits, lengths, anchor, alpha_z,
-                                                          substeps)
+                                                          fit.substeps)
     if method == "trajectory":
         weights, starts = fit_trajectory(responses, start_columns, samples, differences, smoothness, regularization,
                                          start_penalties)
         return weights, list(starts)
     activations, targets, smoothed_starts = _forcing_targets(demos, canonical, basis, inits, anchor, alpha_z,
-                                                             smoothing)
+                                                             fit.smoothing)
     weights = fit_weights(activations, targets, method, regularization, smoothness, np.concatenate(differences),
                           basis.fading.floor)
     starts = [(y0, np.linalg.lstsq(columns[:, 1:], sample - response @ weights - columns[:, :1] * y0,

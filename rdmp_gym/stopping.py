@@ -23,7 +23,6 @@ solves one ridge problem for the stop weights on the demonstration from the exit
 
 from __future__ import annotations
 
-import inspect
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -44,10 +43,12 @@ from .demonstrations import (
     _time_grid,
     _vector3,
 )
+from .dmp import RhythmicDMP
 from .ending import Ending, StopFading, StopPlan, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
-from .fitting import fit_rhythmic, forcing_target, smooth_derivatives
+from .fitting import forcing_target, smooth_derivatives
 from .rhythm import rest_start
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
+from .settings import FitSettings
 from .transformation import TransformationSystem
 from .validation import check_positive
 
@@ -211,22 +212,18 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
     Returns:
         a :class:`RhythmicDMP` with ``ending`` set.
     """
-    from .dmp import RhythmicDMP
-
     _check_stop_settings(n_stop, nu1_factor, nu2_factor)
     seg = segment_ending(demo) if segmentation is None else segmentation
     end_index = round(seg.periodic_end / demo.dt)
     head = Demonstration(demo.t[: end_index + 1], demo.Y[: end_index + 1], name=demo.name)
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: give the StopSegmentation as segmentation=")
-    defaults = inspect.signature(fit_rhythmic).parameters
-    delta, smoothing, regularization = (fit_kwargs.get(name, defaults[name].default)
-                                        for name in ("delta", "smoothing", "regularization"))
+    fit = FitSettings.resolve(fit_kwargs.get("settings"), **{name: value for name, value in fit_kwargs.items()
+                                                             if name in FitSettings.names()})
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
-    method = fit_kwargs.get("method", defaults["method"].default)
     return fit_stop(dmp, demo, seg, n_stop, nu1_factor=nu1_factor, nu2_factor=nu2_factor, stop_overlap=stop_overlap,
-                    rest_margin=rest_margin, delta=delta, regularization=regularization, method=method,
-                    substeps=int(fit_kwargs.get("substeps", defaults["substeps"].default)), smoothing=smoothing)
+                    rest_margin=rest_margin, delta=fit.delta, regularization=fit.regularization, method=fit.method,
+                    substeps=int(fit.substeps), smoothing=fit.smoothing)
 
 
 def _check_stop_settings(n_stop: int, nu1_factor: float, nu2_factor: float) -> None:
