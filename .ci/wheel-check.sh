@@ -16,7 +16,7 @@ step "build the wheel"
 "$PYTHON" -m pip wheel --quiet --no-deps --wheel-dir "$WORK/dist" "$ROOT" 2>&1 | grep -v "Location '" || true
 WHEEL="$(ls "$WORK"/dist/rdmp_gym-*.whl)"
 rm -rf "$ROOT/build"
-for member in rdmp_gym/agents/learners/__init__.py rdmp_gym/envs/assets/armar3_wipe.xml \
+for member in rdmp_gym/agents/learners/__init__.py rdmp_gym/envs/robots/armar3/legacy_scene.xml \
               rdmp_gym-*.dist-info/licenses/LICENSE; do
   "$PYTHON" - "$WHEEL" "$member" <<'PY'
 import fnmatch, sys, zipfile

@@ -21,15 +21,11 @@ from scipy.ndimage import gaussian_filter1d
 
 __all__ = ["Cup", "CupClearance", "HandPoints"]
 
-#: The geoms of the hand that the clearance keeps away from the cup (the sponge included).
-HAND_GEOMS = ("fingers", "thumb", "palm", "sponge")
-
-
 class HandPoints:
     """World points on the hand's geoms for a joint path: the corners, edge and face centres of each geom's
     bounding box (27 per geom), by forward kinematics on a private copy of the model's data."""
 
-    def __init__(self, model: mujoco.MjModel, qpos_adr: np.ndarray, geoms: Sequence[str] = HAND_GEOMS):
+    def __init__(self, model: mujoco.MjModel, qpos_adr: np.ndarray, geoms: Sequence[str]):
         ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name) for name in geoms]
         missing = [name for name, i in zip(geoms, ids, strict=True) if i < 0]
         if missing:

@@ -39,6 +39,7 @@ from scipy.ndimage import uniform_filter1d
 from rdmp_gym.basis import periodic_width, von_mises
 
 from .controller import ForceAdaptation, ForceAdaptationSettings
+from .scene import DEFAULT_XML
 
 __all__ = ["ForceProfileLearning", "ForceProfileSettings", "curved_table_scene", "period_force_errors",
            "wavy_contact"]
@@ -185,7 +186,7 @@ _TABLE_TOP = 'type="box" size="0.25 0.45 0.02" pos="0.11 0 -0.02"'
 
 
 def curved_table_scene(directory: str | Path, crown: float = 0.06) -> Path:
-    """Write a copy of the packaged ArmarWipe scene whose table top is curved (for ``gym.make(...,
+    """Write a copy of the packaged hand-merged wiping scene whose table top is curved (for ``gym.make(...,
     xml_file=path)``) into ``directory`` and return its path.
 
     The box top becomes the upper half of an ellipsoid with the box's half extents (0.25, 0.45 m) and half height
@@ -195,11 +196,11 @@ def curved_table_scene(directory: str | Path, crown: float = 0.06) -> Path:
     17 mm below the plane."""
     if not (np.isfinite(crown) and crown > 0.0):
         raise ValueError(f"crown: expected a finite positive height (m), got {crown!r}")
-    source = Path(__file__).with_name("assets") / "armar3_wipe.xml"
+    source = DEFAULT_XML
     text = source.read_text()
     if text.count(_TABLE_TOP) != 1:
         raise RuntimeError(f"{source}: the table top is not the expected box; update curved_table_scene")
-    path = Path(directory) / "armar3_wipe_curved.xml"
+    path = Path(directory) / "wipe_curved.xml"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text.replace(_TABLE_TOP, f'type="ellipsoid" size="0.25 0.45 {crown!r}" pos="0.11 0 {-crown!r}"'))
     return path

@@ -14,6 +14,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from .arena import compose_scene, self_contact_sensors
+from .robots import ARMAR3, RobotDescription, get_robot
+
 __all__ = [
     "ARM_JOINTS",
     "DEFAULT_MOBILITY",
@@ -27,22 +30,16 @@ __all__ = [
 
 logger = logging.getLogger(__name__)
 
-DEFAULT_XML = Path(__file__).resolve().parent / "assets" / "armar3_wipe.xml"
-
-#: Controlled joints in chain order: torso (3) then the right arm (7).
-ARM_JOINTS = (
-    "hip_pitch", "hip_roll", "hip_yaw",
-    "r_shoulder1", "r_shoulder2", "r_upperarm", "r_elbow", "r_underarm", "r_wrist1", "r_wrist2",
-)
-
-_REQUIRED = {
-    mujoco.mjtObj.mjOBJ_BODY: ("table", "hand", "sponge", "obstacle"),
-    mujoco.mjtObj.mjOBJ_GEOM: ("sponge", "table_top", "obstacle"),
-    mujoco.mjtObj.mjOBJ_SITE: ("ft_site", "sponge_tcp", "tcp"),
-    mujoco.mjtObj.mjOBJ_SENSOR: ("wrist_force", "wrist_torque", "sponge_touch", "sponge_table", "robot_table",
-                                 "arm_torso", "arm_platform", "arm_obstacle"),
-    mujoco.mjtObj.mjOBJ_JOINT: (*ARM_JOINTS, "sponge_slide", "obstacle_free"),
-}
+#: The packaged ARMAR-III scene that ``ArmarWipe-v1`` and ``-v2`` were published with.
+DEFAULT_XML = Path(ARMAR3.legacy_scene)
+#: ARMAR-III's controlled joints in chain order: torso (3) then the right arm (7).
+ARM_JOINTS = ARMAR3.joints
+#: ARMAR-III's preferred arm configuration (null-space posture of the IK).
+DEFAULT_POSTURE = ARMAR3.posture
+#: ARMAR-III's relative mobility of the joints in the IK.
+DEFAULT_MOBILITY = ARMAR3.mobility
+#: Prefixes of the robot's and the sponge tool's names in a composed scene (a hand-merged scene has none).
+ROBOT_PREFIX, TOOL_PREFIX = "robot/", "tool/"
 
 #: Where a parked (absent) obstacle waits: under the floor, out of sight, weightless, with its collisions off.
 OBSTACLE_PARKING = np.array([0.2, 1.5, -1.0])
@@ -94,50 +91,96 @@ class WipeScene:
     """The MuJoCo model and data of the wiping scene, with the indices the controller needs.
 
     Args:
-        xml_file: MJCF path; ``None`` loads the packaged ``armar3_wipe.xml``. A custom file must
-            define the names of the packaged one (table, hand, sponge, sites, sensors, joints).
+        robot: the robot (a registered name or a :class:`~rdmp_gym.envs.robots.RobotDescription`).
+        composed: compose the scene from the arena, the robot and the sponge tool
+            (:func:`~rdmp_gym.envs.arena.compose_scene`); ``False`` loads the robot's hand-merged ``legacy_scene``
+            (the scene the task versions 1 and 2 were published with).
+        xml_file: a hand-merged scene MJCF instead (with the names of the robot's description, the arena's and
+            the sponge tool's, and the sensors of :mod:`~rdmp_gym.envs.arena`); excludes ``composed``.
     """
 
-    def __init__(self, xml_file: str | Path | None = None):
-        path = Path(DEFAULT_XML if xml_file is None else xml_file)
-        if not path.is_file():
-            raise ValueError(f"xml_file: no such file: {path}")
-        self.xml_file = path
-        self.model = mujoco.MjModel.from_xml_path(str(path))
+    def __init__(self, robot: str | RobotDescription = "armar3", composed: bool = False,
+                 xml_file: str | Path | None = None):
+        self.robot = get_robot(robot)
+        if xml_file is not None and composed:
+            raise ValueError("xml_file: give either xml_file or composed=True, not both")
+        if xml_file is None and not composed and self.robot.legacy_scene is None:
+            raise ValueError(f"composed: the robot {self.robot.name!r} has no hand-merged scene; use composed=True")
+        if composed:
+            self.xml_file = None
+            self.model = compose_scene(self.robot, ROBOT_PREFIX, TOOL_PREFIX)
+            self._prefix = {"robot": ROBOT_PREFIX, "tool": TOOL_PREFIX}
+        else:
+            path = Path(self.robot.legacy_scene if xml_file is None else xml_file)
+            if not path.is_file():
+                raise ValueError(f"xml_file: no such file: {path}")
+            self.xml_file = path
+            self.model = mujoco.MjModel.from_xml_path(str(path))
+            self._prefix = {"robot": "", "tool": ""}
         self.data = mujoco.MjData(self.model)
-        m = self.model
-        for obj, names in _REQUIRED.items():
-            missing = [n for n in names if mujoco.mj_name2id(m, obj, n) < 0]
+        self._check_names()
+        self._read_joints()
+        self._read_arena()
+        self._read_sensors()
+        self._read_robot_geoms()
+        self.table_pose = TablePose()
+
+    def name(self, part: str, name: str) -> str:
+        """The model's name of ``name`` of ``part`` (``"robot"``, ``"tool"`` or ``"arena"``)."""
+        return self._prefix.get(part, "") + name
+
+    def id(self, obj: mujoco.mjtObj, part: str, name: str) -> int:
+        """The model id of object ``name`` of ``part`` (-1 if there is none)."""
+        return mujoco.mj_name2id(self.model, obj, self.name(part, name))
+
+    def _check_names(self) -> None:
+        """ValueError naming what the scene lacks."""
+        robot, body, geom = self.robot, mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM
+        site = mujoco.mjtObj.mjOBJ_SITE
+        sensors = ("wrist_force", "wrist_torque", "sponge_touch", "sponge_table", "robot_table",
+                   *self_contact_sensors(robot), "arm_obstacle")
+        required = [(body, "arena", ("table", "obstacle")), (geom, "arena", ("table_top", "obstacle")),
+                    (body, "robot", (robot.root_body, robot.arm_root, *robot.body_links)),
+                    (site, "robot", (robot.ft_site,)), (geom, "robot", robot.hand_geoms),
+                    (mujoco.mjtObj.mjOBJ_JOINT, "robot", robot.joints), (body, "tool", ("sponge",)),
+                    (geom, "tool", ("sponge",)), (site, "tool", ("sponge_tcp",)),
+                    (mujoco.mjtObj.mjOBJ_JOINT, "tool", ("sponge_slide",)),
+                    (mujoco.mjtObj.mjOBJ_JOINT, "arena", ("obstacle_free",)),
+                    (mujoco.mjtObj.mjOBJ_SENSOR, "arena", sensors)]
+        source = self.xml_file.name if self.xml_file is not None else "the composed scene"
+        for obj, part, names in required:
+            missing = [n for n in names if self.id(obj, part, n) < 0]
             if missing:
-                raise ValueError(f"xml_file: {path.name} lacks the required {obj.name[6:].lower()}(s) {missing}")
+                raise ValueError(f"xml_file: {source} lacks the required {obj.name[6:].lower()}(s) {missing}")
 
-        def idx(obj: mujoco.mjtObj, name: str) -> int:
-            return mujoco.mj_name2id(m, obj, name)
-
-        self.joint_ids = np.array([idx(mujoco.mjtObj.mjOBJ_JOINT, n) for n in ARM_JOINTS])
+    def _read_joints(self) -> None:
+        m, joint = self.model, mujoco.mjtObj.mjOBJ_JOINT
+        self.joint_ids = np.array([self.id(joint, "robot", n) for n in self.robot.joints])
         self.qpos_adr = m.jnt_qposadr[self.joint_ids].copy()
         self.dof_adr = m.jnt_dofadr[self.joint_ids].copy()
         self.joint_lower = m.jnt_range[self.joint_ids, 0].copy()
         self.joint_upper = m.jnt_range[self.joint_ids, 1].copy()
         actuator_of_joint = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)
                              if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
-        missing = [n for n, j in zip(ARM_JOINTS, self.joint_ids, strict=True) if int(j) not in actuator_of_joint]
+        missing = [n for n, j in zip(self.robot.joints, self.joint_ids, strict=True) if int(j) not in actuator_of_joint]
         if missing:
             raise ValueError(f"xml_file: no joint actuator for {missing}")
         self.actuator_ids = np.array([actuator_of_joint[int(j)] for j in self.joint_ids])
-        self.table_body = idx(mujoco.mjtObj.mjOBJ_BODY, "table")
-        self.sponge_body = idx(mujoco.mjtObj.mjOBJ_BODY, "sponge")
-        self.sponge_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "sponge")
-        self.table_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "table_top")
+        self.slide_qpos = m.jnt_qposadr[self.id(joint, "tool", "sponge_slide")]
+
+    def _read_arena(self) -> None:
+        m, body, geom = self.model, mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM
+        self.table_body = self.id(body, "arena", "table")
+        self.sponge_body = self.id(body, "tool", "sponge")
+        self.sponge_geom = self.id(geom, "tool", "sponge")
+        self.table_geom = self.id(geom, "arena", "table_top")
         self.sponge_half = m.geom_size[self.sponge_geom].copy()
-        self.ft_site = idx(mujoco.mjtObj.mjOBJ_SITE, "ft_site")
-        self.sponge_site = idx(mujoco.mjtObj.mjOBJ_SITE, "sponge_tcp")
-        self.tcp_site = idx(mujoco.mjtObj.mjOBJ_SITE, "tcp")
-        self.slide_qpos = m.jnt_qposadr[idx(mujoco.mjtObj.mjOBJ_JOINT, "sponge_slide")]
+        self.ft_site = self.id(mujoco.mjtObj.mjOBJ_SITE, "robot", self.robot.ft_site)
+        self.sponge_site = self.id(mujoco.mjtObj.mjOBJ_SITE, "tool", "sponge_tcp")
         # The obstacle: a free body (cylinder) placed on the table or parked.
-        self.obstacle_body = idx(mujoco.mjtObj.mjOBJ_BODY, "obstacle")
-        self.obstacle_geom = idx(mujoco.mjtObj.mjOBJ_GEOM, "obstacle")
-        free = idx(mujoco.mjtObj.mjOBJ_JOINT, "obstacle_free")
+        self.obstacle_body = self.id(body, "arena", "obstacle")
+        self.obstacle_geom = self.id(geom, "arena", "obstacle")
+        free = self.id(mujoco.mjtObj.mjOBJ_JOINT, "arena", "obstacle_free")
         if (m.jnt_type[free] != mujoco.mjtJoint.mjJNT_FREE
                 or m.geom_type[self.obstacle_geom] != mujoco.mjtGeom.mjGEOM_CYLINDER):
             raise ValueError("xml_file: 'obstacle_free' must be a free joint and geom 'obstacle' a cylinder")
@@ -152,34 +195,40 @@ class WipeScene:
         top = m.geom_pos[self.table_geom], m.geom_size[self.table_geom]
         self.table_extent = (float(top[0][0] - top[1][0]), float(top[0][0] + top[1][0]),
                              float(top[0][1] - top[1][1]), float(top[0][1] + top[1][1]))
-        sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_force")
-        self.force_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
-        sensor = idx(mujoco.mjtObj.mjOBJ_SENSOR, "wrist_torque")
-        self.torque_adr = slice(m.sensor_adr[sensor], m.sensor_adr[sensor] + 3)
-        self.touch_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_touch")])
-        # MuJoCo contact sensors, evaluated in C at every step: sponge-table (found, net force [3],
-        # world frame) and robot-subtree-table (found).
-        self.sponge_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")])
-        self.robot_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "robot_table")])
-        # arm-body self-contact (found, min distance) x 2 and arm-obstacle contact (found)
-        self.self_contact_adr = tuple(int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, n)])
-                                      for n in ("arm_torso", "arm_platform"))
-        self.obstacle_contact_adr = int(m.sensor_adr[idx(mujoco.mjtObj.mjOBJ_SENSOR, "arm_obstacle")])
-        if m.sensor_dim[idx(mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")] != 4:
-            raise ValueError("xml_file: sensor 'sponge_table' must be a contact sensor with data=\"found force\" "
-                             "and reduce=\"netforce\"")
-        # Robot = every body on the platform's subtree; arm-collision geoms = robot geoms but the sponge.
-        root = idx(mujoco.mjtObj.mjOBJ_BODY, "platform")
-        robot_bodies = {b for b in range(m.nbody) if self._descends(b, root)} if root >= 0 else set()
-        robot_geom = np.array([int(m.geom_bodyid[g]) in robot_bodies for g in range(m.ngeom)])
-        self.is_arm_geom = robot_geom.copy()
-        self.is_arm_geom[self.sponge_geom] = False
         self.nominal_table_pos = m.body_pos[self.table_body].copy()
         self.nominal_table_rot = np.zeros(9)
         mujoco.mju_quat2Mat(self.nominal_table_rot, m.body_quat[self.table_body])
         self.nominal_table_rot = self.nominal_table_rot.reshape(3, 3)
         self.nominal_table_quat = m.body_quat[self.table_body].copy()
-        self.table_pose = TablePose()
+
+    def _read_sensors(self) -> None:
+        m = self.model
+
+        def adr(name: str) -> int:
+            return int(m.sensor_adr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)])
+
+        self.force_adr = slice(adr("wrist_force"), adr("wrist_force") + 3)
+        self.torque_adr = slice(adr("wrist_torque"), adr("wrist_torque") + 3)
+        self.touch_adr = adr("sponge_touch")
+        # MuJoCo contact sensors, evaluated in C at every step: sponge-table (found, net force [3],
+        # world frame) and robot-subtree-table (found).
+        self.sponge_contact_adr = adr("sponge_table")
+        self.robot_contact_adr = adr("robot_table")
+        # the arm touching each link of the robot's body (found, min distance), and the cup (found)
+        self.self_contact_adr = tuple(adr(n) for n in self_contact_sensors(self.robot))
+        self.obstacle_contact_adr = adr("arm_obstacle")
+        if m.sensor_dim[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, "sponge_table")] != 4:
+            raise ValueError("xml_file: sensor 'sponge_table' must be a contact sensor with data=\"found force\" "
+                             "and reduce=\"netforce\"")
+
+    def _read_robot_geoms(self) -> None:
+        """Robot = every body on the root body's subtree; arm-collision geoms = robot geoms but the sponge."""
+        m = self.model
+        root = self.id(mujoco.mjtObj.mjOBJ_BODY, "robot", self.robot.root_body)
+        robot_bodies = {b for b in range(m.nbody) if self._descends(b, root)}
+        robot_geom = np.array([int(m.geom_bodyid[g]) in robot_bodies for g in range(m.ngeom)])
+        self.is_arm_geom = robot_geom.copy()
+        self.is_arm_geom[self.sponge_geom] = False
 
     def _descends(self, body: int, root: int) -> bool:
         while body > 0:
@@ -251,11 +300,11 @@ class WipeScene:
         return np.asarray(points, dtype=np.float64) @ rot.T + origin
 
     def arm_qpos(self) -> np.ndarray:
-        """Current positions of the 10 controlled joints, [10]."""
+        """Current positions of the ``n`` controlled joints, [n]."""
         return self.data.qpos[self.qpos_adr].copy()
 
     def set_arm_state(self, q: np.ndarray) -> None:
-        """Reset the simulation to rest at joint positions ``q`` [10] with matching servo targets."""
+        """Reset the simulation to rest at joint positions ``q`` [n] with matching servo targets."""
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[self.qpos_adr] = q
         self.data.qpos[self.obstacle_qpos:self.obstacle_qpos + 7] = self._obstacle_pose()
@@ -268,14 +317,7 @@ class WipeScene:
         return rot @ self.data.sensordata[self.force_adr]
 
     def servo_lead(self) -> np.ndarray:
-        """``kv / kp`` of the arm's position servos, [10] (s): the lag a moving target sees."""
+        """``kv / kp`` of the arm's position servos, [n] (s): the lag a moving target sees."""
         kp = self.model.actuator_gainprm[self.actuator_ids, 0]
         kv = -self.model.actuator_biasprm[self.actuator_ids, 2]
         return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
-
-
-#: Preferred arm configuration (null-space posture of the IK): the wiping posture at the nominal patch
-#: centre with the torso upright; every joint well inside its limits.
-DEFAULT_POSTURE = np.array([0.0, 0.0, 0.0, -0.37, 0.10, 0.68, -0.53, 1.18, 0.0, 0.69])
-#: Relative mobility of the joints in the IK: the torso moves little, the hip roll least.
-DEFAULT_MOBILITY = np.array([0.1, 0.05, 0.1, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])

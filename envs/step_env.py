@@ -46,7 +46,7 @@ from rdmp_gym import DMPStepper
 from .context import SIZE as CONTEXT_SIZE
 from .controller import ForceAdaptation
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .wipe_env import WORKSPACE_HIGH, WORKSPACE_LOW, ArmarWipeEnv, outcome
+from .wipe_env import ArmarWipeEnv, outcome
 from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
 __all__ = ["ArmarWipeStepEnv"]
@@ -205,9 +205,8 @@ class ArmarWipeStepEnv(gym.Env):
             raise ValueError("action: contains NaN or infinite values")
         return np.clip(a, -1.0, 1.0)
 
-    @staticmethod
-    def _clip(target: np.ndarray) -> np.ndarray:
-        return np.clip(target, WORKSPACE_LOW, WORKSPACE_HIGH)
+    def _clip(self, target: np.ndarray) -> np.ndarray:
+        return np.clip(target, *self.task.robot.workspace)
 
     def _solve(self, target: np.ndarray, q_init: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joint positions [10] and joint motion per metre along the normal [10] for a sponge target [3]

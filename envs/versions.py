@@ -44,6 +44,8 @@ class TaskVersion:
             joint at its limit.
         event_charge: what a collision, a joint at its limit or a joint acceleration above the limit costs as soon
             as it happens (a share of its weight, :class:`rdmp_gym.envs.reward.RewardSettings`).
+        composed_scene: the scene is composed from the arena, the robot and the sponge tool
+            (:func:`rdmp_gym.envs.arena.compose_scene`); else the robot's hand-merged scene.
     """
 
     version: int
@@ -53,6 +55,7 @@ class TaskVersion:
     speed_normalised_jerk: bool
     executable_success: bool
     event_charge: float
+    composed_scene: bool = False
 
     def patch_clearance(self, sponge_half: np.ndarray) -> float:
         """Clearance (m) between the cup's rim and the patch for a sponge box of half sizes ``[3]`` (face: 1, 2)."""

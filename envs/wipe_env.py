@@ -55,7 +55,8 @@ from .ik import BodyClearance, IKResult, PathIK
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
-from .scene import ARM_JOINTS, DEFAULT_MOBILITY, DEFAULT_POSTURE, TablePose, WipeScene, dirt_grid
+from .robots import ARMAR3, RobotDescription, get_robot
+from .scene import TablePose, WipeScene, dirt_grid
 from .versions import TASK_VERSIONS, TaskVersion
 from .viewer import HumanViewer
 from .wiping import DirtField, WipeTrace, simulate_wipe
@@ -64,9 +65,9 @@ __all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes",
 
 logger = logging.getLogger(__name__)
 
-#: Path bounds in the nominal table frame (m): beyond them a path is invalid without simulation.
-WORKSPACE_LOW = np.array([-0.35, -0.40, -0.05])
-WORKSPACE_HIGH = np.array([0.35, 0.40, 0.30])
+#: ARMAR-III's path bounds in the nominal table frame (m): beyond a robot's ``workspace`` a path is invalid
+#: without simulation.
+WORKSPACE_LOW, WORKSPACE_HIGH = ARMAR3.workspace
 #: ``info["is_success"]`` thresholds: coverage, force-in-band fraction, obstacle displacement (m).
 SUCCESS_COVERAGE = 0.95
 SUCCESS_FORCE_IN_BAND = 0.9
@@ -127,9 +128,10 @@ def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> Rhyt
     return dmp.with_sweep(covering_sweep(transient, end - SWEEP_END_MARGIN, dmp.n_dims))
 
 
-def _workspace_excess(path: np.ndarray) -> float:
-    """How far (m) ``path [T, 3]`` leaves the workspace box at most (0 inside)."""
-    return float(np.max(np.maximum(WORKSPACE_LOW - path, 0.0) + np.maximum(path - WORKSPACE_HIGH, 0.0)))
+def _workspace_excess(path: np.ndarray, workspace: tuple[np.ndarray, np.ndarray]) -> float:
+    """How far (m) ``path [T, 3]`` leaves the ``workspace`` box ``(low [3], high [3])`` at most (0 inside)."""
+    low, high = workspace
+    return float(np.max(np.maximum(low - path, 0.0) + np.maximum(path - high, 0.0)))
 
 
 def _cup_clearance(value: float | CupClearance | None) -> CupClearance | None:
@@ -143,8 +145,8 @@ def _cup_clearance(value: float | CupClearance | None) -> CupClearance | None:
     return CupClearance(margin=float(value))
 
 
-def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
-    """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against the workspace."""
+def _saved_dmp(dmp: str | Path | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
+    """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against ``workspace``."""
     if not isinstance(dmp, RhythmicDMP):
         if not isinstance(dmp, (str, Path)):
             raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
@@ -154,7 +156,7 @@ def _saved_dmp(dmp: str | Path | RhythmicDMP) -> RhythmicDMP:
     if dmp.n_dims != 3:
         raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
     t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
-    check_frame(dmp.rollout(t), WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="dmp")
+    check_frame(dmp.rollout(t), *workspace, centre_dims=(0, 1), name="dmp")
     return dmp
 
 
@@ -196,8 +198,8 @@ class ArmarWipeEnv(gym.Env):
             sponge) into the table beyond which the episode is invalid (reason ``"penetration"``).
         limit_margin: distance to a joint limit (rad) that counts as "at the limit".
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
-        max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid.
-        xml_file: MJCF of the scene (default: the packaged ``armar3_wipe.xml``).
+        max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid (default: the robot's).
+        xml_file: a hand-merged scene MJCF (default: the robot's own scene; :class:`~rdmp_gym.envs.scene.WipeScene`).
         render_mode: ``None``, ``"rgb_array"`` (RGB frames), ``"depth_array"`` (depth in m) or ``"human"``
             (MuJoCo's viewer, following every control step; needs a display); width, height, camera: of the
             rendered frames.
@@ -243,7 +245,7 @@ class ArmarWipeEnv(gym.Env):
         penetration_limit: float = 0.005,
         limit_margin: float = 0.02,
         ik_tolerance: tuple[float, float] = (0.005, float(np.deg2rad(5.0))),
-        max_joint_speed: float = 3.0,
+        max_joint_speed: float | None = None,
         xml_file: str | Path | None = None,
         render_mode: str | None = None,
         width: int = 480,
@@ -253,12 +255,15 @@ class ArmarWipeEnv(gym.Env):
         frame_stride: int = 4,
         version: int = 1,
         cup_clearance: float | CupClearance | None = None,
+        robot: str | RobotDescription = "armar3",
     ):
         super().__init__()
         if isinstance(version, bool) or version not in TASK_VERSIONS:
             raise ValueError(f"version: expected one of {sorted(TASK_VERSIONS)}, got {version!r}")
         #: what this task version changes (see :mod:`rdmp_gym.envs.versions`)
         self.task_version: TaskVersion = TASK_VERSIONS[version]
+        #: the robot (:mod:`rdmp_gym.envs.robots`)
+        self.robot: RobotDescription = get_robot(robot)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, "
                              f"got {render_mode!r}")
@@ -270,7 +275,7 @@ class ArmarWipeEnv(gym.Env):
         if dmp is not None:
             if demonstration is not None:
                 raise ValueError("dmp: give either dmp or demonstration, not both")
-            self.dmp = _saved_dmp(dmp)
+            self.dmp = _saved_dmp(dmp, self.robot.workspace)
         elif demonstration is not None:
             if not isinstance(demonstration, Demonstration):
                 raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
@@ -278,7 +283,7 @@ class ArmarWipeEnv(gym.Env):
             if demonstration.n_dims != 3:
                 raise ValueError("demonstration: expected 3 dimensions (x, y, z in the table frame), "
                                  f"got {demonstration.n_dims}")
-            demonstration.check_frame(WORKSPACE_LOW, WORKSPACE_HIGH, centre_dims=(0, 1), name="demonstration")
+            demonstration.check_frame(*self.robot.workspace, centre_dims=(0, 1), name="demonstration")
             self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
                                        method=fit_method, **FADE_BEFORE_T)
         else:
@@ -297,7 +302,8 @@ class ArmarWipeEnv(gym.Env):
         self._anchor_z = float(self.dmp.anchor[2])
 
         # --- the scene, timing and control
-        self.scene = WipeScene(xml_file)
+        self.scene = WipeScene(self.robot, composed=self.task_version.composed_scene and xml_file is None,
+                               xml_file=xml_file)
         model = self.scene.model
         if timestep is not None:
             model.opt.timestep = check_positive(timestep, "timestep")
@@ -346,7 +352,7 @@ class ArmarWipeEnv(gym.Env):
                              f"got {type(force_learning).__name__}")
         self.force_learning = (ForceProfileSettings() if force_learning is True
                                else force_learning or None)
-        self.reward_settings = RewardSettings(target_force=target_force,
+        self.reward_settings = RewardSettings(target_force=target_force, max_joint_accel=self.robot.max_joint_accel,
                                               force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1],
                                               event_charge=self.task_version.event_charge)
         self.reward_weights = RewardWeights.from_mapping(reward_weights)
@@ -357,7 +363,8 @@ class ArmarWipeEnv(gym.Env):
         if len(ik_tolerance) != 2:
             raise ValueError("ik_tolerance: expected (position m, angle rad)")
         self.ik_tolerance = tuple(check_positive(value, "ik_tolerance") for value in ik_tolerance)
-        self.max_joint_speed = check_positive(max_joint_speed, "max_joint_speed")
+        speed_limit = self.robot.max_joint_speed if max_joint_speed is None else max_joint_speed
+        self.max_joint_speed = check_positive(speed_limit, "max_joint_speed")
         self.wear_rate = check_positive(wear_rate, "wear_rate")
         self.penetration_limit = check_positive(penetration_limit, "penetration_limit")
         if not isinstance(obstacle, (bool, np.bool_)):
@@ -369,13 +376,10 @@ class ArmarWipeEnv(gym.Env):
                                         patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
                                         near_patch=self.task_version.pad_clearance)
 
-        kinematics = ChainKinematics(model, "sponge_tcp", ARM_JOINTS,
-                                     bodies=("torso", "r_underarm_link"))
-        clearance = BodyClearance(model, kinematics, "torso", ("r_forearm",))
-        self.ik = PathIK(kinematics, DEFAULT_POSTURE, DEFAULT_MOBILITY, clearance=clearance)
+        self.ik = self._path_ik()
         #: the clearance term that keeps the hand away from the cup (None: off)
         self.cup_clearance = _cup_clearance(cup_clearance)
-        self._hand_points = HandPoints(model, self.scene.qpos_adr) if self.cup_clearance is not None else None
+        self._hand_points = self._hand() if self.cup_clearance is not None else None
         self._lead = self.scene.servo_lead()
         self._engage = self.adaptation_settings.engage_height
 
@@ -405,6 +409,24 @@ class ArmarWipeEnv(gym.Env):
         self._dirt = np.zeros(0)
         self._imitation_jerk: float | None = None
         self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
+
+    def _path_ik(self) -> PathIK:
+        """The path IK of the robot's chain to the sponge's face centre, with its arm-from-body clearance."""
+        scene, robot = self.scene, self.robot
+        joints = tuple(scene.name("robot", n) for n in robot.joints)
+        geoms = robot.body_clearance
+        bodies = () if geoms is None else tuple(scene.name("robot", n) for n in (geoms.box_body, *geoms.capsule_bodies))
+        kinematics = ChainKinematics(scene.model, scene.name("tool", "sponge_tcp"), joints, bodies=bodies)
+        clearance = None if geoms is None else BodyClearance(
+            scene.model, kinematics, scene.name("robot", geoms.box),
+            tuple(scene.name("robot", n) for n in geoms.capsules))
+        return PathIK(kinematics, robot.posture, robot.mobility, clearance=clearance)
+
+    def _hand(self) -> HandPoints:
+        """Points on the robot's hand geoms and the sponge, for the cup clearance."""
+        scene = self.scene
+        geoms = (*(scene.name("robot", n) for n in self.robot.hand_geoms), scene.name("tool", "sponge"))
+        return HandPoints(scene.model, scene.qpos_adr, geoms)
 
     @property
     def success_joint_accel(self) -> float | None:
@@ -554,7 +576,8 @@ class ArmarWipeEnv(gym.Env):
         """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that :meth:`step` executes for parameters
         ``theta``: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
         path = self.rollout_path(theta)
-        if self.cup_clearance is None or not np.all(np.isfinite(path)) or _workspace_excess(path) > 0:
+        if (self.cup_clearance is None or not np.all(np.isfinite(path))
+                or _workspace_excess(path, self.robot.workspace) > 0):
             return path
         return self._clear_cup(path, self._solve(path), {})[0]
 
@@ -590,7 +613,7 @@ class ArmarWipeEnv(gym.Env):
         if cup is None:
             return {}
         if self._hand_points is None:
-            self._hand_points = HandPoints(self.scene.model, self.scene.qpos_adr)
+            self._hand_points = self._hand()
         gaps = self._hand_points.gaps(self._solve(np.asarray(path, dtype=np.float64)).q, cup)
         return dict(zip(self._hand_points.names, gaps.T, strict=True))
 
@@ -627,13 +650,13 @@ class ArmarWipeEnv(gym.Env):
         assert path is not None
         if not np.all(np.isfinite(path)):
             return self._invalid(info, "nonfinite_path", 1.0)
-        excess = _workspace_excess(path)
+        excess = _workspace_excess(path, self.robot.workspace)
         if excess > 0:
             return self._invalid(info, "workspace", excess / 0.1)
         solution = self._solve(path)
         if self.cup_clearance is not None:
             path, solution = self._clear_cup(path, solution, info)
-            excess = _workspace_excess(path)
+            excess = _workspace_excess(path, self.robot.workspace)
             if excess > 0:
                 return self._invalid(info, "workspace", excess / 0.1)
         flat = path[:, 2] <= self._engage

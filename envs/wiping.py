@@ -15,8 +15,8 @@ impact). Everything else is evaluated afterwards, vectorised over the episode:
   since the previous step. Standing still (``s = 0``) or hovering (``F = 0``) removes nothing; the
   coverage is the fraction of the dirt removed;
 - an arm collision is a contact of a robot geom other than the sponge with the table; a self-collision
-  a contact of the moving arm (upper arm to sponge) with the torso, head or platform (sensors
-  ``arm_torso``, ``arm_platform``); for both the deepest penetration is recorded;
+  a contact of the moving arm with a link of the robot's own body (sensors ``arm_<link>``,
+  :mod:`rdmp_gym.envs.arena`); for both the deepest penetration is recorded;
 - the obstacle: whether the arm touches it (sensor ``arm_obstacle``) and how far it has moved.
 """
 
@@ -108,8 +108,8 @@ class WipeTrace:
         removed: fraction of all the dirt removed in each step, [T] (sums to the coverage).
         dirt: dirt left per cell at the end, [N] in [0, 1].
         arm_contact: a robot geom other than the sponge touches the table, [T].
-        self_contact: the moving arm touches the robot's torso, head or platform, [T].
-        obstacle_contact: the arm (upper arm to sponge) touches the obstacle, [T].
+        self_contact: the moving arm touches a link of the robot's own body, [T].
+        obstacle_contact: the moving arm touches the obstacle, [T].
         obstacle_shift: distance of the obstacle's centre from where it stood, [T] (m; 0 without one).
         at_limit: a controlled joint is within the margin of a limit, [T].
         sponge_pos: sponge face centre (on the hand), [T, 3] (world).
@@ -259,7 +259,8 @@ def simulate_wipe(
     bias_n = float(scene.wrist_force_world() @ normal)
     a = scene.sponge_contact_adr
     robot_adr = scene.robot_contact_adr
-    torso_adr, platform_adr = scene.self_contact_adr
+    self_found_cols = list(scene.self_contact_adr)                # per link of the robot's body: found, distance
+    self_dist_cols = [adr + 1 for adr in scene.self_contact_adr]
     half = scene.sponge_half
     tn0, tn1, tn2 = (float(x) for x in table_normal)
     fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
@@ -350,8 +351,7 @@ def simulate_wipe(
     adaptation.force, adaptation.offset = filtered, offset
 
     robot_found = record[:, robot_adr]
-    self_distance = np.where(record[:, [torso_adr, platform_adr]] > 0,
-                             -record[:, [torso_adr + 1, platform_adr + 1]], -np.inf)
+    self_distance = np.where(record[:, self_found_cols] > 0, -record[:, self_dist_cols], -np.inf)
     self_found = np.isfinite(self_distance).any(axis=1)
     penetration = max(0.0, table_penetration, float(np.fmax.reduce(self_distance.ravel())))
     obstacle_found = record[:, scene.obstacle_contact_adr] > 0

@@ -151,4 +151,4 @@ def test_table_pose_and_dirt_grid(scene):
     with pytest.raises(ValueError, match="cell"):
         dirt_grid(np.zeros(2), np.ones(2), 0.0)
     with pytest.raises(ValueError, match="xml_file"):
-        WipeScene("/nonexistent/scene.xml")
+        WipeScene(xml_file="/nonexistent/scene.xml")

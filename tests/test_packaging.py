@@ -35,7 +35,7 @@ def test_wheel_holds_every_module_of_the_three_layers_the_xml_and_the_license(wh
                 for file in folder.rglob("*.py") if "__pycache__" not in file.parts}
     assert "rdmp_gym/agents/learners/__init__.py" in expected
     assert expected <= names, sorted(expected - names)
-    assert "rdmp_gym/envs/assets/armar3_wipe.xml" in names
+    assert "rdmp_gym/envs/robots/armar3/legacy_scene.xml" in names
     assert any(name.endswith(".dist-info/licenses/LICENSE") for name in names)
     metadata = zipfile.ZipFile(path).read(f"rdmp_gym-{cli.__version__}.dist-info/METADATA").decode()
     assert f"Version: {cli.__version__}\n" in metadata and "License-Expression: BSD-3-Clause" in metadata
