@@ -11,25 +11,31 @@ from .basis import BasisSet, Fading
 from .canonical import CanonicalSystem
 from .classic import PeriodicDMP
 from .demonstrations import Demonstration, SyntheticTruth, multi_transient_demonstrations, wiping_demonstration
-from .dmp import DMPStepper, RhythmicDMP, TransientStart
+from .dmp import DMPStepper, RhythmicDMP, StopRequest, TransientStart
 from .parameters import GROUPS, ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .serialization import load_dmp, save_dmp
+from .settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
 from .sweep import Sweep
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_FIT",
     "GROUPS",
+    "PAPER_FIT",
+    "PUBLISHED_ENV_FIT",
     "BasisSet",
     "CanonicalSystem",
     "DMPStepper",
     "Demonstration",
     "Fading",
+    "FitSettings",
     "ParameterLayout",
     "PeriodicDMP",
     "RhythmicDMP",
     "Segmentation",
+    "StopRequest",
     "Sweep",
     "SyntheticTruth",
     "TransientStart",

@@ -8,7 +8,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -16,16 +16,16 @@ from .basis import BasisSet, normalize
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
 from .demonstrations import Demonstration
-from .ending import Ending, StopPlan, plan_stop
+from .ending import Ending, StopPlan, StopRequest, plan_stop
 from .fitting import PAPER_SETTINGS, fit_rhythmic
-from .parameters import ParameterLayout
+from .parameters import ParameterLayout, group_key
 from .settings import DEFAULT_FIT, FitSettings
 from .start import TransientStart, settled_state, start_blend_profiles
 from .sweep import Sweep
 from .transformation import cached_system
 from .validation import as_finite_array, check_positive, check_time_grid
 
-__all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "TransientStart", "start_blend_profiles"]
+__all__ = ["PAPER_SETTINGS", "DMPStepper", "RhythmicDMP", "StopRequest", "TransientStart", "start_blend_profiles"]
 
 logger = logging.getLogger(__name__)
 
@@ -33,6 +33,34 @@ logger = logging.getLogger(__name__)
 TEMPO_RANGE = (1e-6, 1e6)
 
 GroupSelection = str | Iterable[str] | None
+
+
+class _Batch(NamedTuple):
+    """B parameter sets of one DMP, decoded from ``thetas [B, P]`` (see :meth:`RhythmicDMP._decode`)."""
+
+    weights: np.ndarray                     # [B, d, D]
+    inits: np.ndarray                       # [B, K, 2] (after the choice of transient: [B, 2])
+    anchors: np.ndarray                     # [B, d]
+    amplitudes: np.ndarray                  # [B, d]
+    sweeps: np.ndarray | None               # [B, V, d] via points of the anchor's travel, None without a sweep
+    stop_weights: np.ndarray | None         # [B, d, S], None without an ending
+
+    def rows(self, rows: np.ndarray) -> _Batch:
+        """The parameter sets of ``rows``."""
+        return _Batch(*(None if part is None else part[rows] for part in self))
+
+
+class _StartState(NamedTuple):
+    """Where B rollouts start: ``y0``, ``yd0`` ``[B, d]`` and, for the smooth start, each blend's length ``[B]`` (s;
+    ``None``: the paper's start)."""
+
+    y0: np.ndarray
+    yd0: np.ndarray
+    blend_length: np.ndarray | None
+
+    def rows(self, rows: np.ndarray) -> _StartState:
+        return _StartState(self.y0[rows], self.yd0[rows], None if self.blend_length is None
+                           else self.blend_length[rows])
 
 
 def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, velocity_offset: np.ndarray,
@@ -246,18 +274,18 @@ class RhythmicDMP:
                               self.amplitude[None], None)
         return y[0], yd[0]
 
-    def _simulate(self, t: np.ndarray, weights: np.ndarray, inits: np.ndarray, anchors: np.ndarray,
-                  amplitudes: np.ndarray, y0: np.ndarray, yd0: np.ndarray, tempo: float,
-                  transform: np.ndarray | None, blend_length: np.ndarray | None = None,
-                  stop: StopPlan | None = None, stop_weights: np.ndarray | None = None, velocity: bool = True,
-                  sweeps: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-        """Open-loop integration of B parameter sets: weights ``[B, d, D]``, inits ``[B, 2]``,
-        anchors/amplitudes/y0/yd0 ``[B, d]`` -> positions and velocities ``[B, T, d]`` (``None`` for the
-        velocities unless ``velocity``). The forcing term is multiplied by ``M diag(amplitude)``. With
-        ``blend_length [B]`` (s) the start is blended (``start_blend``): the result is the settled motion plus a
-        quintic offset ``e(t)`` that starts at ``(y0, yd0)`` minus the settled state and is 0 from ``blend_length``
-        on. A ``stop`` (with ``stop_weights [B, d, S]``) ends the movement at ``stop.goal [B, d]``. ``sweeps
-        [B, K, d]``: via points of the anchor's travel along ``self.sweep``'s timing."""
+    def _simulate(self, t: np.ndarray, batch: _Batch, start: _StartState, tempo: float,
+                  transform: np.ndarray | None, stop: StopPlan | None = None, velocity: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Open-loop integration of B parameter sets ``batch`` (inits ``[B, 2]``) from ``start`` -> positions and
+        velocities ``[B, T, d]`` (``None`` for the velocities unless ``velocity``). The forcing term is multiplied by
+        ``M diag(amplitude)``. With ``start.blend_length [B]`` (s) the start is blended (``start_blend``): the result
+        is the settled motion plus a quintic offset ``e(t)`` that starts at ``(y0, yd0)`` minus the settled state and
+        is 0 from ``blend_length`` on. A ``stop`` (with ``batch.stop_weights [B, d, S]``) ends the movement at
+        ``stop.goal [B, d]``. ``batch.sweeps [B, K, d]``: via points of the anchor's travel along ``self.sweep``'s
+        timing."""
+        weights, inits, anchors, amplitudes, sweeps, stop_weights = batch
+        y0, yd0, blend_length = start
         t = check_time_grid(t, "t")
         elapsed = t - t[0]
         dt = float(elapsed[-1] / (elapsed.size - 1))
@@ -329,8 +357,7 @@ class RhythmicDMP:
                 yd0: np.ndarray | None = None, anchor: np.ndarray | None = None, *,
                 scale: float | np.ndarray = 1.0, rotation: float | np.ndarray | None = None,
                 tempo: float | None = None, start_blend: bool = True, return_velocity: bool = False,
-                stop_at: float | None = None, exit_phase: float | None = None, goal: np.ndarray | None = None
-                ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                stop_at: float | StopRequest | None = None) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Reproduce the movement: transient ``transient`` from its own initial condition, then the cycle.
 
         Args:
@@ -353,11 +380,10 @@ class RhythmicDMP:
                 The periodic part is the same either way.
             return_velocity: also return velocities.
             stop_at: end the movement: a stop requested at this time (s after ``t[0]``) leaves the cycle at the
-                next demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at the goal (needs a DMP
-                fitted with :func:`rdmp_gym.stopping.fit_ending`); a request during the start transient is served
-                once the transient has reached the cycle.
-            goal: ``[d]`` rest position of the stop (default: the demonstrated one, moved and transformed with
-                the anchor like the periodic part).
+                next demonstrated exit phase and comes to rest at the demonstrated goal, moved and transformed with
+                the anchor like the periodic part (needs a DMP fitted with :func:`rdmp_gym.stopping.fit_ending`); a
+                :class:`StopRequest` ``(at, exit_phase, goal)`` gives the exit phase (rad) and the goal ``[d]`` too.
+                A request during the start transient is served once the transient has reached the cycle.
         Returns:
             positions ``[T, d]`` (and velocities ``[T, d]``).
         """
@@ -369,21 +395,19 @@ class RhythmicDMP:
         y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes, transform)
         start = self.transients[int(k[0])]
         inits = np.array([[start.phi0, start.r0]])
-        stop = self._stop_plan(stop_at, exit_phase, goal, start, tempo, anchors, amplitudes, transform)
-        y, yd = self._simulate(t, self.weights[None], inits, anchors, amplitudes, y0, yd0, tempo, transform,
-                               self._blend_lengths(k, tempo, start_blend), stop,
-                               None if stop is None else self.ending.weights[None], return_velocity,
-                               None if self.sweep is None else self.sweep.points[None])
+        stop = self._stop_plan(StopRequest.of(stop_at), start, tempo, anchors, amplitudes, transform)
+        batch = _Batch(self.weights[None], inits, anchors, amplitudes,
+                       None if self.sweep is None else self.sweep.points[None],
+                       None if stop is None else self.ending.weights[None])
+        y, yd = self._simulate(t, batch, _StartState(y0, yd0, self._blend_lengths(k, tempo, start_blend)), tempo,
+                               transform, stop, return_velocity)
         return (y[0], yd[0]) if return_velocity else y[0]
 
-    def _stop_plan(self, stop_at: float | None, exit_phase: float | None, goal: object, start: TransientStart,
-                   tempo: float, anchors: np.ndarray, amplitudes: np.ndarray, transform: np.ndarray | None = None
-                   ) -> StopPlan | None:
-        """The stop requested by ``stop_at`` (``None``: no stop); default goals ``[B, d]`` move with the anchors.
+    def _stop_plan(self, request: StopRequest | None, start: TransientStart, tempo: float, anchors: np.ndarray,
+                   amplitudes: np.ndarray, transform: np.ndarray | None = None) -> StopPlan | None:
+        """The stop ``request`` (``None``: no stop); default goals ``[B, d]`` move with the anchors.
         A request during the start transient of ``start`` is served once the transient has reached the cycle."""
-        if stop_at is None:
-            if exit_phase is not None or goal is not None:
-                raise ValueError("stop_at: exit_phase and goal need a stop time")
+        if request is None:
             return None
         if self.ending is None:
             raise ValueError("stop_at: this DMP encodes no end of the movement; fit it with "
@@ -391,12 +415,12 @@ class RhythmicDMP:
         relative = amplitudes * (self.ending.goal - self.anchor)
         if transform is not None:
             relative = relative @ transform.T
-        goals = self._vector(goal, anchors + relative, "goal", anchors.shape[0])
-        stop_at = float(as_finite_array(stop_at, "stop_at", ndim=0))
+        goals = self._vector(request.goal, anchors + relative, "goal", anchors.shape[0])
+        stop_at = float(as_finite_array(request.at, "stop_at", ndim=0))
         if stop_at < 0.0:
             raise ValueError(f"stop_at: expected a time >= 0, got {stop_at!r}")
         return plan_stop(self.ending, max(stop_at, start.length / tempo), start.phi0, self.canonical.omega * tempo,
-                         goals, exit_phase)
+                         goals, request.exit_phase)
 
     def with_ending(self, ending: Ending | None) -> RhythmicDMP:
         """A copy of this DMP with another end of the movement (``None`` removes it)."""
@@ -411,17 +435,16 @@ class RhythmicDMP:
     def rollout_batch(self, thetas: np.ndarray, t: np.ndarray, groups: GroupSelection = None,
                       transient: int | str = 0, y0: np.ndarray | None = None, yd0: np.ndarray | None = None,
                       anchor: np.ndarray | None = None, tempo: float | None = None,
-                      start_blend: bool = True, stop_at: float | None = None,
-                      exit_phase: float | None = None, goal: np.ndarray | None = None) -> np.ndarray:
+                      start_blend: bool = True, stop_at: float | StopRequest | None = None) -> np.ndarray:
         """Roll out B parameter vectors at once (the selected ``groups`` of each; the rest as fitted).
 
         Args:
             thetas: ``[B, P]`` parameter vectors, P = ``self.layout.size(groups)``.
             t: ``[T]`` evenly spaced times.
             groups: which parameter groups ``thetas`` holds (see :mod:`rdmp_gym.parameters`).
-            transient, y0, yd0, anchor, tempo, start_blend, stop_at, exit_phase, goal: as in :meth:`rollout`;
-                y0/yd0/anchor/goal may be ``[B, d]`` (under ``transient="nearest"`` each row picks its own
-                transient). The stop is requested at the same time for all B; each row exits at the exit phase
+            transient, y0, yd0, anchor, tempo, start_blend, stop_at: as in :meth:`rollout`;
+                y0/yd0/anchor and the stop's goal may be ``[B, d]`` (under ``transient="nearest"`` each row picks its
+                own transient). The stop is requested at the same time for all B; each row exits at the exit phase
                 that follows its transient's fitted phase (their phases differ only where ``initial`` is selected).
         Returns:
             ``[B, T, d]`` positions.
@@ -430,8 +453,9 @@ class RhythmicDMP:
         if thetas.shape[0] == 0:
             raise ValueError("thetas: expected at least one parameter vector (B >= 1), got shape "
                              f"{thetas.shape}")
-        weights, inits, anchors, amplitudes, sweeps, stop_weights = self._decode(thetas, groups)
+        decoded = self._decode(thetas, groups)
         batch = thetas.shape[0]
+        anchors, amplitudes = decoded.anchors, decoded.amplitudes
         if anchor is not None:
             if "anchor" in self.layout.resolve(groups):
                 raise ValueError("anchor: given both as an argument and in thetas (group 'anchor')")
@@ -439,21 +463,19 @@ class RhythmicDMP:
         tempo = self._tempo(tempo)
         k = self._transients(transient, y0, batch, amplitudes)
         y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes)
-        inits = inits[np.arange(batch), k]
-        if stop_at is None:
-            self._stop_plan(None, exit_phase, goal, self.transients[0], tempo, anchors, amplitudes)
-            return self._simulate(t, weights, inits, anchors, amplitudes, y0, yd0, tempo, None,
-                                  self._blend_lengths(k, tempo, start_blend), velocity=False, sweeps=sweeps)[0]
+        decoded = decoded._replace(inits=decoded.inits[np.arange(batch), k], anchors=anchors)
+        starts = _StartState(y0, yd0, self._blend_lengths(k, tempo, start_blend))
+        request = StopRequest.of(stop_at)
+        if request is None:
+            return self._simulate(t, decoded, starts, tempo, None, velocity=False)[0]
+        goals = None if request.goal is None else self._vector(request.goal, self.anchor, "goal", batch)
         result = np.empty((batch, check_time_grid(t, "t").size, self.n_dims))
         for index in np.unique(k):      # the exit time follows each transient's own phase
             rows = np.flatnonzero(k == index)
-            stop = self._stop_plan(stop_at, exit_phase, None if goal is None else self._vector(
-                goal, self.anchor, "goal", batch)[rows], self.transients[index], tempo, anchors[rows],
-                amplitudes[rows])
-            result[rows] = self._simulate(t, weights[rows], inits[rows], anchors[rows], amplitudes[rows], y0[rows],
-                                          yd0[rows], tempo, None, self._blend_lengths(k[rows], tempo, start_blend),
-                                          stop, stop_weights[rows], velocity=False,
-                                          sweeps=None if sweeps is None else sweeps[rows])[0]
+            stop = self._stop_plan(request if goals is None else replace(request, goal=goals[rows]),
+                                   self.transients[index], tempo, anchors[rows], amplitudes[rows])
+            result[rows] = self._simulate(t, decoded.rows(rows), starts.rows(rows), tempo, None, stop,
+                                          velocity=False)[0]
         return result
 
     def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,
@@ -489,19 +511,19 @@ class RhythmicDMP:
     def get_params(self, groups: GroupSelection = None) -> np.ndarray:
         """The selected groups as one flat vector ``[P]`` (order: see :mod:`rdmp_gym.parameters`)."""
         parts = []
-        for name in self.layout.resolve(groups):
-            if name == "periodic":
+        for key in self.layout.keys(groups):
+            if key.kind == "periodic":
                 parts.append(self.weights[:, : self.basis.n_periodic].ravel())
-            elif name.startswith("transient:"):
-                parts.append(self.weights[:, self._transient_columns(int(name[10:]))].ravel())
-            elif name.startswith("initial:"):
-                start = self.transients[int(name[8:])]
+            elif key.kind == "transient":
+                parts.append(self.weights[:, self._transient_columns(key.transient)].ravel())
+            elif key.kind == "initial":
+                start = self.transients[key.transient]
                 parts.append(np.array([start.phi0, start.r0]))
-            elif name == "anchor":
+            elif key.kind == "anchor":
                 parts.append(self.anchor.copy())
-            elif name == "stop":
+            elif key.kind == "stop":
                 parts.append(self.ending.weights.ravel())
-            elif name == "sweep":
+            elif key.kind == "sweep":
                 parts.append(self.sweep.points.ravel())
             else:
                 parts.append(self.amplitude.copy())
@@ -511,8 +533,7 @@ class RhythmicDMP:
         offset = self.basis.n_periodic + sum(self.basis.transient_sizes[:k])
         return slice(offset, offset + self.basis.transient_sizes[k])
 
-    def _decode(self, thetas: np.ndarray, groups: GroupSelection) -> tuple[
-            np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    def _decode(self, thetas: np.ndarray, groups: GroupSelection) -> _Batch:
         """``thetas [B, P]`` -> weights ``[B, d, D]``, initial conditions ``[B, K, 2]``, anchors and
         amplitudes ``[B, d]``, the sweep's via points ``[B, V, d]`` (``None`` without a sweep), stop weights
         ``[B, d, S]`` (``None`` without an ending)."""
@@ -529,24 +550,24 @@ class RhythmicDMP:
         stop_weights = None if self.ending is None else np.repeat(self.ending.weights[None], batch, axis=0)
         sweeps = None if self.sweep is None else np.repeat(self.sweep.points[None], batch, axis=0)
         for name, part in slices.items():
-            values = thetas[:, part]
-            if name == "periodic":
+            values, key = thetas[:, part], group_key(name)
+            if key.kind == "periodic":
                 weights[:, :, : self.basis.n_periodic] = values.reshape(batch, self.n_dims, -1)
-            elif name.startswith("transient:"):
-                weights[:, :, self._transient_columns(int(name[10:]))] = values.reshape(batch, self.n_dims, -1)
-            elif name.startswith("initial:"):
+            elif key.kind == "transient":
+                weights[:, :, self._transient_columns(key.transient)] = values.reshape(batch, self.n_dims, -1)
+            elif key.kind == "initial":
                 if np.any(values[:, 1] <= 0.0):
                     raise ValueError(f"theta: the initial radius r0 of {name} must be > 0")
-                inits[:, int(name[8:])] = values
-            elif name == "anchor":
+                inits[:, key.transient] = values
+            elif key.kind == "anchor":
                 anchors = values.copy()
-            elif name == "stop":
+            elif key.kind == "stop":
                 stop_weights = values.reshape(batch, self.n_dims, -1)
-            elif name == "sweep":
+            elif key.kind == "sweep":
                 sweeps = values.reshape(batch, -1, self.n_dims)
             else:
                 amplitudes = values.copy()
-        return weights, inits, anchors, amplitudes, sweeps, stop_weights
+        return _Batch(weights, inits, anchors, amplitudes, sweeps, stop_weights)
 
     def with_params(self, theta: np.ndarray, groups: GroupSelection = None) -> RhythmicDMP:
         """A new DMP whose selected groups are replaced by ``theta [P]``."""
@@ -572,7 +593,7 @@ class RhythmicDMP:
         start = self.transients[k]
         elapsed = as_finite_array(t, "t", ndim=1) - np.min(t)
         phi, r = self.canonical.state(elapsed, start.phi0, start.r0)
-        stop = self._stop_plan(stop_at, None, None, start, self.canonical.tempo, self.anchor[None],
+        stop = self._stop_plan(StopRequest.of(stop_at), start, self.canonical.tempo, self.anchor[None],
                                self.amplitude[None])
         if stop is None:
             activation = self.basis.normalized(phi, r)                               # [T, D]
@@ -581,16 +602,16 @@ class RhythmicDMP:
                                                        * self.canonical.tempo, stop.rotation),
                                    self.basis.fading.floor)                                      # [T, D + S]
         columns = []
-        for name in self.layout.resolve(groups):
-            if name == "periodic":
+        for key in self.layout.keys(groups):
+            if key.kind == "periodic":
                 block = activation[:, : self.basis.n_periodic]
-            elif name.startswith("transient:"):
-                block = activation[:, self._transient_columns(int(name[10:]))]
-            elif name == "stop" and stop is not None:
+            elif key.kind == "transient":
+                block = activation[:, self._transient_columns(key.transient)]
+            elif key.kind == "stop" and stop is not None:
                 block = activation[:, self.basis.n_basis:]
             else:
-                acts = name != "stop" and (not name.startswith("initial:") or int(name[8:]) == k)
-                columns.append(np.full((phi.size, self.layout.sizes[name]), float(acts)))
+                acts = key.kind != "stop" and (key.kind != "initial" or key.transient == k)
+                columns.append(np.full((phi.size, self.layout.sizes[str(key)]), float(acts)))
                 continue
             columns.append(np.tile(block, (1, self.n_dims)))
         return np.concatenate(columns, axis=1)
@@ -669,7 +690,7 @@ class DMPStepper:
         if self.stop is not None:
             raise ValueError("request_stop: a stop has already been requested")
         start = self.dmp.transients[self.transient]
-        self.stop = self.dmp._stop_plan(self.time, exit_phase, goal, start, self.canonical.tempo,
+        self.stop = self.dmp._stop_plan(StopRequest(self.time, exit_phase, goal), start, self.canonical.tempo,
                                         self.anchor[None], self.dmp.amplitude[None])
         self._block_index = -1      # the open-loop input from now on includes the stop
         return self.stop.exit_time

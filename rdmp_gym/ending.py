@@ -12,7 +12,25 @@ import numpy as np
 from .basis import GATE_FLOOR
 from .validation import as_finite_array, check_positive
 
-__all__ = ["Ending", "StopFading", "StopPlan", "exit_time", "minimum_jerk", "minimum_jerk_inverse", "plan_stop"]
+__all__ = ["Ending", "StopFading", "StopPlan", "StopRequest", "exit_time", "minimum_jerk", "minimum_jerk_inverse",
+           "plan_stop"]
+
+
+@dataclass(frozen=True)
+class StopRequest:
+    """The end of a rollout: a stop requested ``at`` seconds after the start leaves the cycle at the next
+    demonstrated exit phase (or at ``exit_phase``, rad) and comes to rest at ``goal`` (``[d]``, or ``[B, d]`` in a
+    batch; default: the demonstrated goal, moved and transformed with the anchor). A plain number for ``stop_at``
+    is ``StopRequest(at=number)``."""
+
+    at: float
+    exit_phase: float | None = None
+    goal: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, stop_at: float | StopRequest | None) -> StopRequest | None:
+        """``stop_at`` as a request (``None``: no stop)."""
+        return stop_at if stop_at is None or isinstance(stop_at, StopRequest) else cls(stop_at)
 
 
 def minimum_jerk(u: np.ndarray) -> np.ndarray:

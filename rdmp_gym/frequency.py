@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from .dmp import _blend_shift
-from .ending import StopPlan
+from .ending import StopPlan, StopRequest
 from .validation import as_finite_array, check_positive
 
 __all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "follow_rhythm"]
@@ -192,7 +192,7 @@ class AdaptiveFrequencyStepper:
         """As :meth:`rdmp_gym.DMPStepper.request_stop`, in canonical time; returns the exit's canonical time ``s``."""
         if self.stop is not None:
             raise ValueError("request_stop: a stop has already been requested")
-        plan = self.dmp._stop_plan(self.s, exit_phase, goal, self.start_state, 1.0, self.dmp.anchor[None],
+        plan = self.dmp._stop_plan(StopRequest(self.s, exit_phase, goal), self.start_state, 1.0, self.dmp.anchor[None],
                                    self.dmp.amplitude[None])
         self.stop = plan
         self._block_index = -1

@@ -11,10 +11,33 @@ names ``transient`` and ``initial`` select every transient's group.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import NamedTuple
 
-__all__ = ["GROUPS", "ParameterLayout"]
+__all__ = ["GROUPS", "GroupKey", "ParameterLayout", "group_key"]
 
 GROUPS = ("periodic", "transient", "initial", "anchor", "amplitude", "sweep", "stop")
+
+#: the groups that come once per transient (named ``"kind:k"``)
+PER_TRANSIENT = ("transient", "initial")
+
+
+class GroupKey(NamedTuple):
+    """A parameter group's name taken apart: its ``kind`` (one of :data:`GROUPS`) and, for the groups of one
+    transient (``transient:k``, ``initial:k``), the transient's index (``None`` otherwise)."""
+
+    kind: str
+    transient: int | None = None
+
+    def __str__(self) -> str:
+        return self.kind if self.transient is None else f"{self.kind}:{self.transient}"
+
+
+def group_key(name: str) -> GroupKey:
+    """The :class:`GroupKey` of a full group name (``"periodic"``, ``"transient:0"``, ``"initial:2"``, ...)."""
+    kind, _, index = name.partition(":")
+    if kind not in GROUPS or (kind in PER_TRANSIENT) != bool(index) or (index and not index.isdigit()):
+        raise ValueError(f"groups: {name!r} is not a full parameter group name")
+    return GroupKey(kind, int(index) if index else None)
 
 
 class ParameterLayout:
@@ -31,8 +54,8 @@ class ParameterLayout:
     def __init__(self, n_dims: int, n_periodic: int, transient_sizes: Sequence[int], stop_size: int = 0,
                  sweep_size: int = 0) -> None:
         self.sizes: dict[str, int] = {"periodic": n_dims * n_periodic}
-        self.sizes.update({f"transient:{k}": n_dims * m for k, m in enumerate(transient_sizes)})
-        self.sizes.update({f"initial:{k}": 2 for k in range(len(transient_sizes))})
+        self.sizes.update({str(GroupKey("transient", k)): n_dims * m for k, m in enumerate(transient_sizes)})
+        self.sizes.update({str(GroupKey("initial", k)): 2 for k in range(len(transient_sizes))})
         self.sizes["anchor"] = n_dims
         self.sizes["amplitude"] = n_dims
         if sweep_size:
@@ -50,14 +73,18 @@ class ParameterLayout:
         for name in requested:
             if name in self.sizes:
                 chosen.add(name)
-            elif name in ("transient", "initial"):
-                chosen.update(f"{name}:{k}" for k in range(self.n_transients))
+            elif name in PER_TRANSIENT:
+                chosen.update(str(GroupKey(name, k)) for k in range(self.n_transients))
             else:
                 raise ValueError(f"groups: unknown parameter group {name!r}; expected one of "
                                  f"{list(GROUPS)} or one of {list(self.sizes)}")
         if not chosen:
             raise ValueError("groups: select at least one parameter group")
         return [name for name in self.sizes if name in chosen]
+
+    def keys(self, groups: str | Iterable[str] | None = None) -> list[GroupKey]:
+        """The selected groups as :class:`GroupKey` s, in canonical order."""
+        return [group_key(name) for name in self.resolve(groups)]
 
     def slices(self, groups: str | Iterable[str] | None = None) -> dict[str, slice]:
         """Slices of each selected group inside the vector made of just the selected groups."""

@@ -44,7 +44,7 @@ from .demonstrations import (
     _vector3,
 )
 from .dmp import RhythmicDMP
-from .ending import Ending, StopFading, StopPlan, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
+from .ending import Ending, StopFading, StopPlan, StopRequest, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
 from .fitting import forcing_target, smooth_derivatives
 from .rhythm import rest_start
 from .segmentation import Segmentation, _change_point, _design, _fit, _harmonics, _normalised, segment
@@ -52,8 +52,8 @@ from .settings import FitSettings
 from .transformation import TransformationSystem
 from .validation import check_positive
 
-__all__ = ["Ending", "StopFading", "StopPlan", "StopSegmentation", "ending_demonstration", "exit_time", "fit_ending",
-           "fit_stop",
+__all__ = ["Ending", "StopFading", "StopPlan", "StopRequest", "StopSegmentation", "ending_demonstration", "exit_time",
+           "fit_ending", "fit_stop",
            "minimum_jerk", "plan_stop", "segment_ending"]
 
 logger = logging.getLogger(__name__)

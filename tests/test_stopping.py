@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, load_dmp, save_dmp, wiping_demonstration
+from rdmp_gym.ending import StopRequest
 from rdmp_gym.stopping import ending_demonstration, exit_time, fit_ending, segment_ending
 
 H = 1e-3                                   # evaluation grid (1 kHz)
@@ -109,7 +110,7 @@ def test_given_exit_phase_and_goal_come_to_rest(fitted):
     t = np.arange(0.0, 11.0, 1e-3)
     goal = dmp.ending.goal + np.array([0.05, -0.02, 0.03])
     for exit_phase in (dmp.ending.exit_phase + 1.0, dmp.ending.exit_phase + np.pi):
-        y, yd = dmp.rollout(t, stop_at=4.0, exit_phase=exit_phase, goal=goal, return_velocity=True)
+        y, yd = dmp.rollout(t, stop_at=StopRequest(4.0, exit_phase, goal), return_velocity=True)
         assert np.linalg.norm(y[-1] - goal) < 1e-3
         assert np.linalg.norm(yd[-1]) < 1e-3
         assert np.all(np.isfinite(y))
@@ -133,7 +134,7 @@ def test_stop_group_save_load_and_old_files(fitted, tmp_path):
     assert not np.any(dmp.param_time_weights(t, "stop"))
     weights = dmp.param_time_weights(t, ["periodic", "stop"], stop_at=5.0)             # [T, d (N + S)]
     stop_columns = weights[:, dmp.layout.sizes["periodic"]:]
-    exit_at = dmp._stop_plan(5.0, None, None, dmp.transients[0], 1.0, dmp.anchor[None],
+    exit_at = dmp._stop_plan(StopRequest(5.0), dmp.transients[0], 1.0, dmp.anchor[None],
                              dmp.amplitude[None]).exit_time
     assert not np.any(stop_columns[t < exit_at])
     at_rest = stop_columns[-1].reshape(dmp.n_dims, -1).sum(axis=1)     # the origin's function is 1: sum >= 1 - floor
@@ -161,10 +162,10 @@ def test_bad_input_is_named(fitted):
         plain.start(0.01).request_stop()
     with pytest.raises(ValueError, match="stop_at"):
         dmp.rollout(t, stop_at=-1.0)
-    with pytest.raises(ValueError, match="stop_at"):
-        dmp.rollout(t, goal=dmp.ending.goal)
+    with pytest.raises(TypeError, match="goal"):
+        dmp.rollout(t, goal=dmp.ending.goal)                        # the goal belongs to the stop's request
     with pytest.raises(ValueError, match="goal"):
-        dmp.rollout(t, stop_at=1.0, goal=[0.0, 0.0])
+        dmp.rollout(t, stop_at=StopRequest(1.0, goal=[0.0, 0.0]))
     stepper = dmp.start(0.01)
     stepper.request_stop()
     with pytest.raises(ValueError, match="request_stop"):

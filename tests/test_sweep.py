@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rdmp_gym import RhythmicDMP, Sweep, load_dmp, save_dmp
+from rdmp_gym.ending import StopRequest
 from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
 
 T_FINE = np.linspace(0.0, 6.0, 6001)
@@ -153,7 +154,7 @@ def test_a_stop_after_the_travel_comes_to_rest_at_its_goal():
     dt, request = 2e-3, 5.0
     t = np.arange(0.0, 11.0, dt)
     goal = dmp.ending.goal + np.array([0.08, 0.05, 0.0])
-    y = travelling.rollout(t, stop_at=request, goal=goal)
+    y = travelling.rollout(t, stop_at=StopRequest(request, goal=goal))
     assert np.linalg.norm(y[-1] - goal) < 1e-3
     stepper = travelling.start(dt)
     path = [stepper.state[0]]
