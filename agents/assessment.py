@@ -18,9 +18,9 @@ import gymnasium as gym
 import numpy as np
 from tqdm.auto import tqdm
 
+from .config import check_choice
 from .evaluation import Evaluator
 from .learners import CONTEXTUAL, policy_from_state
-from .options import check_choice
 from .plots import plot_policy_comparison
 from .protocol import PolicyScores, context_observations, evaluate_actions, final_test_seeds, interval, path_jerk
 from .runs import RunDirectory, write_atomic

@@ -1,6 +1,6 @@
 """stable-baselines3 PPO and SAC on the same episodic env: a contextual bandit, one step per episode.
 
-Settings: see :mod:`rdmp_gym.agents.ppo_config` and :mod:`rdmp_gym.agents.sac_config`.
+Settings: see :mod:`rdmp_gym.agents.sb3_config`.
 
 ``PPOAgent`` and ``SACAgent`` implement the training loop's agent interface (see ``rdmp_gym.agents.training``).
 A resumed PPO run continues from the saved model and optimiser, but not bit-identically (the envs'
@@ -29,9 +29,7 @@ from stable_baselines3.common.logger import Logger, configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
-from .options import from_options
-from .ppo_config import PPOConfig
-from .sac_config import SACConfig
+from .sb3_config import PPOConfig, SACConfig
 from .smooth_actions import SmoothActions, SmoothActionVecEnv
 from .tasks import TaskSpec, episode_metrics
 
@@ -184,8 +182,8 @@ class PPOAgent(_SB3Agent):
     divergence_hint = "lower learning_rate or target_kl (--option learning_rate=...)"
 
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, workers: int, seed: int,
-                 options: Mapping[str, Any] | None = None, log_dir: str | Path | None = None) -> None:
-        self.config = from_options(PPOConfig, options, "ppo")
+                 options: PPOConfig | Mapping[str, Any] | None = None, log_dir: str | Path | None = None) -> None:
+        self.config = options if isinstance(options, PPOConfig) else PPOConfig.from_dict(options)
         self._logger = _logger(self.config.tensorboard, log_dir)
         envs = parallel_envs(rollouts, self.config.envs)
         self.rollouts = rollouts
@@ -206,6 +204,12 @@ class PPOAgent(_SB3Agent):
             self.model.policy.action_net.bias.copy_(torch.as_tensor(_latent(self.smooth, initial_action),
                                                                     dtype=torch.float32))
         self._collector = _EpisodeCollector(smooth=self.smooth)
+
+    @classmethod
+    def from_run(cls, config: Any, initial_action: np.ndarray, run_path: Path) -> PPOAgent:
+        """The agent of a training run (``config``: a :class:`~rdmp_gym.agents.training.TrainConfig`)."""
+        return cls(config.task, initial_action, config.rollouts, config.workers, config.seed, config.options,
+                   log_dir=run_path)
 
     @property
     def exploration(self) -> float:
@@ -235,9 +239,14 @@ class SACAgent(_SB3Agent):
     name = "sac"
     divergence_hint = "lower learning_rate (--option learning_rate=...)"
 
+    @classmethod
+    def from_run(cls, config: Any, initial_action: np.ndarray, run_path: Path) -> SACAgent:
+        """The agent of a training run (``config``: a :class:`~rdmp_gym.agents.training.TrainConfig`)."""
+        return cls(config.task, initial_action, config.rollouts, config.seed, config.options)
+
     def __init__(self, task: TaskSpec, initial_action: np.ndarray, rollouts: int, seed: int,
-                 options: Mapping[str, Any] | None = None) -> None:
-        self.config = from_options(SACConfig, options, "sac")
+                 options: SACConfig | Mapping[str, Any] | None = None) -> None:
+        self.config = options if isinstance(options, SACConfig) else SACConfig.from_dict(options)
         self.rollouts = rollouts
         self.smooth = _smooth_actions(task, self.config.length)
         self.env = _vector_env(task, 1, 1, self.smooth)

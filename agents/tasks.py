@@ -8,15 +8,26 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID
 
 from .imitation import load_demonstration
 
-__all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID",
-           "ResetOptions", "TaskSpec", "episode_metrics", "failure_contexts", "run_episode", "task_options"]
+__all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS",
+           "MAIN_OPTIONS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec",
+           "episode_metrics", "failure_contexts", "run_episode", "task_options"]
 
-WIPE_ID = "rdmp_gym/ArmarWipe-v1"
+#: the first wiping task (the ids are defined in ``rdmp_gym.envs.registration``)
+WIPE_ID = ENV_ID
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
-WIPE_V2_ID = "rdmp_gym/ArmarWipe-v2"
+WIPE_V2_ID = ENV_ID_V2
+
+#: The main job (``rdmp-gym main``, and ``rdmp-gym train`` without ``--agent``/``--env``): the learner that reached
+#: the validation target soonest in the benchmark, ``bbrl`` exploring the approach 3x wider, on the current task
+#: executed with the hand's clearance from the cup. Given options and env keywords of the same name replace these.
+MAIN_AGENT = "bbrl"
+MAIN_ENV = LATEST_ENV_ID
+MAIN_ENV_KWARGS: dict[str, Any] = {"cup_clearance": 0.01}
+MAIN_OPTIONS: dict[str, Any] = {"sigma_factors": {"approach": 3.0}}
 
 #: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
 #: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
@@ -25,9 +36,10 @@ WIPE_V2_ID = "rdmp_gym/ArmarWipe-v2"
 #: shared refinement; the approach is explored over its whole range (only a lift near its full 6 cm clears
 #: the cup, so a small step never shows its worth).
 CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
-    WIPE_ID: {"gain_groups": "amplitude,approach", "features": "patch_size,obstacle", "sigma_factors": "approach=3"},
-    WIPE_V2_ID: {"gain_groups": "amplitude,approach,sweep_x,sweep_y", "features": "patch_size,obstacle",
-                 "sigma_factors": "approach=3"},
+    WIPE_ID: {"gain_groups": ["amplitude", "approach"], "features": ["patch_size", "obstacle"],
+              "sigma_factors": {"approach": 3.0}},
+    WIPE_V2_ID: {"gain_groups": ["amplitude", "approach", "sweep_x", "sweep_y"], "features": ["patch_size", "obstacle"],
+                 "sigma_factors": {"approach": 3.0}},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 #: smooth exploration for the one-θ learners and SB3's on the tasks published with it (ArmarWipe-v1's runs keep theirs)

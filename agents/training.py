@@ -20,7 +20,7 @@ import subprocess
 import time
 from collections import Counter
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -31,13 +31,13 @@ from tqdm.auto import tqdm
 
 from rdmp_gym import save_dmp
 
+from . import sb3_config  # noqa: F401  (declares PPO and SAC)
+from .config import Settings, check_choice, check_range
 from .evaluation import Evaluator
-from .learners import CONTEXTUAL, LEARNERS, EpisodeBatch, Learner, SearchSpace, make_learner
-from .options import check_choice, check_range, from_options, to_options
-from .ppo_config import PPOConfig
+from .learners import EpisodeBatch, Learner, SearchSpace, make_learner
 from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
+from .registry import REGISTRY, agent_spec
 from .runs import RunDirectory, write_atomic
-from .sac_config import SACConfig
 from .tasks import WIPE_ID, TaskSpec, task_options
 
 __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_summary", "environment_record",
@@ -45,9 +45,8 @@ __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_su
 
 logger = logging.getLogger(__name__)
 
-AGENT_CONFIGS: dict[str, type] = {**{name: config for name, (_, config) in LEARNERS.items()}, "ppo": PPOConfig,
-                                  "sac": SACConfig}
-AGENTS = tuple(AGENT_CONFIGS)
+#: every registered agent's name (the ask/tell learners, ``ppo`` and ``sac``)
+AGENTS = tuple(REGISTRY)
 START_MODES = ("imitation", "perturbed", "shrunk")
 _FEATURE_CONTEXTS = 64   # training contexts whose mean and spread standardise a contextual learner's features
 _SEED_LIMIT = 2**31 - 1
@@ -68,8 +67,10 @@ class TrainConfig:
         env_id: the episodic env.
         env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
         reset_options: options for every reset (e.g. a fixed context), or None.
-        options: the agent's settings (fields of ``PI2Config``, ``PIBBConfig``, ``CMAESConfig``, ``PPOConfig``, ...);
-            a contextual search on the wiping task starts from ``tasks.CONTEXTUAL_SEARCH_DEFAULTS``.
+        options: the agent's settings: its typed settings object (``PI2Config``, ``BBRLConfig``, ``PPOConfig``, ...,
+            used as given), or a mapping of their fields over the task's defaults for the agent
+            (``tasks.task_options``: e.g. a contextual search on the wiping task starts from
+            ``tasks.CONTEXTUAL_SEARCH_DEFAULTS``). Stored as the typed object.
         start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
             ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
             a smaller, damped movement; the initial conditions as fitted).
@@ -89,7 +90,7 @@ class TrainConfig:
     env_id: str = WIPE_ID
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     reset_options: dict[str, Any] | None = None
-    options: dict[str, Any] = field(default_factory=dict)
+    options: Settings | Mapping[str, Any] = field(default_factory=dict)
     start: str = "imitation"
     perturbation: float = 0.3
     demo: str = ""
@@ -107,23 +108,43 @@ class TrainConfig:
         check_range(self.eval_episodes, "eval_episodes", 1, None)
         check_range(self.eval_every, "eval_every", 1, None)
         check_choice(self.start, "start", START_MODES)
-        for name in ("env_kwargs", "options"):
-            if not isinstance(getattr(self, name), Mapping):
-                raise TypeError(f"{name}: expected a mapping, got {type(getattr(self, name)).__name__}")
+        if not isinstance(self.env_kwargs, Mapping):
+            raise TypeError(f"env_kwargs: expected a mapping, got {type(self.env_kwargs).__name__}")
         if self.reset_options is not None and not isinstance(self.reset_options, Mapping):
             raise TypeError(f"reset_options: expected a mapping or None, got {type(self.reset_options).__name__}")
-        object.__setattr__(self, "options", task_options(self.env_id, self.agent, self.options,
-                                                               self.env_kwargs))
-        from_options(AGENT_CONFIGS[self.agent], self.options, self.agent)  # fail early on a bad setting
+        settings = agent_spec(self.agent).config
+        if isinstance(self.options, Mapping):
+            merged = task_options(self.env_id, self.agent, self.options, self.env_kwargs)
+            object.__setattr__(self, "options", settings.from_dict(merged, self.agent))
+        elif type(self.options) is not settings:
+            raise TypeError(f"options: expected {settings.__name__} or a mapping for {self.agent}, "
+                            f"got {type(self.options).__name__}")
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> TrainConfig:
-        """Build from a mapping (e.g. ``config.json``); unknown keys are a ``ValueError``."""
-        return from_options(cls, values, "config")
+        """Build from a mapping (e.g. ``config.json``, also as earlier versions wrote it); unknown keys are a
+        ``ValueError``, values of the wrong type a ``TypeError`` naming the field."""
+        values = dict(values)
+        known = {item.name for item in fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(f"config: unknown option(s) {unknown}; expected some of {sorted(known)}")
+        for name, kind in (("agent", str), ("env_id", str), ("start", str), ("demo", str), ("shared_context", bool)):
+            if name in values and not isinstance(values[name], kind):
+                raise TypeError(f"config.{name}: expected {kind.__name__}, got {values[name]!r}")
+        for name in ("updates", "rollouts", "seed", "workers", "eval_episodes", "eval_every"):
+            if name in values and (isinstance(values[name], bool) or not isinstance(values[name], int)):
+                raise TypeError(f"config.{name}: expected an integer, got {values[name]!r}")
+        if isinstance(values.get("options", {}), Mapping):
+            spec = agent_spec(values.get("agent", cls.agent))
+            values["options"] = spec.config.from_dict(values.get("options"), spec.name)
+        return cls(**values)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly fields."""
-        return to_options(self)
+        """JSON-friendly fields (the options as a JSON object)."""
+        values = {item.name: getattr(self, item.name) for item in fields(self)}
+        return {**values, "env_kwargs": dict(self.env_kwargs), "options": self.options.to_dict(),
+                "reset_options": None if self.reset_options is None else dict(self.reset_options)}
 
     @property
     def task(self) -> TaskSpec:
@@ -241,19 +262,13 @@ def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Ge
 
 def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np.random.Generator],
                 initial: np.ndarray, run_path: Path) -> Agent:
-    if config.agent == "ppo":
-        from .sb3 import PPOAgent
-
-        return PPOAgent(config.task, initial, config.rollouts, config.workers, config.seed, config.options,
-                        log_dir=run_path)
-    if config.agent == "sac":
-        from .sb3 import SACAgent
-
-        return SACAgent(config.task, initial, config.rollouts, config.seed, config.options)
+    spec = agent_spec(config.agent)
+    if spec.kind == "sb3":
+        return spec.load().from_run(config, initial, run_path)
     base = evaluator.env.unwrapped
     weights = base.action_time_weights() if config.agent == "pi2" else None
     space = None
-    if config.agent in CONTEXTUAL or float(config.options.get("length", 0.0)) > 0:
+    if spec.uses_context or getattr(config.options, "length", 0.0) > 0:
         seeds = streams["features"].integers(TRAIN_SEED_LIMIT, size=_FEATURE_CONTEXTS)
         space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, seeds, config.task.options()))
     learner = make_learner(config.agent, initial, config.rollouts, streams["learner"], config.options, weights,

@@ -22,7 +22,7 @@ from rdmp_gym.agents.evaluation import Evaluator, WorkerError
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
-from rdmp_gym.envs.tracking import TRACKING_ID
+from rdmp_gym.envs.registration import TRACKING_ID
 
 FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
 TRACKING = {"n_periodic": 10, "n_transient": 10, "duration": 4.0}

@@ -11,7 +11,7 @@ from rdmp_gym.agents.learners.contextual import policy_from_state
 from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
-from rdmp_gym.envs.tracking import TRACKING_ID
+from rdmp_gym.envs.registration import TRACKING_ID
 
 N = 12
 
@@ -218,7 +218,7 @@ def test_sac_leaves_no_sb3_folder_in_the_temporary_directory(tmp_path, monkeypat
     """SB3's default logger makes an ``SB3-<date>`` folder at every ``learn()``; the agents set their own."""
     from rdmp_gym.agents.sb3 import SACAgent
     from rdmp_gym.agents.tasks import TaskSpec
-    from rdmp_gym.envs.tracking import TRACKING_ID as TRACKING
+    from rdmp_gym.envs.registration import TRACKING_ID as TRACKING
 
     monkeypatch.setenv("SB3_LOGDIR", str(tmp_path / "sb3"))     # where SB3's default logger would write
     spec = TaskSpec(TRACKING, {"n_periodic": 8, "n_transient": 8, "duration": 2.0})
@@ -255,14 +255,23 @@ def test_features_select_context_fields_by_name():
 def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_the_config():
     from rdmp_gym.agents.tasks import CONTEXTUAL_SEARCH_DEFAULTS, WIPE_ID
 
+    from rdmp_gym.agents.learners.contextual import AmplitudeConfig, CPI2Config, RandomReturnConfig
+
     defaults = CONTEXTUAL_SEARCH_DEFAULTS[WIPE_ID]
-    config = TrainConfig(agent="cpi2", options={"sigma_factors": "approach=2"})
-    assert config.options == {**defaults, "sigma_factors": "approach=2"}            # the run's own option wins
+    config = TrainConfig(agent="cpi2", options={"sigma_factors": {"approach": 2}})
+    assert config.options == CPI2Config.from_dict({**defaults, "sigma_factors": {"approach": 2.0}})  # the run's wins
+    assert config.options.gain_groups == ("amplitude", "approach")                  # typed: lists, not comma strings
     assert TrainConfig.from_dict(config.to_dict()) == config                       # and it round-trips
-    assert TrainConfig(agent="random").options == defaults                          # the control explores alike
-    assert TrainConfig(agent="amplitude").options == {}
-    assert TrainConfig(agent="cpi2", env_kwargs={"groups": ["periodic"]}).options == {}
-    assert TrainConfig(agent="cpi2", env_id=TRACKING_ID).options == {}
+    assert TrainConfig(agent="random").options == RandomReturnConfig.from_dict(defaults)  # the control explores alike
+    assert TrainConfig(agent="amplitude").options == AmplitudeConfig()
+    assert TrainConfig(agent="cpi2", env_kwargs={"groups": ["periodic"]}).options == CPI2Config()
+    assert TrainConfig(agent="cpi2", env_id=TRACKING_ID).options == CPI2Config()
+    given = CPI2Config(sigma=0.2)                                                   # a typed object is used as given
+    assert TrainConfig(agent="cpi2", options=given).options is given
+    old = {**config.to_dict(), "options": {"gain_groups": "amplitude,approach", "sigma_factors": "approach=3"}}
+    assert TrainConfig.from_dict(old).options.sigma_factors == {"approach": 3.0}  # a config.json of earlier versions
+    with pytest.raises(TypeError, match="cpi2.sigma"):
+        TrainConfig(agent="cpi2", options={"sigma": "big"})
 
 
 def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():

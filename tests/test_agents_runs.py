@@ -10,7 +10,7 @@ import pytest
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.tasks import TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
-from rdmp_gym.envs.tracking import TRACKING_ID
+from rdmp_gym.envs.registration import TRACKING_ID
 
 LOG_KEYS = {"update", "episodes", "eval_episodes", "exploration", "eval_return_mean", "eval_return_best",
             "eval_coverage", "eval_force_in_band", "eval_valid", "best_eval_return", "time_s"}

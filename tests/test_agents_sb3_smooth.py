@@ -16,7 +16,7 @@ from rdmp_gym.agents.sb3 import PPOAgent, SACAgent
 from rdmp_gym.agents.smooth_actions import SmoothActions
 from rdmp_gym.agents.tasks import WIPE_ID, WIPE_V2_ID, TaskSpec, task_options
 from rdmp_gym.agents.training import TrainConfig, train
-from rdmp_gym.envs.tracking import TRACKING_ID
+from rdmp_gym.envs.registration import TRACKING_ID
 
 WEIGHTS = 20                     # periodic weights per degree of freedom
 TASK = TaskSpec(TRACKING_ID, {"n_periodic": WEIGHTS, "n_transient": 10, "duration": 4.0})

@@ -20,7 +20,7 @@ from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.runs import RunDirectory, RunLockedError
 from rdmp_gym.agents.training import NoValidEpisodesError, TrainConfig, train
-from rdmp_gym.envs.tracking import TRACKING_ID
+from rdmp_gym.envs.registration import TRACKING_ID
 
 ENV = {"n_periodic": 8, "n_transient": 8, "duration": 3.0}
 

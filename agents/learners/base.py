@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["EpisodeBatch", "Learner", "check_state_like", "cost_to_go", "cost_weights", "ridge_hat"]
+__all__ = ["EpisodeBatch", "Learner", "LearnerInputs", "check_state_like", "cost_to_go", "cost_weights", "ridge_hat"]
 
 
 @dataclass(frozen=True)
@@ -137,8 +137,28 @@ def check_state_like(value: Any, template: Any, path: str) -> None:
         fail("a numpy Generator")
 
 
+@dataclass(frozen=True)
+class LearnerInputs:
+    """What the task gives a learner beyond its settings when it is built (see :meth:`Learner.build`).
+
+    Attributes:
+        name: the name the learner was registered under (one class may serve several, e.g. ``creps``, ``cpi2``).
+        time_weights: ``[T, n]`` activation of each action dimension per control step (PI²), or None.
+        space: the action layout and context standardisation
+            (:class:`~rdmp_gym.agents.learners.contextual.SearchSpace`; the contextual learners, and the smooth
+            exploration of the others), or None.
+    """
+
+    name: str = ""
+    time_weights: np.ndarray | None = None
+    space: Any = None
+
+
 class Learner(ABC):
     """An episodic black-box learner over actions in ``[-1, 1]^n``.
+
+    A learner joins the registry with :func:`rdmp_gym.agents.registry.register` in its own module; the
+    training loop builds it with :meth:`build`.
 
     Args:
         initial_mean: ``[n]`` start of the search (0 = the imitation fit).
@@ -164,6 +184,16 @@ class Learner(ABC):
         self.rng = rng
         self.updates = 0
         self._mean = mean
+
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: Any,
+              inputs: LearnerInputs) -> Learner:
+        """The learner for a run: its settings ``config`` and what it needs of the task (``inputs``).
+
+        The default passes only the settings; learners that need the time weights or the action layout
+        override it and say so in a ``ValueError`` when it is missing.
+        """
+        return cls(initial_mean, rollouts, rng, config)
 
     @property
     def n_params(self) -> int:

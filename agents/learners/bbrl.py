@@ -42,14 +42,13 @@ learner's numpy Generator (torch is seeded from it per update), so resuming from
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import torch
 
-from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
+from .bbrl_config import BASELINES, CREDITS, BBRLConfig
 from .contextual import SearchSpace, group_factors, select_groups
 from .smooth import smooth_factor, squash, unsquash
 
@@ -58,97 +57,7 @@ __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", 
 _DTYPE = torch.float64
 #: the low-rank factor's entries start at this share of each dimension's sigma (times a standard normal draw)
 LOW_RANK_START = 0.01
-CREDITS = ("step", "episode")
-BASELINES = ("ridge", "network")
 _BUFFER = ("contexts", "samples", "costs", "traces")
-
-
-@dataclass(frozen=True)
-class BBRLConfig:
-    """Settings of :class:`BBRL`.
-
-    Attributes:
-        sigma: initial per-dimension standard deviation of the exploration (action units).
-        length: correlation length of the exploration in neighbouring weights (0 = independent).
-        rough: share of independent (not smooth) exploration in the correlation.
-        rank: columns of the learned low-rank covariance factor ``U`` (0 = none; it starts at small random values).
-        hidden: width of the two hidden layers of the mean network.
-        epsilon: trust region: the largest mean KL divergence of one update.
-        h: eliteness of the sample weights ``exp(-h Â)`` (``Â`` the advantage scaled to [0, 1]).
-        credit: ``"step"`` (per-step credit from the cost trace, where the task gives one) or ``"episode"``.
-        epochs: Adam steps per update.
-        learning_rate: Adam's step size.
-        reuse: batches (this one and earlier ones) whose samples enter each update.
-        value_ridge: ridge of the context baselines of the cost (and cost-to-go).
-        min_sigma: floor of each dimension's standard deviation.
-        sigma_factors: per-group factors of the initial ``sigma``, ``"group=factor,..."`` (e.g. ``"approach=3"``);
-            choosing them is task structure, like ``cpi2``'s.
-        groups: comma-separated action groups that the policy sets (``""`` = every dimension); the others stay
-            at the start action. Choosing them is task structure, like ``cpi2``'s gain groups.
-        baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
-            ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
-        history: batches the ``"network"`` baseline is fitted to (those before the ``reuse`` batches it judges).
-        value_epochs: Adam steps of the baseline network per update.
-        replay: share of each update's rollouts that revisit earlier training contexts, those the policy did
-            worst in against the context baseline (prioritised context replay, Jiang et al. 2021); 0 = none.
-        replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
-            with probability proportional to ``k^(-1/replay_temperature)``.
-        replay_size: the most recently seen training contexts that the replay chooses from.
-        context_scale: the network also gives each context a scale ``s(s)`` of the exploration
-            (``Sigma(s) = s(s)^2 Sigma``, 1 at the start), fitted with the covariance, so that the exploration can
-            stay wide where wide samples pay and narrow where they do not.
-        antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
-            context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
-            ridge regression on the context; needs an even number of rollouts.
-    """
-
-    sigma: float = 0.3
-    length: float = 5.0
-    rough: float = 0.1
-    rank: int = 0
-    hidden: int = 64
-    epsilon: float = 0.2
-    h: float = 10.0
-    credit: str = "step"
-    epochs: int = 10
-    learning_rate: float = 1e-2
-    reuse: int = 4
-    value_ridge: float = 1.0
-    min_sigma: float = 0.01
-    groups: str = ""
-    sigma_factors: str = ""
-    baseline: str = "ridge"
-    history: int = 20
-    value_epochs: int = 50
-    replay: float = 0.0
-    replay_temperature: float = 0.3
-    replay_size: int = 100
-    antithetic: bool = False
-    context_scale: bool = False
-
-    def __post_init__(self) -> None:
-        check_range(self.sigma, "sigma", 0.0, None, low_open=True)
-        check_range(self.length, "length", 0.0, None)
-        check_range(self.rough, "rough", 0.0, 1.0, low_open=True)
-        check_range(self.rank, "rank", 0, None)
-        check_range(self.hidden, "hidden", 1, None)
-        check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
-        check_range(self.h, "h", 0.0, None, low_open=True)
-        check_choice(self.credit, "credit", CREDITS)
-        check_range(self.epochs, "epochs", 1, None)
-        check_range(self.learning_rate, "learning_rate", 0.0, None, low_open=True)
-        check_range(self.reuse, "reuse", 1, None)
-        check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
-        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
-        check_choice(self.baseline, "baseline", BASELINES)
-        check_range(self.history, "history", 1, None)
-        check_range(self.value_epochs, "value_epochs", 1, None)
-        check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
-        check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
-        check_range(self.replay_size, "replay_size", 1, None)
-        if self.antithetic and self.replay > 0:
-            raise ValueError("antithetic: a pair's own mean judges each sample, which leaves the replay no context "
-                             "to rank; use antithetic with replay = 0")
 
 
 def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.ndarray,
@@ -335,6 +244,14 @@ class BBRL(Learner):
         #: the replay's table: reset seeds of recent training contexts [M] (oldest first) and their last advantage [M]
         self._replay_seeds = np.zeros(0, dtype=np.int64)
         self._replay_scores = np.zeros(0)
+
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: BBRLConfig,
+              inputs: LearnerInputs) -> BBRL:
+        """``bbrl`` needs the action layout and the context standardisation (``inputs.space``)."""
+        if inputs.space is None:
+            raise ValueError("space: bbrl needs the action layout and context standardisation (SearchSpace)")
+        return cls(initial_mean, rollouts, rng, inputs.space, config)
 
     def _active_dims(self, space: SearchSpace) -> np.ndarray:
         if not self.config.groups:

@@ -21,8 +21,10 @@ from typing import Any
 import cma
 import numpy as np
 
-from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner
+from ..config import Settings, check_choice, check_range
+from ..registry import register
+from .base import EpisodeBatch, Learner, LearnerInputs
+from .smooth import exploration_factor
 
 __all__ = ["CMAES", "CMAESConfig"]
 
@@ -30,7 +32,7 @@ BOUND_MODES = ("transform", "penalty")
 
 
 @dataclass(frozen=True)
-class CMAESConfig:
+class CMAESConfig(Settings):
     """CMA-ES settings.
 
     Attributes:
@@ -106,6 +108,13 @@ class CMAES(Learner):
             x = self._start_mean + x @ self.factor.T
         return np.clip(x, -1.0, 1.0)
 
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: CMAESConfig,
+              inputs: LearnerInputs) -> CMAES:
+        """With ``length > 0`` the smooth exploration needs the action layout (``inputs.space``)."""
+        factor = exploration_factor(np.asarray(initial_mean).size, config.length, inputs.space, inputs.name)
+        return cls(initial_mean, rollouts, rng, config, factor)
+
     @property
     def exploration(self) -> float:
         return float(np.mean(self.strategy.sigma * np.sqrt(self.strategy.sm.variances)))
@@ -148,3 +157,6 @@ class CMAES(Learner):
         if self.rng.bit_generator.state != target_rng or not np.array_equal(self._mean, target_mean):
             raise ValueError("state: replaying the stored CMA-ES generations does not reach the stored mean and "
                              "RNG state (the state was altered or written by another cma version)")
+
+
+register("cmaes", CMAESConfig, CMAES)

@@ -28,81 +28,112 @@ reward). With ``contextual=False`` the gains stay 0 (one θ for all contexts).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize
 
-from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_to_go, cost_weights, ridge_hat
+from ..config import Settings, check_choice, check_range
+from ..registry import register
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
 from .smooth import SmoothNoise, block_layout, squash, unsquash
 
-__all__ = ["WEIGHTINGS", "AmplitudeConfig", "CPI2Config", "CPIBBConfig", "CREPSConfig", "ContextualConfig",
-           "ContextualSearch", "RandomReturnConfig", "SearchSpace", "action_layout", "policy_from_state"]
+__all__ = [
+    "WEIGHTINGS",
+    "AmplitudeConfig",
+    "CPI2Config",
+    "CPIBBConfig",
+    "CREPSConfig",
+    "ContextualConfig",
+    "ContextualSearch",
+    "ContextualSettings",
+    "RandomReturnConfig",
+    "SearchSpace",
+    "action_layout",
+    "group_factors",
+    "policy_from_state",
+    "select_groups",
+]
 
 WEIGHTINGS = ("reps", "pibb", "pi2")
 _BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
 
 
 @dataclass(frozen=True)
-class ContextualConfig:
-    """Settings of :class:`ContextualSearch`.
+class ContextualSettings(Settings):
+    """Settings every contextual learner shares (the linear-Gaussian searches here and ``bbrl``).
 
     Attributes:
         sigma: initial per-weight standard deviation (action units).
         length: correlation length of the exploration in neighbouring weights (0 = isotropic).
-        weighting: ``reps``, ``pibb`` or ``pi2`` (see the module docstring).
-        epsilon: REPS's KL bound.
-        h: PI^BB's / PI²'s eliteness.
-        contextual: learn the gains ``K`` (False: one θ for every context).
-        groups: comma-separated action groups to search (``""`` = all; e.g. ``"amplitude"``).
-        gain_groups: comma-separated searched groups whose actions depend on the context (rows of ``K``);
-            the others get one value for every context (``θ̄`` only). ``""`` = every searched group. Few
-            context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
-        sigma_factors: per-group factors of ``sigma`` and its bounds, ``"group=factor,..."`` (e.g.
-            ``"approach=3"``: a dimension whose effect is only seen far from the imitation, such as a lift
-            that clears an obstacle only near its full height, is explored over its whole range).
-        features: comma-separated context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
-            ``"patch_size,obstacle"``); ``""`` = every field. The rest is left out of the policy and baselines.
-        control_cost: weight of ``½ aᵀRa`` in the cost.
+        epsilon: the update's KL bound (REPS's dual; ``bbrl``'s trust region).
+        h: eliteness of the cost weighting.
         reuse: batches (this one and earlier ones) whose samples enter each update.
-        gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
-        adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
-        min_sigma, max_sigma: bounds of each block's standard deviation.
-        random_returns: the control: replace every return by a standard-normal draw.
+        min_sigma: floor of the exploration's standard deviation.
+        groups: the action groups to search (empty = all; e.g. ``["amplitude"]``); the others stay at the start.
+        sigma_factors: per-group factors of ``sigma`` and its bounds (e.g. ``{"approach": 3}``: a dimension whose
+            effect is only seen far from the imitation, such as a lift that clears an obstacle only near its full
+            height, is explored over its whole range). Choosing groups and factors is task structure.
     """
 
     sigma: float = 0.3
     length: float = 5.0
-    weighting: str = "reps"
     epsilon: float = 1.0
     h: float = 10.0
-    contextual: bool = True
-    groups: str = ""
-    gain_groups: str = ""
-    sigma_factors: str = ""
-    features: str = ""
-    control_cost: float = 0.05
     reuse: int = 4
-    gain_prior: float = 0.3
-    adapt_rate: float = 0.5
     min_sigma: float = 0.02
-    max_sigma: float = 0.6
-    random_returns: bool = False
+    groups: tuple[str, ...] = ()
+    sigma_factors: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, None, low_open=True)
         check_range(self.length, "length", 0.0, None)
-        check_choice(self.weighting, "weighting", WEIGHTINGS)
         check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
         check_range(self.h, "h", 0.0, None, low_open=True)
-        check_range(self.control_cost, "control_cost", 0.0, None)
         check_range(self.reuse, "reuse", 1, None)
+        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+        for group, factor in self.sigma_factors.items():
+            if not np.isfinite(factor) or factor <= 0:
+                raise ValueError(f"sigma_factors: {group}={factor!r} is not a factor > 0")
+
+
+@dataclass(frozen=True)
+class ContextualConfig(ContextualSettings):
+    """Settings of :class:`ContextualSearch` (beyond :class:`ContextualSettings`).
+
+    Attributes:
+        weighting: ``reps``, ``pibb`` or ``pi2`` (see the module docstring).
+        contextual: learn the gains ``K`` (False: one θ for every context).
+        gain_groups: the searched groups whose actions depend on the context (rows of ``K``);
+            the others get one value for every context (``θ̄`` only). Empty = every searched group. Few
+            context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
+        features: the context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
+            ``["patch_size", "obstacle"]``); empty = every field. The rest is left out of the policy and baselines.
+        control_cost: weight of ``½ aᵀRa`` in the cost.
+        gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
+        adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
+        max_sigma: upper bound of each block's standard deviation.
+        random_returns: the control: replace every return by a standard-normal draw.
+    """
+
+    weighting: str = "reps"
+    contextual: bool = True
+    gain_groups: tuple[str, ...] = ()
+    features: tuple[str, ...] = ()
+    control_cost: float = 0.05
+    gain_prior: float = 0.3
+    adapt_rate: float = 0.5
+    max_sigma: float = 0.6
+    random_returns: bool = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_choice(self.weighting, "weighting", WEIGHTINGS)
+        check_range(self.control_cost, "control_cost", 0.0, None)
         check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
         check_range(self.adapt_rate, "adapt_rate", 0.0, 1.0)
-        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
         check_range(self.max_sigma, "max_sigma", self.sigma, None)
 
 
@@ -136,7 +167,7 @@ class RandomReturnConfig(ContextualConfig):
 class AmplitudeConfig(ContextualConfig):
     """The amplitude-only baseline: one shared θ over the ``amplitude`` group (3 numbers), isotropic."""
 
-    groups: str = "amplitude"
+    groups: tuple[str, ...] = ("amplitude",)
     contextual: bool = False
     length: float = 0.0
 
@@ -191,44 +222,35 @@ def action_layout(env: Any) -> tuple[dict[str, slice], int]:
     return {"all": slice(0, int(env.action_space.shape[0]))}, 1
 
 
-def _items(spec: str) -> list[str]:
-    """The non-empty, stripped items of a comma-separated option."""
-    return [item.strip() for item in spec.split(",") if item.strip()]
-
-
-def select_groups(slices: Mapping[str, slice], spec: str, argument: str) -> dict[str, slice]:
-    """The groups of ``slices`` named in the comma-separated ``spec`` (``transient`` names every ``transient:k``)."""
-    wanted = _items(spec)
+def select_groups(slices: Mapping[str, slice], names: Sequence[str], argument: str) -> dict[str, slice]:
+    """The groups of ``slices`` that ``names`` name (``transient`` names every ``transient:k``)."""
+    wanted = list(names)
     chosen = {k: v for k, v in slices.items() if k in wanted or k.split(":")[0] in wanted}
     if not chosen:
-        raise ValueError(f"{argument}: {spec!r} selects none of the action's groups {sorted(slices)}")
+        raise ValueError(f"{argument}: {wanted!r} selects none of the action's groups {sorted(slices)}")
     return chosen
 
 
-def group_factors(slices: Mapping[str, slice], spec: str, argument: str = "sigma_factors"
+def group_factors(slices: Mapping[str, slice], factors: Mapping[str, float], argument: str = "sigma_factors"
                   ) -> list[tuple[slice, float]]:
-    """``(group slice, factor)`` pairs of a ``"group=factor,..."`` spec (factors > 0), in the spec's order."""
+    """``(group slice, factor)`` pairs of ``{group: factor}`` (factors > 0), in the mapping's order."""
     pairs = []
-    for item in _items(spec):
-        name, _, text = item.partition("=")
-        try:
-            factor = float(text)
-        except ValueError:
-            factor = float("nan")
+    for name, factor in factors.items():
         if not np.isfinite(factor) or factor <= 0:
-            raise ValueError(f"{argument}: {item!r} is not 'group=factor' with a factor > 0")
-        pairs.extend((group, factor) for group in select_groups(slices, name, argument).values())
+            raise ValueError(f"{argument}: {name}={factor!r} is not a factor > 0")
+        pairs.extend((group, float(factor)) for group in select_groups(slices, [name], argument).values())
     return pairs
 
 
-def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice], spec: str) -> np.ndarray:
+def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str, slice],
+                   factors: Mapping[str, float]) -> np.ndarray:
     """``[B]`` the ``sigma_factors`` of each exploration block (1 where none is given)."""
-    factors = np.ones(len(blocks))
-    for group, factor in group_factors(slices, spec):
+    per_block = np.ones(len(blocks))
+    for group, factor in group_factors(slices, factors):
         for index, (part, _) in enumerate(blocks):
             if group.start <= part.start < group.stop:
-                factors[index] = factor
-    return factors
+                per_block[index] = factor
+    return per_block
 
 
 def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
@@ -339,7 +361,7 @@ class ContextualSearch(Learner):
         if self.center.ndim != 1 or scale.shape != self.center.shape or np.any(scale < 0):
             raise ValueError("space: context_center and context_scale must be 1-D of one length, scale >= 0")
         if self.config.features:
-            wanted = set(_items(self.config.features))
+            wanted = set(self.config.features)
             names = space.context_names
             if names is None or not wanted <= set(names):
                 raise ValueError(f"features: {self.config.features!r} names fields the env's context does not have "
@@ -368,6 +390,14 @@ class ContextualSearch(Learner):
         self._buffer: list[dict[str, np.ndarray]] = []
 
     # ------------------------------------------------------------------ policy
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: ContextualConfig,
+              inputs: LearnerInputs) -> ContextualSearch:
+        """A contextual search needs the action layout and the context standardisation (``inputs.space``)."""
+        if inputs.space is None:
+            raise ValueError(f"space: {inputs.name} needs the action layout and context standardisation (SearchSpace)")
+        return cls(initial_mean, rollouts, rng, inputs.space, config, name=inputs.name or "creps")
+
     @property
     def exploration(self) -> float:
         return float(np.mean(self.sigmas))
@@ -520,3 +550,8 @@ def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.
         gate = None if gate is None else np.asarray(gate, dtype=np.int64)
         x = np.concatenate([x, context_features(obs, center, scale, gate)], axis=1)
     return squash(x @ gains.T)
+
+
+for _name, _config in (("creps", CREPSConfig), ("cpibb", CPIBBConfig), ("cpi2", CPI2Config),
+                       ("amplitude", AmplitudeConfig), ("random", RandomReturnConfig)):
+    register(_name, _config, ContextualSearch)

@@ -24,14 +24,16 @@ from typing import Any
 
 import numpy as np
 
-from ..options import check_range
-from .base import EpisodeBatch, Learner, cost_to_go, cost_weights
+from ..config import Settings, check_range
+from ..registry import register
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights
+from .smooth import exploration_factor
 
 __all__ = ["PI2", "PI2Config"]
 
 
 @dataclass(frozen=True)
-class PI2Config:
+class PI2Config(Settings):
     """PI² settings.
 
     Attributes:
@@ -89,6 +91,15 @@ class PI2(Learner):
         if self.factor.shape != (self.n_params, self.n_params):
             raise ValueError(f"factor: expected shape ({self.n_params}, {self.n_params}), got {self.factor.shape}")
 
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: PI2Config,
+              inputs: LearnerInputs) -> PI2:
+        """PI² needs the time weights, and with ``length > 0`` the action layout."""
+        if inputs.time_weights is None:
+            raise ValueError("time_weights: PI² needs the activation of each parameter per control step")
+        factor = exploration_factor(np.asarray(initial_mean).size, config.length, inputs.space, inputs.name)
+        return cls(initial_mean, rollouts, rng, inputs.time_weights, config, factor)
+
     @property
     def exploration(self) -> float:
         return float(self.sigma)
@@ -116,3 +127,6 @@ class PI2(Learner):
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
         self.sigma = float(state["sigma"])
+
+
+register("pi2", PI2Config, PI2)

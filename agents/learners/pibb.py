@@ -13,8 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from ..options import check_choice, check_range
-from .base import EpisodeBatch, Learner, cost_weights
+from ..config import Settings, check_choice, check_range
+from ..registry import register
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights
+from .smooth import exploration_factor
 
 __all__ = ["PIBB", "PIBBConfig"]
 
@@ -22,7 +24,7 @@ COVARIANCE_MODES = ("decay", "adaptation")
 
 
 @dataclass(frozen=True)
-class PIBBConfig:
+class PIBBConfig(Settings):
     """PI^BB settings.
 
     Attributes:
@@ -78,6 +80,13 @@ class PIBB(Learner):
         self._factor = self.config.sigma * shape
         self.covariance = self._factor @ self._factor.T                  # [n, n]
 
+    @classmethod
+    def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: PIBBConfig,
+              inputs: LearnerInputs) -> PIBB:
+        """With ``length > 0`` the smooth exploration needs the action layout (``inputs.space``)."""
+        factor = exploration_factor(np.asarray(initial_mean).size, config.length, inputs.space, inputs.name)
+        return cls(initial_mean, rollouts, rng, config, factor)
+
     @property
     def exploration(self) -> float:
         return float(np.mean(np.sqrt(np.diag(self.covariance))))
@@ -115,3 +124,6 @@ class PIBB(Learner):
             raise ValueError(f"state: covariance/factor shapes {covariance.shape}/{factor.shape}, expected "
                              f"{self.covariance.shape}")
         self.covariance, self._factor = covariance, factor
+
+
+register("pibb", PIBBConfig, PIBB)

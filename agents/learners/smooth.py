@@ -20,6 +20,7 @@ optimum at 0.7 with ``sigma`` 0.6 after 50 updates, test_agents_contextual.py's 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -175,3 +176,13 @@ def _symmetric_root(covariance: np.ndarray) -> np.ndarray:
     """``[m, m]`` the symmetric positive square root of a covariance ``[m, m]``."""
     values, vectors = np.linalg.eigh(covariance)
     return (vectors * np.sqrt(np.maximum(values, 0.0))) @ vectors.T
+
+
+def exploration_factor(n: int, length: float, space: Any, name: str) -> np.ndarray | None:
+    """``[n, n]`` the smooth exploration's factor of a one-θ learner (:func:`smooth_factor`), None for ``length 0``;
+    ``space`` (a :class:`~rdmp_gym.agents.learners.contextual.SearchSpace`) gives the action layout."""
+    if length <= 0:
+        return None
+    if space is None:
+        raise ValueError(f"space: {name} with length > 0 (smooth exploration) needs the action layout")
+    return smooth_factor(n, space.slices, space.n_dims, length)

@@ -1,0 +1,86 @@
+"""``bbrl``'s settings, apart from :mod:`rdmp_gym.agents.learners.bbrl` so that declaring and checking them does
+not import torch (the learner's module is imported when a run builds it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..config import check_choice, check_range
+from ..registry import register
+from .contextual import ContextualSettings
+
+__all__ = ["BASELINES", "CREDITS", "BBRLConfig"]
+
+CREDITS = ("step", "episode")
+BASELINES = ("ridge", "network")
+
+
+@dataclass(frozen=True)
+class BBRLConfig(ContextualSettings):
+    """Settings of :class:`~rdmp_gym.agents.learners.bbrl.BBRL` (beyond :class:`ContextualSettings`, whose
+    ``epsilon`` bounds the trust region: the largest mean KL divergence of one update).
+
+    Attributes:
+        rough: share of independent (not smooth) exploration in the correlation.
+        rank: columns of the learned low-rank covariance factor ``U`` (0 = none; it starts at small random values).
+        hidden: width of the two hidden layers of the mean network.
+        credit: ``"step"`` (per-step credit from the cost trace, where the task gives one) or ``"episode"``.
+        epochs: Adam steps per update.
+        learning_rate: Adam's step size.
+        value_ridge: ridge of the context baselines of the cost (and cost-to-go).
+        baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
+            ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
+        history: batches the ``"network"`` baseline is fitted to (those before the ``reuse`` batches it judges).
+        value_epochs: Adam steps of the baseline network per update.
+        replay: share of each update's rollouts that revisit earlier training contexts, those the policy did
+            worst in against the context baseline (prioritised context replay, Jiang et al. 2021); 0 = none.
+        replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
+            with probability proportional to ``k^(-1/replay_temperature)``.
+        replay_size: the most recently seen training contexts that the replay chooses from.
+        context_scale: the network also gives each context a scale ``s(s)`` of the exploration
+            (``Sigma(s) = s(s)^2 Sigma``, 1 at the start), fitted with the covariance, so that the exploration can
+            stay wide where wide samples pay and narrow where they do not.
+        antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
+            context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
+            ridge regression on the context; needs an even number of rollouts.
+    """
+
+    epsilon: float = 0.2
+    min_sigma: float = 0.01
+    rough: float = 0.1
+    rank: int = 0
+    hidden: int = 64
+    credit: str = "step"
+    epochs: int = 10
+    learning_rate: float = 1e-2
+    value_ridge: float = 1.0
+    baseline: str = "ridge"
+    history: int = 20
+    value_epochs: int = 50
+    replay: float = 0.0
+    replay_temperature: float = 0.3
+    replay_size: int = 100
+    antithetic: bool = False
+    context_scale: bool = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_range(self.rough, "rough", 0.0, 1.0, low_open=True)
+        check_range(self.rank, "rank", 0, None)
+        check_range(self.hidden, "hidden", 1, None)
+        check_choice(self.credit, "credit", CREDITS)
+        check_range(self.epochs, "epochs", 1, None)
+        check_range(self.learning_rate, "learning_rate", 0.0, None, low_open=True)
+        check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
+        check_choice(self.baseline, "baseline", BASELINES)
+        check_range(self.history, "history", 1, None)
+        check_range(self.value_epochs, "value_epochs", 1, None)
+        check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
+        check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
+        check_range(self.replay_size, "replay_size", 1, None)
+        if self.antithetic and self.replay > 0:
+            raise ValueError("antithetic: a pair's own mean judges each sample, which leaves the replay no context "
+                             "to rank; use antithetic with replay = 0")
+
+
+register("bbrl", BBRLConfig, "rdmp_gym.agents.learners.bbrl:BBRL", uses_context=True)

@@ -1,0 +1,23 @@
+"""Import costs: torch loads only with the learners that use it (bbrl, PPO, SAC), in a fresh interpreter."""
+
+import subprocess
+import sys
+
+
+def _loads_torch(code: str) -> bool:
+    probe = f"import sys\n{code}\nprint('torch' in sys.modules)"
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=300)
+    return result.stdout.strip().splitlines()[-1] == "True"
+
+
+def test_the_agents_package_the_training_loop_and_the_registry_do_not_load_torch():
+    code = ("import rdmp_gym.agents\nimport rdmp_gym.agents.training, rdmp_gym.agents.learners, rdmp_gym.agents.cli\n"
+            "from rdmp_gym.agents import TrainConfig\n"
+            "config = TrainConfig(agent='bbrl', options={'sigma_factors': {'approach': 3}})\n"
+            "from rdmp_gym.agents.registry import REGISTRY\nassert {'bbrl', 'ppo', 'sac', 'cpi2'} <= set(REGISTRY)")
+    assert not _loads_torch(code)
+
+
+def test_building_bbrl_loads_torch():
+    assert _loads_torch("from rdmp_gym.agents.registry import agent_spec\n"
+                        "import rdmp_gym.agents.learners\nagent_spec('bbrl').load()")
