@@ -13,10 +13,14 @@ __all__ = [
     "DEPRECATED_ENV_ID",
     "ENV_ID",
     "ENV_ID_V2",
+    "ENV_ID_V3",
     "LATEST_ENV_ID",
     "LATEST_STEP_ID",
+    "PANDA_ID_V3",
+    "PANDA_STEP_ID_V3",
     "STEP_ID",
     "STEP_ID_V2",
+    "STEP_ID_V3",
     "TRACKING_ID",
     "register_envs",
 ]
@@ -28,6 +32,11 @@ ENV_ID_V2 = "rdmp_gym/ArmarWipe-v2"
 #: Step-based twins (one control step per ``step``) of v1 and v2.
 STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
 STEP_ID_V2 = "rdmp_gym/ArmarWipeStep-v2"
+#: The task on a composed scene with a smooth-path success, for each robot, and their step twins.
+ENV_ID_V3 = "rdmp_gym/ArmarWipe-v3"
+STEP_ID_V3 = "rdmp_gym/ArmarWipeStep-v3"
+PANDA_ID_V3 = "rdmp_gym/PandaWipe-v3"
+PANDA_STEP_ID_V3 = "rdmp_gym/PandaWipeStep-v3"
 #: Deprecated: v0's reward could be gamed; it makes the v1 env without the obstacle, with a DeprecationWarning.
 DEPRECATED_ENV_ID = "rdmp_gym/ArmarWipe-v0"
 #: Tracking a target rhythm with the DMP (no MuJoCo).
@@ -47,6 +56,10 @@ _SPECS: dict[str, tuple[str, dict]] = {
     STEP_ID: (_STEP, {}),
     ENV_ID_V2: (_WIPE, {"obstacle": True, "version": 2}),
     STEP_ID_V2: (_STEP, {"version": 2, "max_shift": (0.06, 0.06, 0.02)}),
+    ENV_ID_V3: (_WIPE, {"obstacle": True, "version": 3}),
+    STEP_ID_V3: (_STEP, {"version": 3, "max_shift": (0.06, 0.06, 0.02)}),
+    PANDA_ID_V3: (_WIPE, {"obstacle": True, "version": 3, "robot": "panda"}),
+    PANDA_STEP_ID_V3: (_STEP, {"version": 3, "max_shift": (0.06, 0.06, 0.02), "robot": "panda"}),
 }
 
 

@@ -309,7 +309,8 @@ class ArmarWipeStepEnv(gym.Env):
         if last:
             stats = task._statistics(trace, smooth)
             valid = not penetrated
-            success, causes = outcome(stats, valid, unstable, task.success_joint_accel)
+            success, causes = outcome(stats, valid, unstable, task.success_joint_accel,
+                                      task.task_version.max_jerk_ratio)
             info.update(stats)
             info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,

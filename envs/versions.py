@@ -1,4 +1,5 @@
-"""What changes between the versions of the wiping task (``ArmarWipe-v1``, ``ArmarWipe-v2`` and their step twins).
+"""What changes between the versions of the wiping task (``ArmarWipe-v1``, ``-v2``, ``-v3``, ``PandaWipe-v3`` and their
+step twins).
 
 =====================  ===========================  =====================================================
                         v1                           v2
@@ -16,6 +17,13 @@ smoothness              jerk / the imitation's       jerk per unit of squared sp
 collisions, limits      charged per step             also a fixed 0.2 x weight once they happen at all, so
                                                      a graze costs more than the coverage it buys
 =====================  ===========================  =====================================================
+
+v3 keeps v2's task and changes: the scene is composed from the arena, a robot (``ArmarWipe-v3``: ARMAR-III,
+``PandaWipe-v3``: a Franka Panda) and the sponge tool; ``is_success`` also needs a smooth path (speed-normalised
+jerk within :data:`MAX_JERK_RATIO` of the imitation's, so that no uniformly random action succeeds); the cup's
+displacement counts from the robot's first touch (a cup that settles untouched costs nothing); an episode voided
+for penetration reports coverage 0 like every other voided episode; the step twin runs the episodic env's
+simulation core.
 """
 
 from __future__ import annotations
@@ -28,6 +36,9 @@ __all__ = ["TASK_VERSIONS", "TaskVersion"]
 
 #: Cup-rim clearance (m) beyond the pad's half-diagonal in v2.
 CUP_MARGIN = 0.01
+#: v3's ``is_success`` needs the path's speed-normalised jerk within this factor of the imitation's: learned
+#: policies run at 1.0-1.3x, a smooth 6 cm lift over a cup at 2x, uniformly random actions at 7-25x.
+MAX_JERK_RATIO = 3.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +57,12 @@ class TaskVersion:
             as it happens (a share of its weight, :class:`rdmp_gym.envs.reward.RewardSettings`).
         composed_scene: the scene is composed from the arena, the robot and the sponge tool
             (:func:`rdmp_gym.envs.arena.compose_scene`); else the robot's hand-merged scene.
+        max_jerk_ratio: ``is_success`` also needs the path's jerk within this factor of the imitation's (the
+            smoothness measure of the version); None: not checked.
+        cup_from_touch: the cup's displacement counts from the robot's first touch (a cup that settles untouched
+            costs nothing); else from where it was placed.
+        void_coverage: an episode voided after simulation (penetration) reports coverage 0 like one rejected
+            before it, its simulated coverage in ``info["simulated_coverage"]``.
     """
 
     version: int
@@ -56,6 +73,9 @@ class TaskVersion:
     executable_success: bool
     event_charge: float
     composed_scene: bool = False
+    max_jerk_ratio: float | None = None
+    cup_from_touch: bool = False
+    void_coverage: bool = False
 
     def patch_clearance(self, sponge_half: np.ndarray) -> float:
         """Clearance (m) between the cup's rim and the patch for a sponge box of half sizes ``[3]`` (face: 1, 2)."""
@@ -69,4 +89,7 @@ TASK_VERSIONS = {
                    executable_success=False, event_charge=0.0),
     2: TaskVersion(2, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
                    executable_success=True, event_charge=0.2),
+    3: TaskVersion(3, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
+                   executable_success=True, event_charge=0.2, composed_scene=True, max_jerk_ratio=MAX_JERK_RATIO,
+                   cup_from_touch=True, void_coverage=True),
 }

@@ -78,11 +78,13 @@ DEFAULT_GROUPS = ("periodic", "transient", "initial", "amplitude", "approach")
 SWEEP_END_MARGIN = 0.5
 
 
-def failure_causes(stats: Mapping[str, Any], max_joint_accel: float | None = None) -> tuple[str, ...]:
+def failure_causes(stats: Mapping[str, Any], max_joint_accel: float | None = None,
+                   max_jerk_ratio: float | None = None) -> tuple[str, ...]:
     """The ``is_success`` criteria that an episode's statistics (``ArmarWipeEnv``'s info) miss, in the order
-    ``"coverage"``, ``"force"``, ``"arm collision"``, ``"self-collision"``, ``"cup"`` (touched or moved), and with
+    ``"coverage"``, ``"force"``, ``"arm collision"``, ``"self-collision"``, ``"cup"`` (touched or moved), with
     ``max_joint_accel`` (rad/s², executable success) ``"joint acceleration"`` (the peak above it) and
-    ``"joint limit"``; empty for a success (validity is checked apart)."""
+    ``"joint limit"``, and with ``max_jerk_ratio`` ``"jerk"`` (the path's jerk ratio above it); empty for a success
+    (validity is checked apart)."""
     met = {"coverage": stats["coverage"] >= SUCCESS_COVERAGE,
            "force": stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND,
            "arm collision": stats["arm_collision_fraction"] == 0.0,
@@ -91,19 +93,25 @@ def failure_causes(stats: Mapping[str, Any], max_joint_accel: float | None = Non
     if max_joint_accel is not None:
         met["joint acceleration"] = stats["peak_joint_accel"] <= max_joint_accel
         met["joint limit"] = stats["joint_limit_fraction"] == 0.0
+    if max_jerk_ratio is not None:
+        met["jerk"] = stats["jerk_ratio"] <= max_jerk_ratio
     return tuple(name for name, ok in met.items() if not ok)
 
 
-def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = None) -> bool:
+def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = None,
+                    max_jerk_ratio: float | None = None) -> bool:
     """Whether an episode's statistics meet the ``is_success`` thresholds: no :func:`failure_causes`."""
-    return not failure_causes(stats, max_joint_accel)
+    return not failure_causes(stats, max_joint_accel, max_jerk_ratio)
 
 
-def outcome(stats: Mapping[str, Any], valid: bool, unstable: bool, max_joint_accel: float | None
-            ) -> tuple[bool, tuple[str, ...]]:
+def outcome(stats: Mapping[str, Any], valid: bool, unstable: bool, max_joint_accel: float | None,
+            max_jerk_ratio: float | None = None) -> tuple[bool, tuple[str, ...]]:
     """``(is_success, causes)`` of an episode: ``("invalid",)`` or ``("unstable",)`` first, else
     :func:`failure_causes`."""
-    causes = ("invalid",) if not valid else ("unstable",) if unstable else failure_causes(stats, max_joint_accel)
+    if not valid or unstable:
+        causes: tuple[str, ...] = ("invalid",) if not valid else ("unstable",)
+    else:
+        causes = failure_causes(stats, max_joint_accel, max_jerk_ratio)
     return not causes, causes
 
 
@@ -682,7 +690,8 @@ class ArmarWipeEnv(gym.Env):
         if callback is not None:
             self.frames.append(self._frame())
         trace = simulate_wipe(self.scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
-                              limit_margin=self.limit_margin, callback=callback, fine_force=self.fine_force)
+                              limit_margin=self.limit_margin, callback=callback, fine_force=self.fine_force,
+                              cup_from_touch=self.task_version.cup_from_touch)
         self._dirt = trace.dirt
         info.update(self._statistics(trace, smooth))
         traces: dict[str, np.ndarray] = {}
@@ -690,6 +699,8 @@ class ArmarWipeEnv(gym.Env):
         if trace.penetration > self.penetration_limit:
             logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, self.penetration_limit)
             terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights, traces)
+            if self.task_version.void_coverage:
+                info["simulated_coverage"], info["coverage"] = info["coverage"], 0.0
             return self._finish(info, terms, cost, valid=False, reason="penetration", unstable=trace.unstable)
         terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
@@ -742,7 +753,7 @@ class ArmarWipeEnv(gym.Env):
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool) -> tuple[float, dict]:
         reward = sum(terms.values())
-        success, causes = outcome(info, valid, unstable, self.success_joint_accel)
+        success, causes = outcome(info, valid, unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
                      "unstable": unstable, "is_success": success, "failure_causes": causes,
                      "n_cells": len(self._cells_world)})

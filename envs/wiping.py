@@ -221,6 +221,7 @@ def simulate_wipe(
     max_force: float = 2000.0,
     callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None,
     fine_force: bool = False,
+    cup_from_touch: bool = False,
 ) -> WipeTrace:
     """Run the plan from the current simulation state.
 
@@ -236,6 +237,8 @@ def simulate_wipe(
         callback: called as ``callback(k, dirt_left)`` after control step ``k``; ``dirt_left()`` returns the
             dirt left per cell ``[N]`` so far (e.g. to grab video frames; each call costs a wear evaluation).
         fine_force: also record the sponge–table force at every physics step (``trace.fine_force``).
+        cup_from_touch: measure the cup's displacement from where it stood just before the robot first touched
+            it (zero before): a cup that settles untouched has not moved (else from where it was placed).
     """
     m, d = scene.model, scene.data
     count = len(plan)
@@ -370,7 +373,7 @@ def simulate_wipe(
     lo = scene.joint_lower + limit_margin
     hi = scene.joint_upper - limit_margin
     at_limit = live & np.any((joint_pos < lo) | (joint_pos > hi), axis=1)
-    shift = np.where(live, np.linalg.norm(obstacle_pos - obstacle_start, axis=1), 0.0)
+    shift = _cup_shift(obstacle_pos, obstacle_start, obstacle_found & live if cup_from_touch else None, live)
     if scene.obstacle_xy is None:
         shift[:] = 0.0
 
@@ -387,6 +390,19 @@ def simulate_wipe(
     return WipeTrace(contact_force, wrist_force, depth_trace, removed, left, arm_contact, self_found & live,
                      obstacle_found & live, shift, at_limit, sponge_pos, penetration, impact_force, impact_step,
                      fine, steps, unstable)
+
+
+def _cup_shift(position: np.ndarray, start: np.ndarray, touched: np.ndarray | None, live: np.ndarray) -> np.ndarray:
+    """The cup's displacement ``[T]`` (m) from ``start [3]`` given its positions ``[T, 3]``, zero after the live steps;
+    with ``touched [T]`` from where it stood before the first touched step, and zero before that step."""
+    if touched is None:
+        return np.where(live, np.linalg.norm(position - start, axis=1), 0.0)
+    first = np.flatnonzero(touched)
+    if not first.size:
+        return np.zeros(len(position))
+    reference = position[first[0] - 1] if first[0] > 0 else start
+    after = np.arange(len(position)) >= first[0]
+    return np.where(live & after, np.linalg.norm(position - reference, axis=1), 0.0)
 
 
 @dataclass(frozen=True)
