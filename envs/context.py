@@ -13,8 +13,11 @@ The context is the observation of the episodic env: a float32 vector ``[13]``
 Each field has a *sampling* range (what ``reset`` draws from, well inside the reach) and wider
 *bounds* (the observation space; what ``reset(options=...)`` accepts). Whatever is drawn or given,
 the whole dirt patch lies on the table top, and a cup stands on the table, off the patch; a context
-that breaks either raises ``ValueError``. The cup keeps ``patch_clearance`` from the patch (1 cm in
-``ArmarWipe-v1``; in ``ArmarWipe-v2`` the pad's half-diagonal plus 1 cm, so the pad can wipe the patch edge).
+that breaks either raises ``ValueError``. A cup given in the options is checked like a drawn one: it also keeps
+``patch_clearance`` (plus its radius) from the sponge start, whose pad would otherwise start on it; ``obstacle``
+is 0 or 1, and ``obstacle_position`` comes with ``obstacle = 1`` (or in the whole ``context``). The cup keeps
+``patch_clearance`` from the patch (1 cm in ``ArmarWipe-v1``; in ``ArmarWipe-v2`` the pad's half-diagonal plus
+1 cm, so the pad can wipe the patch edge).
 
 The cup is not drawn uniformly: with probability ``obstacle_probability`` it stands in the approach
 corridor, on the line from the sponge start (projected on the table) to the patch centre, 35-60 % of
@@ -152,10 +155,12 @@ class ContextSpec:
     def sample(self, rng: np.random.Generator, options: Mapping | None = None) -> Context:
         """Draw a context from ``rng``; ``options`` fixes fields (or ``context``: the whole vector).
 
-        Raises ValueError for a patch beyond the table top, or a cup off the table or on the patch."""
+        Raises ValueError for a patch beyond the table top, a cup off the table, on the patch or (given) on the
+        sponge start, an ``obstacle`` other than 0 or 1, or an ``obstacle_position`` without ``obstacle = 1``."""
         vector = np.r_[rng.uniform(self.low[:_DRAWN], self.high[:_DRAWN]), 0.0, 0.0, 0.0]
         draw = rng.uniform(size=4)                      # presence, position along and across the corridor
         given: set[str] = set()
+        named: set[str] = set()                         # fields given by their own name (not in ``context``)
         for key, value in (options or {}).items():
             if key == "context":
                 start, length = 0, SIZE
@@ -163,6 +168,7 @@ class ContextSpec:
             else:
                 start, length = self._field(key, "options")
                 given.add(_ALIASES.get(key, key))
+                named.add(_ALIASES.get(key, key))
             try:
                 array = np.asarray(value, dtype=np.float64).reshape(-1)
             except (TypeError, ValueError) as error:
@@ -175,7 +181,16 @@ class ContextSpec:
             if np.any(array < self.bound_low[part]) or np.any(array > self.bound_high[part]):
                 raise ValueError(f"options: {key} = {array} lies outside the bounds "
                                  f"[{self.bound_low[part]}, {self.bound_high[part]}]")
+            presence = array[10 - start] if start <= 10 < start + length else 0.0
+            if presence not in (0.0, 1.0):
+                raise ValueError(f"options: obstacle expects 0 (no cup) or 1 (a cup), got {presence:g}")
             vector[part] = array
+        if "obstacle_position" in named and "obstacle" not in given:
+            raise ValueError("options: obstacle_position is given without obstacle; give obstacle = 1 with it "
+                             "(or the whole context)")
+        if "obstacle_position" in named and vector[10] == 0.0:
+            raise ValueError("options: obstacle_position is given with obstacle = 0 (no cup); give obstacle = 1 "
+                             "or leave obstacle_position out")
         context = Context.from_vector(vector)
         self._check_patch(context)
         present = context.obstacle if "obstacle" in given else draw[0] < self.obstacle_probability
@@ -196,7 +211,19 @@ class ContextSpec:
         if present and self._misplaced(context, position):
             raise ValueError(f"options: obstacle_position {position} puts the cup (radius {self.obstacle_radius} m) "
                              f"off the table top {self.table_extent} or on the dirt patch")
+        if present and "obstacle_position" in given:
+            self._check_start(context, position)
         return context
+
+    def _check_start(self, context: Context, xy: np.ndarray) -> None:
+        """A given cup keeps what a drawn one keeps from the sponge start (projected on the table): its radius plus
+        ``patch_clearance`` (1e-6 m of slack for a context read back from the float32 observation)."""
+        reach = self.obstacle_radius + self.patch_clearance
+        gap = float(np.linalg.norm(xy - context.sponge_start[:2]))
+        if gap < reach - 1e-6:
+            raise ValueError(f"options: obstacle_position {xy} puts the cup {gap:.3f} m from the sponge start "
+                             f"{context.sponge_start[:2]} (table frame), where the pad starts on it; expected at "
+                             f"least {reach:.3f} m (the cup's radius + patch_clearance)")
 
     def _check_patch(self, context: Context) -> None:
         x_lo, x_hi, y_lo, y_hi = self.table_extent
