@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .validation import as_finite_array, check_positive
+from .validation import as_finite_array, check_positive, check_time_grid
 
 __all__ = ["AdaptiveLift", "LiftOver", "ObstacleAvoidance", "avoiding_rollout", "minimum_jerk_step",
            "spring_stiffness"]
@@ -300,8 +300,6 @@ def avoiding_rollout(dmp, t: np.ndarray, obstacles: ObstacleAvoidance | list[Obs
     Returns:
         positions and velocities, each ``[T, d]``.
     """
-    from .validation import check_time_grid
-
     t = check_time_grid(t, "t")
     terms = [obstacles] if hasattr(obstacles, "acceleration") else list(obstacles)
     if not terms or not all(callable(getattr(term, "acceleration", None)) for term in terms):

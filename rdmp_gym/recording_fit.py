@@ -41,6 +41,7 @@ from .fitting import (
 )
 from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
 from .segmentation import Segmentation
+from .settings import FitSettings
 from .stopping import StopSegmentation, fit_stop
 from .sweep import Sweep
 from .validation import check_positive
@@ -154,7 +155,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
         goal = demo.Y[t >= seg.rest_time].mean(axis=0)
         stop_seg = StopSegmentation(Segmentation(seg.period, seg.rhythm_start, anchor), seg.rhythm_end,
                                     seg.rest_time, goal)
-        dmp = fit_stop(dmp, demo, stop_seg, n_stop, method="trajectory")
+        dmp = fit_stop(dmp, demo, stop_seg, n_stop, settings=FitSettings.resolve(method="trajectory"))
         exit_at = _exit_time(dmp.ending, seg.rhythm_end)
         stop_at = exit_at - 0.5 * seg.period
     logger.info("fitted a recording: period %.4g s, entry %.3g s of %.3g s to the rhythm, %d via points, stop %s",

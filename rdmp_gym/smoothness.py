@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import comb
 
 import numpy as np
 from numpy.polynomial import Polynomial
@@ -249,8 +250,6 @@ class SmoothTestSignal:
 
 
 def _binomial(n: int, k: int) -> int:
-    from math import comb
-
     return comb(n, k)
 
 

@@ -222,8 +222,7 @@ def fit_ending(demo: Demonstration, n_stop: int = 15, *,
                                                              if name in FitSettings.names()})
     dmp = RhythmicDMP.fit(head, segmentations=[seg.start], **fit_kwargs)
     return fit_stop(dmp, demo, seg, n_stop, nu1_factor=nu1_factor, nu2_factor=nu2_factor, stop_overlap=stop_overlap,
-                    rest_margin=rest_margin, delta=fit.delta, regularization=fit.regularization, method=fit.method,
-                    substeps=int(fit.substeps), smoothing=fit.smoothing)
+                    rest_margin=rest_margin, settings=fit)
 
 
 def _check_stop_settings(n_stop: int, nu1_factor: float, nu2_factor: float) -> None:
@@ -235,15 +234,19 @@ def _check_stop_settings(n_stop: int, nu1_factor: float, nu2_factor: float) -> N
 
 
 def fit_stop(dmp, demo: Demonstration, seg: StopSegmentation, n_stop: int = 15, *, nu1_factor: float = 0.9,
-             nu2_factor: float = 0.7, stop_overlap: float = 0.9, rest_margin: float = 0.15, delta: float = 1e-3,
-             regularization: float | None = None, method: str = "trajectory", substeps: int = 4,
-             smoothing: float = 0.15):
+             nu2_factor: float = 0.7, stop_overlap: float = 0.9, rest_margin: float = 0.15,
+             settings: FitSettings | None = None):
     """``dmp`` (a fitted :class:`RhythmicDMP` that reproduces ``demo`` up to its stop) with a stop fitted to the rest
     of ``demo``: the stop family's ``n_stop`` weights by one ridge regression, start and periodic weights held.
     ``method="trajectory"`` matches the rollout's positions (and follows an anchor that travels with
     ``dmp.sweep``); ``"lwr"``/``"ridge"`` match the forcing target (10) (a fixed anchor). Other arguments as in
-    :func:`fit_ending`. Returns a copy of ``dmp`` with ``ending`` set."""
+    :func:`fit_ending`; the stop shares the fit's ``settings`` (:class:`~rdmp_gym.settings.FitSettings`, default
+    :data:`~rdmp_gym.settings.DEFAULT_FIT`): ``delta``, ``regularization``, ``method``, ``substeps``, ``smoothing``.
+    Returns a copy of ``dmp`` with ``ending`` set."""
     _check_stop_settings(n_stop, nu1_factor, nu2_factor)
+    fit = FitSettings.resolve(settings)
+    delta, regularization, method, substeps, smoothing = (fit.delta, fit.regularization, fit.method,
+                                                           int(fit.substeps), fit.smoothing)
     if regularization is None:          # resolved per method, as in RhythmicDMP.fit
         regularization = 1e-4 if method == "trajectory" else 1e-6
     dt = demo.dt
