@@ -148,6 +148,9 @@ def realistic_recording(kind: str = "wiping", *, rng: np.random.Generator, rate:
         clock_jitter: relative spread of the sampling intervals; 1 % of the samples are dropped.
         n_periods, period: override the kind's number of periods and mean period (s).
         approach: override the durations (s) of the approach's moves (a pause between consecutive ones).
+
+    One function of more than 80 lines on purpose: its draws from ``rng`` come in one fixed order that the
+    benchmarked recordings depend on, and most of its length is the checks of the arguments.
     """
     if kind not in RECORDING_KINDS:
         raise ValueError(f"kind: expected one of {sorted(RECORDING_KINDS)}, got {kind!r}")
