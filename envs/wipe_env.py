@@ -59,7 +59,7 @@ from .robots import ARMAR3, RobotDescription, get_robot
 from .scene import TablePose, WipeScene, dirt_grid
 from .versions import TASK_VERSIONS, TaskVersion
 from .viewer import HumanViewer
-from .wiping import DirtField, WipeTrace, simulate_wipe
+from .wiping import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 
 __all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes", "outcome"]
 
@@ -437,6 +437,12 @@ class ArmarWipeEnv(gym.Env):
         return HandPoints(scene.model, scene.qpos_adr, geoms)
 
     @property
+    def simulation_settings(self) -> SimulationSettings:
+        """The simulation core's settings of this env (:class:`~rdmp_gym.envs.wiping.SimulationSettings`)."""
+        return SimulationSettings(limit_margin=self.limit_margin, fine_force=self.fine_force,
+                                  cup_from_touch=self.task_version.cup_from_touch)
+
+    @property
     def success_joint_accel(self) -> float | None:
         """The peak joint acceleration (rad/s²) that ``is_success`` allows (None: not checked, v1)."""
         return self.reward_settings.max_joint_accel if self.task_version.executable_success else None
@@ -690,8 +696,7 @@ class ArmarWipeEnv(gym.Env):
         if callback is not None:
             self.frames.append(self._frame())
         trace = simulate_wipe(self.scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
-                              limit_margin=self.limit_margin, callback=callback, fine_force=self.fine_force,
-                              cup_from_touch=self.task_version.cup_from_touch)
+                              self.simulation_settings, callback=callback)
         self._dirt = trace.dirt
         info.update(self._statistics(trace, smooth))
         traces: dict[str, np.ndarray] = {}

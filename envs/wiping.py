@@ -31,8 +31,8 @@ import numpy as np
 from .controller import ForceAdaptation, JointTargetPlan
 from .scene import WipeScene
 
-__all__ = ["IMPACT_WINDOW", "DirtField", "WipeTrace", "arm_table_penetration", "cells_under_sponge",
-           "contact_summary", "simulate_wipe"]
+__all__ = ["IMPACT_WINDOW", "DirtField", "SimulationSettings", "WipeSimulation", "WipeTrace", "arm_table_penetration",
+           "cells_under_sponge", "contact_summary", "simulate_wipe"]
 
 #: Time after the first sponge contact (s) in which the peak normal force is the impact.
 IMPACT_WINDOW = 0.2
@@ -95,6 +95,24 @@ def _carry_forward(rows: np.ndarray, values: np.ndarray, count: int) -> np.ndarr
     latest = np.searchsorted(rows, np.arange(count), side="right") - 1       # the last row at or before each step
     full[latest >= 0] = values[latest[latest >= 0]]
     return full
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    """What the simulation core records and how it judges a step.
+
+    Attributes:
+        limit_margin: distance to a joint limit (rad) counted as "at the limit".
+        max_force: any wrist or contact force above this (N) counts as a diverged simulation.
+        fine_force: also record the sponge–table force at every physics step (``trace.fine_force``).
+        cup_from_touch: measure the cup's displacement from where it stood just before the robot first touched
+            it (zero before): a cup that settles untouched has not moved (else from where it was placed).
+    """
+
+    limit_margin: float = 0.02
+    max_force: float = 2000.0
+    fine_force: bool = False
+    cup_from_touch: bool = False
 
 
 @dataclass
@@ -210,20 +228,193 @@ def _undispatched(function: Callable) -> Callable:
     return getattr(function, "_implementation", function)
 
 
-def simulate_wipe(
-    scene: WipeScene,
-    plan: JointTargetPlan,
-    path_height: np.ndarray,
-    adaptation: ForceAdaptation,
-    dirt: DirtField,
-    frame_skip: int,
-    limit_margin: float = 0.02,
-    max_force: float = 2000.0,
-    callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None,
-    fine_force: bool = False,
-    cup_from_touch: bool = False,
-) -> WipeTrace:
-    """Run the plan from the current simulation state.
+class WipeSimulation:
+    """The simulation core of the wiping task: one control step at a time, and the episode's trace.
+
+    Both envs run it: the episodic env steps it along a whole planned path (:func:`simulate_wipe`), the step twin
+    one control step per ``step``. Per control step it does only what must happen online: the wrist-force
+    admittance law on the pressing depth (the law of :class:`~rdmp_gym.envs.controller.ForceAdaptation`, inlined:
+    the same operations in the same order), the servo targets, the physics (one physics step at a time for
+    :data:`IMPACT_WINDOW` after the first sponge contact, to catch the impact) and a copy of the measurements;
+    :meth:`trace` evaluates the rest vectorised.
+
+    Args:
+        scene: the scene, already reset to rest at the first joint targets with the table and obstacle in place.
+        count: control steps of the episode (``T``).
+        adaptation: the force controller (reset here).
+        dirt: the dirt cells, the table normal and the wear law.
+        frame_skip: physics steps per control step.
+        normal: the control normal [3] (world) the pressing depth acts along and the wrist force is read along.
+        settings: :class:`SimulationSettings`.
+    """
+
+    def __init__(self, scene: WipeScene, count: int, adaptation: ForceAdaptation, dirt: DirtField,
+                 frame_skip: int, normal: np.ndarray, settings: SimulationSettings | None = None):
+        m, d = scene.model, scene.data
+        if frame_skip < 1:
+            raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
+        ids = scene.actuator_ids
+        if not np.all(m.actuator_ctrllimited[ids]):       # MuJoCo clamps the servo targets to ctrlrange
+            raise ValueError("scene: the arm actuators must be ctrl-limited to the joint ranges")
+        self.scene, self.count, self.adaptation, self.dirt = scene, count, adaptation, dirt
+        self.frame_skip, self.normal = frame_skip, normal
+        self.settings = SimulationSettings() if settings is None else settings
+        self._ctrl_index: slice | np.ndarray = ids
+        if np.array_equal(ids, np.arange(ids[0], ids[0] + len(ids))):
+            self._ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
+        adaptation.reset()
+        self._ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
+        self._wrist = d.sensordata[scene.force_adr]    # a view: the wrist sensor's force [3], updated by every step
+        self._rotated = np.empty(3)                     # R @ f, written in place every step
+        self._bias = float(scene.wrist_force_world() @ normal)
+        self._tn = tuple(float(x) for x in np.asarray(dirt.normal, dtype=np.float64))
+        self.fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
+        # One row per control step, copied with a single call: the sensors, qpos, the sponge site's position
+        # and the sponge box's pose (the box pose is the one of the step's last kinematics pass).
+        self._rows = _RecordLayout(m.nsensordata, m.nq)
+        self.record = np.zeros((count, self._rows.width))
+        self._sources = (d.sensordata, d.qpos, d.site_xpos[scene.sponge_site], d.geom_xpos[scene.sponge_geom],
+                         d.geom_xmat[scene.sponge_geom])
+        self._concatenate = _undispatched(np.concatenate)
+        self._dot = _undispatched(np.dot)
+        self.wrist_force = np.zeros(count)
+        self.depth = np.zeros(count)
+        self.peak = np.zeros(count)          # per-step peak force while stepping one physics step at a time
+        self.fine = np.zeros(count * frame_skip) if self.settings.fine_force else None
+        self.obstacle_start = d.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3].copy()
+        ctrl = d.ctrl[self._ctrl_index]      # a view when the arm actuators are consecutive
+        self._ctrl = ctrl if np.shares_memory(ctrl, d.ctrl) else None
+        self._learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (force_learning)
+        self.measured = 0.0
+        self.steps = count
+        self.table_penetration = 0.0
+        self.first_contact = -1
+        # MuJoCo resets the data (time back to 0) when accelerations blow up: time that fails to advance
+        # signals divergence, as do NaN and excessive wrist forces.
+        self._last_time = d.time
+
+    def step(self, k: int, q_row: np.ndarray, ndq_row: np.ndarray, engage: float) -> bool:
+        """Control step ``k``: the depth from the admittance law, servo targets ``q_row - depth * ndq_row`` ([n]
+        each), the physics, the record. ``engage`` in [0, 1]: how much the law acts (its engagement at the
+        commanded height). Returns True when the simulation diverged (the episode ends at this step)."""
+        adaptation, law = self.adaptation, self.adaptation.settings
+        filtered, offset = adaptation.force, adaptation.offset
+        filtered += adaptation.alpha * (self.measured - filtered)
+        if law.enabled:
+            rate = law.gain * (law.target_force - filtered) * engage
+            # min(max_rate, max(-max_rate, rate)) and the same for the offset, as conditional expressions that
+            # return what the builtins return (the first argument unless the second is strictly beyond it)
+            max_rate = law.max_rate
+            rate = rate if rate > -max_rate else -max_rate
+            rate = rate if rate < max_rate else max_rate
+            offset = offset + rate * adaptation.dt
+            offset = offset if offset > law.min_offset else law.min_offset
+            offset = offset if offset < law.max_offset else law.max_offset
+        adaptation.force, adaptation.offset = filtered, offset
+        depth = adaptation.preload + offset
+        if self._learn is not None:
+            depth += self._learn(filtered, engage)
+        if self._ctrl is None:
+            self.scene.data.ctrl[self._ctrl_index] = q_row - depth * ndq_row
+        else:
+            mujoco.mju_addScl(self._ctrl, q_row, ndq_row, -depth)   # q - depth ndq, elementwise as numpy rounds it
+        return self._physics(k, depth)
+
+    def _physics(self, k: int, depth: float) -> bool:
+        m, d, scene = self.scene.model, self.scene.data, self.scene
+        sensordata, a, frame_skip = d.sensordata, scene.sponge_contact_adr, self.frame_skip
+        fine = self.fine
+        if fine is not None or (self.first_contact >= 0 and k < self.first_contact + self.fine_window):
+            tn0, tn1, tn2 = self._tn
+            top = 0.0
+            for i in range(frame_skip):
+                mujoco.mj_step(m, d)
+                force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
+                top = max(top, force)
+                if fine is not None:
+                    fine[k * frame_skip + i] = force
+            self.peak[k] = top
+        else:
+            mujoco.mj_step(m, d, frame_skip)
+        if self.first_contact < 0 and sensordata[a] > 0:
+            self.first_contact = k
+        dot = self._dot
+        measured = self._bias - float(dot(self.normal, dot(self._ft_rot, self._wrist, out=self._rotated)))
+        self.measured = measured
+        self.wrist_force[k] = measured
+        self.depth[k] = depth
+        self._concatenate(self._sources, out=self.record[k])
+        if sensordata[scene.robot_contact_adr] - sensordata[a] > 0.5:
+            self.table_penetration = max(self.table_penetration, arm_table_penetration(scene))
+        now = d.time
+        if now <= self._last_time or measured != measured or abs(measured) > self.settings.max_force:
+            self.steps = k + 1
+            return True
+        self._last_time = now
+        return False
+
+    def dirt_left(self, k: int) -> np.ndarray:
+        """Dirt left per cell [N] after control step ``k`` (recomputes the episode so far: for video frames)."""
+        a = self.scene.sponge_contact_adr
+        rows = self._rows
+        return _dirt_left(self.dirt, self.record[:, a:a + 4], self.record[:, rows.box_pos],
+                          self.record[:, rows.box_rot], self.scene.sponge_half, k)
+
+    def trace(self) -> WipeTrace:
+        """The episode's :class:`WipeTrace` (its first :attr:`steps` control steps are live)."""
+        scene, record, rows, count = self.scene, self.record, self._rows, self.count
+        settings, steps = self.settings, self.steps
+        a = scene.sponge_contact_adr
+        contact = record[:, a:a + 4]          # found, net force (world)
+        box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
+        table_normal = np.asarray(self.dirt.normal, dtype=np.float64)
+        robot_found = record[:, scene.robot_contact_adr]
+        self_found_cols = list(scene.self_contact_adr)             # per link of the robot's body: found, distance
+        self_dist_cols = [adr + 1 for adr in scene.self_contact_adr]
+        self_distance = np.where(record[:, self_found_cols] > 0, -record[:, self_dist_cols], -np.inf)
+        self_found = np.isfinite(self_distance).any(axis=1)
+        penetration = max(0.0, self.table_penetration, float(np.fmax.reduce(self_distance.ravel())))
+        obstacle_found = record[:, scene.obstacle_contact_adr] > 0
+        qpos = record[:, rows.qpos]
+        obstacle_pos = qpos[:, scene.obstacle_qpos:scene.obstacle_qpos + 3]
+        joint_pos = qpos[:, scene.qpos_adr]
+        sponge_pos = record[:, rows.site_pos].copy()
+        contact_force = np.abs(contact[:, 1:] @ table_normal)
+        over = np.flatnonzero(contact_force[:steps] > settings.max_force)
+        unstable = steps < count or bool(over.size) or not np.isfinite(contact_force[:steps]).all()
+        if over.size:
+            steps = min(steps, int(over[0]) + 1)
+        live = np.arange(count) < steps
+        contact_force = np.where(live, np.nan_to_num(contact_force), 0.0)
+        arm_contact = live & (robot_found - contact[:, 0] > 0.5)
+        lo = scene.joint_lower + settings.limit_margin
+        hi = scene.joint_upper - settings.limit_margin
+        at_limit = live & np.any((joint_pos < lo) | (joint_pos > hi), axis=1)
+        shift = _cup_shift(obstacle_pos, self.obstacle_start,
+                           obstacle_found & live if settings.cup_from_touch else None, live)
+        if scene.obstacle_xy is None:
+            shift[:] = 0.0
+
+        removed, left = _removal(self.dirt, contact_force, box_pos, box_rot, scene.sponge_half, live)
+        peak = np.maximum(self.peak, contact_force)
+        impact_step = -1
+        impact_force = 0.0
+        if self.first_contact >= 0:
+            window = slice(self.first_contact, min(steps, self.first_contact + self.fine_window))
+            impact_step = self.first_contact + int(np.argmax(peak[window]))
+            impact_force = float(peak[impact_step])
+        wrist_force, depth_trace = self.wrist_force.copy(), self.depth.copy()
+        for array in (wrist_force, depth_trace):
+            array[~live] = 0.0
+        return WipeTrace(contact_force, wrist_force, depth_trace, removed, left, arm_contact, self_found & live,
+                         obstacle_found & live, shift, at_limit, sponge_pos, penetration, impact_force, impact_step,
+                         self.fine, steps, unstable)
+
+
+def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarray, adaptation: ForceAdaptation,
+                  dirt: DirtField, frame_skip: int, settings: SimulationSettings | None = None,
+                  callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None) -> WipeTrace:
+    """Run a whole joint-target plan from the current simulation state with :class:`WipeSimulation`.
 
     Args:
         scene: the scene, already reset to rest at ``plan.q[0]`` with the table and obstacle in place.
@@ -232,164 +423,23 @@ def simulate_wipe(
         adaptation: the force controller (reset here).
         dirt: the dirt cells, the table normal and the wear law.
         frame_skip: physics steps per control step.
-        limit_margin: distance to a joint limit (rad) counted as "at the limit".
-        max_force: any wrist or contact force above this (N) counts as a diverged simulation.
+        settings: :class:`SimulationSettings` (limit margin, force limit, fine force, the cup's displacement).
         callback: called as ``callback(k, dirt_left)`` after control step ``k``; ``dirt_left()`` returns the
             dirt left per cell ``[N]`` so far (e.g. to grab video frames; each call costs a wear evaluation).
-        fine_force: also record the sponge–table force at every physics step (``trace.fine_force``).
-        cup_from_touch: measure the cup's displacement from where it stood just before the robot first touched
-            it (zero before): a cup that settles untouched has not moved (else from where it was placed).
     """
-    m, d = scene.model, scene.data
     count = len(plan)
     if path_height.shape != (count,):
         raise ValueError(f"path_height: expected shape ({count},), got {path_height.shape}")
-    if frame_skip < 1:
-        raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
-    ids = scene.actuator_ids
-    if not np.all(m.actuator_ctrllimited[ids]):       # MuJoCo clamps the servo targets to ctrlrange
-        raise ValueError("scene: the arm actuators must be ctrl-limited to the joint ranges")
-    ctrl_index: slice | np.ndarray = ids
-    if np.array_equal(ids, np.arange(ids[0], ids[0] + len(ids))):
-        ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
-    adaptation.reset()
-    normal = plan.normal
-    table_normal = np.asarray(dirt.normal, dtype=np.float64)
-    ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
-    sensordata = d.sensordata
-    wrist = sensordata[scene.force_adr]      # a view: the wrist sensor's force [3], updated by every step
-    rotated = np.empty(3)                    # R @ f, written in place every step
-    bias_n = float(scene.wrist_force_world() @ normal)
-    a = scene.sponge_contact_adr
-    robot_adr = scene.robot_contact_adr
-    self_found_cols = list(scene.self_contact_adr)                # per link of the robot's body: found, distance
-    self_dist_cols = [adr + 1 for adr in scene.self_contact_adr]
-    half = scene.sponge_half
-    tn0, tn1, tn2 = (float(x) for x in table_normal)
-    fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
-
-    # One row per control step, copied with a single call: the sensors, qpos, the sponge site's position
-    # and the sponge box's pose (the box pose is the one of the step's last kinematics pass).
-    sensors = m.nsensordata
-    rows = _RecordLayout(sensors, m.nq)
-    record = np.zeros((count, rows.width))
-    sources = (sensordata, d.qpos, d.site_xpos[scene.sponge_site], d.geom_xpos[scene.sponge_geom],
-               d.geom_xmat[scene.sponge_geom])
-    concatenate = _undispatched(np.concatenate)
-    contact = record[:, a:a + 4]          # found, net force (world)
-    box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
-    wrist_force = np.zeros(count)
-    depth_trace = np.zeros(count)
-    peak = np.zeros(count)                # per-step peak force while stepping one physics step at a time
-    fine = np.zeros(count * frame_skip) if fine_force else None
-    obstacle_qpos = slice(scene.obstacle_qpos, scene.obstacle_qpos + 3)
-    obstacle_start = d.qpos[obstacle_qpos].copy()
-    ctrl = d.ctrl[ctrl_index]             # a view when the arm actuators are consecutive
-    if not np.shares_memory(ctrl, d.ctrl):
-        ctrl = None
-    q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
-    add_scaled, dot = mujoco.mju_addScl, _undispatched(np.dot)   # q - depth ndq, elementwise as numpy rounds it
-    # the admittance law of ForceAdaptation.update, inlined (same operations in the same order)
-    law = adaptation.settings
-    adapt = law.enabled
+    simulation = WipeSimulation(scene, count, adaptation, dirt, frame_skip, plan.normal, settings)
     engage = adaptation.engagement(path_height).tolist()
-    alpha, dt, preload = adaptation.alpha, adaptation.dt, adaptation.preload
-    gain, target, max_rate = law.gain, law.target_force, law.max_rate
-    min_offset, max_offset = law.min_offset, law.max_offset
-    filtered, offset = adaptation.force, adaptation.offset
-    learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (force_learning)
-    step = mujoco.mj_step
-    measured = 0.0
-    steps = count
-    table_penetration = 0.0
-    first_contact = -1
-    # MuJoCo resets the data (time back to 0) when accelerations blow up: time that fails to advance
-    # signals divergence, as do NaN and excessive wrist forces.
-    last_time = d.time
-
+    q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
+    step = simulation.step
     for k in range(count):
-        filtered += alpha * (measured - filtered)
-        if adapt:
-            rate = gain * (target - filtered) * engage[k]
-            # min(max_rate, max(-max_rate, rate)) and the same for the offset, as conditional expressions that
-            # return what the builtins return (the first argument unless the second is strictly beyond it)
-            rate = rate if rate > -max_rate else -max_rate
-            rate = rate if rate < max_rate else max_rate
-            offset = offset + rate * dt
-            offset = offset if offset > min_offset else min_offset
-            offset = offset if offset < max_offset else max_offset
-        depth = preload + offset
-        if learn is not None:
-            depth += learn(filtered, engage[k])
-        if ctrl is None:
-            d.ctrl[ctrl_index] = q_rows[k] - depth * ndq_rows[k]
-        else:
-            add_scaled(ctrl, q_rows[k], ndq_rows[k], -depth)
-        if fine is not None or (first_contact >= 0 and k < first_contact + fine_window):
-            top = 0.0
-            for i in range(frame_skip):
-                step(m, d)
-                force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
-                top = max(top, force)
-                if fine is not None:
-                    fine[k * frame_skip + i] = force
-            peak[k] = top
-        else:
-            step(m, d, frame_skip)
-        if first_contact < 0 and sensordata[a] > 0:
-            first_contact = k
-        measured = bias_n - float(dot(normal, dot(ft_rot, wrist, out=rotated)))   # = normal @ (R @ f)
-        wrist_force[k] = measured
-        depth_trace[k] = depth
-        concatenate(sources, out=record[k])
-        if sensordata[robot_adr] - sensordata[a] > 0.5:
-            table_penetration = max(table_penetration, arm_table_penetration(scene))
-        now = d.time
-        if now <= last_time or measured != measured or abs(measured) > max_force:
-            steps = k + 1
+        if step(k, q_rows[k], ndq_rows[k], engage[k]):
             break
-        last_time = now
         if callback is not None:
-            callback(k, lambda k=k: _dirt_left(dirt, contact, box_pos, box_rot, half, k))
-    adaptation.force, adaptation.offset = filtered, offset
-
-    robot_found = record[:, robot_adr]
-    self_distance = np.where(record[:, self_found_cols] > 0, -record[:, self_dist_cols], -np.inf)
-    self_found = np.isfinite(self_distance).any(axis=1)
-    penetration = max(0.0, table_penetration, float(np.fmax.reduce(self_distance.ravel())))
-    obstacle_found = record[:, scene.obstacle_contact_adr] > 0
-    qpos = record[:, rows.qpos]
-    obstacle_pos = qpos[:, obstacle_qpos]
-    joint_pos = qpos[:, scene.qpos_adr]
-    sponge_pos = record[:, rows.site_pos].copy()
-    contact_force = np.abs(contact[:, 1:] @ table_normal)
-    over = np.flatnonzero(contact_force[:steps] > max_force)
-    unstable = steps < count or bool(over.size) or not np.isfinite(contact_force[:steps]).all()
-    if over.size:
-        steps = min(steps, int(over[0]) + 1)
-    live = np.arange(count) < steps
-    contact_force = np.where(live, np.nan_to_num(contact_force), 0.0)
-    arm_contact = live & (robot_found - contact[:, 0] > 0.5)
-    lo = scene.joint_lower + limit_margin
-    hi = scene.joint_upper - limit_margin
-    at_limit = live & np.any((joint_pos < lo) | (joint_pos > hi), axis=1)
-    shift = _cup_shift(obstacle_pos, obstacle_start, obstacle_found & live if cup_from_touch else None, live)
-    if scene.obstacle_xy is None:
-        shift[:] = 0.0
-
-    removed, left = _removal(dirt, contact_force, box_pos, box_rot, half, live)
-    peak = np.maximum(peak, contact_force)
-    impact_step = -1
-    impact_force = 0.0
-    if first_contact >= 0:
-        window = slice(first_contact, min(steps, first_contact + fine_window))
-        impact_step = first_contact + int(np.argmax(peak[window]))
-        impact_force = float(peak[impact_step])
-    for array in (wrist_force, depth_trace):
-        array[~live] = 0.0
-    return WipeTrace(contact_force, wrist_force, depth_trace, removed, left, arm_contact, self_found & live,
-                     obstacle_found & live, shift, at_limit, sponge_pos, penetration, impact_force, impact_step,
-                     fine, steps, unstable)
+            callback(k, lambda k=k: simulation.dirt_left(k))
+    return simulation.trace()
 
 
 def _cup_shift(position: np.ndarray, start: np.ndarray, touched: np.ndarray | None, live: np.ndarray) -> np.ndarray:
