@@ -17,7 +17,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
-from rdmp_gym.agents.cli import main
 from rdmp_gym.agents.evaluation import Evaluator, WorkerError
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
@@ -40,12 +39,9 @@ def test_ray_backend_gives_the_numbers_of_the_local_pool(tmp_path):
                          eval_episodes=2)
     local = train(config, tmp_path / "local")
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    try:                          # the same run through the command line, on 2 Ray actors
-        status = main(["train", "--out", str(tmp_path / "ray"), "--backend", "ray", "--workers", "2",
-                       "--updates", "2", "--rollouts", "4", "--seed", "1", "--start", "perturbed",
-                       "--option", "sigma=0.3", "--eval-episodes", "2", "--n-periodic", "10", "--n-transient", "10",
-                       "--env-option", "n_periods=2", "--env-option", "control_rate=50",
-                       "--reset-option", f"context={json.dumps(context.tolist())}"])
+    try:                          # the same run on 2 Ray actors
+        train(config, tmp_path / "ray", backend="ray")
+        status = 0
     finally:
         ray.shutdown()
     assert status == 0

@@ -87,8 +87,7 @@ def test_ppo_trains_on_the_env(tmp_path, context):
 def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     out = tmp_path / "main"
     tiny = ["--updates", "2", "--rollouts", "4", "--workers", "1", "--n-periodic", "10", "--n-transient", "10",
-            "--env-option", "n_periods=2", "--env-option", "control_rate=25", "--env-option", "frame_stride=25",
-            "--env-option", "width=64", "--env-option", "height=64"]
+            "--env-option", "n_periods", "2", "control_rate", "25", "frame_stride", "25", "width", "64", "height", "64"]
     assert main(["main", "--out", str(out), "--episodes", "2", "--video", *tiny]) == 0
     assert "trained fails on: " in capsys.readouterr().out
     for name in ("fit.png", "summary.json", "train/log.jsonl", "train/learning_curve.png", "train/evaluation.png",
@@ -97,7 +96,7 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["evaluation"]) == {"imitation", "trained"}
     config = json.loads((out / "train" / "config.json").read_text())        # the main job's own defaults
-    assert config["env_kwargs"]["cup_clearance"] == 0.01 and config["options"]["sigma_factors"] == "approach=3"
+    assert config["env_kwargs"]["cup_clearance"] == 0.01 and config["options"]["sigma_factors"] == {"approach": 3.0}
     assert main(["fit", "--style", "3", "--plot", "--out", str(tmp_path / "fit")]) == 0
     assert (tmp_path / "fit" / "fit.png").exists() and (tmp_path / "fit" / "dmp.json").exists()
     assert main(["evaluate", str(out / "train"), "--episodes", "1", "--workers", "1"]) == 0
@@ -107,10 +106,11 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
                  *tiny[2:]]) == 0
     assert len((tmp_path / "cmaes" / "log.jsonl").read_text().splitlines()) == 4
     capsys.readouterr()
-    assert main(["train", "--out", str(tmp_path / "bad"), "--option", "sigmaa=0.2"]) == 2
-    assert "sigmaa" in capsys.readouterr().err
-    assert main(["train", "--out", str(tmp_path / "bad"), "--env-option", "n_periodics=3"]) == 2
+    assert main(["train", "--out", str(tmp_path / "bad"), "--options.sigmaa", "0.2"]) == 2     # tyro names it
+    assert main(["train", "--out", str(tmp_path / "bad"), "--env-option", "n_periodics", "3"]) == 2
     assert "n_periodics" in capsys.readouterr().err
+    assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--resume", "--seed", "4"]) == 2
+    assert "seed" in capsys.readouterr().err                     # a resumed run keeps its configuration
 
 
 def test_ppo_reports_a_diverged_policy_clearly(context):
