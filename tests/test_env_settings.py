@@ -59,6 +59,9 @@ def test_the_defaults_are_the_envs_signature():
     defaults = EnvConfig().to_kwargs()
     for name in named:
         assert params[name].default == defaults[name], name
+    keywords = [name for name, p in params.items() if name not in ("self", "config")
+                and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    assert set(keywords) <= set(ENV_KWARGS)             # every keyword of the env is a setting
 
 
 def test_unknown_keyword_is_named():
