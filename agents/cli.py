@@ -280,7 +280,10 @@ def _parse_run(kind: type[TrainCommand], argv: Sequence[str], prog: str) -> tupl
                       **{name: {**values[name], **getattr(parsed, name)} for name in ("env_option", "reset_option")}})
     if not command.out:
         raise ValueError("--out: the run directory is required")
-    return command, train_config(command, given)
+    config = train_config(command, given)
+    if first.resume:                     # not a flag: the saved run's (runs of the library may set it either way)
+        config = dataclasses.replace(config, shared_context=saved.shared_context)
+    return command, config
 
 
 def _train_or_resume(command: TrainCommand, config: TrainConfig, out: str | Path) -> RunDirectory:
