@@ -161,7 +161,8 @@ def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.nd
                                                "eval_return_mean", "return_mean", "exploration")}
              for record in records if record.get("eval_return_mean") is not None]
     return {"agent": config.agent, "seed": config.seed, "seconds": round(time.perf_counter() - began, 1),
-            "options": config.options, "episodes_to_target": episodes_to(records, SUCCESS_TARGET), "curve": curve,
+            "options": config.options.to_dict(), "episodes_to_target": episodes_to(records, SUCCESS_TARGET),
+            "curve": curve,
             "test": scores.to_dict(), "test_means": scores.means(), "code": _code(run)}
 
 
@@ -209,6 +210,15 @@ def _same_protocol(saved: dict, config: TrainConfig, test_seeds: np.ndarray) -> 
             and saved["final_test_seeds"] == test_seeds.tolist())
 
 
+def _same_options(saved: dict, config: TrainConfig) -> bool:
+    """Whether a stored run's options (also as earlier versions stored them: the given ones, comma strings) are
+    the settings of ``config``."""
+    try:
+        return type(config.options).from_dict(saved, config.agent) == config.options
+    except (TypeError, ValueError):
+        return False
+
+
 def reusable_runs(documents: list[dict], configs: list[TrainConfig], names: list[str],
                   test_seeds: np.ndarray) -> dict[tuple[str, int], dict]:
     """``{(label, seed): run}`` from earlier results documents for the configs they match in every setting
@@ -219,7 +229,7 @@ def reusable_runs(documents: list[dict], configs: list[TrainConfig], names: list
         runs = {(run["agent"], run["seed"]): run for run in document["runs"]}
         for name, config in zip(names, configs, strict=True):
             run = runs.get((name, config.seed))
-            if (run is not None and learners.get(name) == config.agent and run["options"] == config.options
+            if (run is not None and learners.get(name) == config.agent and _same_options(run["options"], config)
                     and _same_protocol(document["settings"], config, test_seeds)):
                 found.setdefault((name, config.seed), run)
     return found

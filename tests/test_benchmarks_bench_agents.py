@@ -76,12 +76,12 @@ def test_earlier_runs_stand_only_for_configs_that_match_every_setting():
     config = TrainConfig(agent="cpi2", env_id="rdmp_gym/ArmarWipe-v2", updates=2, rollouts=2, seed=1, workers=1,
                          eval_episodes=3, eval_every=1)
     seeds = np.array([7, 8])
-    matching = _document(config.options)
+    matching = _document(config.options.to_dict())
     assert list(reusable_runs([matching], [config], ["plain"], seeds)) == [("plain", 1)]
     assert reusable_runs([matching], [config], ["other"], seeds) == {}
     assert reusable_runs([matching], [config], ["plain"], np.array([7, 9])) == {}
-    assert reusable_runs([_document(config.options, budget=6)], [config], ["plain"], seeds) == {}
-    assert reusable_runs([_document({**config.options, "sigma": 0.3})], [config], ["plain"], seeds) == {}
+    assert reusable_runs([_document(config.options.to_dict(), budget=6)], [config], ["plain"], seeds) == {}
+    assert reusable_runs([_document({**config.options.to_dict(), "sigma": 0.2})], [config], ["plain"], seeds) == {}
 
 
 def test_the_settings_of_a_call_that_reuses_results_are_json(monkeypatch):
