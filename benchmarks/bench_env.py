@@ -96,7 +96,7 @@ def timing(env, repeats: int) -> dict:
         env_wall.append(time.perf_counter() - wall)
         env.reset(seed=0, options=NOMINAL)
         path = u.rollout_path(u.action_map.theta0)
-        solution = u._solve(path)
+        solution = u.solve_path(path)
         plan = JointTargetPlan(solution, u.dt, u.scene.servo_lead(), u.scene.joint_lower, u.scene.joint_upper,
                                u.scene.control_frame()[1][:, 2])
         preload = u.adaptation_settings.target_force / u.adaptation_settings.stiffness

@@ -47,6 +47,7 @@ LATEST_STEP_ID = STEP_ID_V2
 
 _WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
 _STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
+_STEP_TWIN = "rdmp_gym.envs.step_twin:WipeStepEnv"
 
 #: id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
@@ -57,9 +58,9 @@ _SPECS: dict[str, tuple[str, dict]] = {
     ENV_ID_V2: (_WIPE, {"obstacle": True, "version": 2}),
     STEP_ID_V2: (_STEP, {"version": 2, "max_shift": (0.06, 0.06, 0.02)}),
     ENV_ID_V3: (_WIPE, {"obstacle": True, "version": 3}),
-    STEP_ID_V3: (_STEP, {"version": 3, "max_shift": (0.06, 0.06, 0.02)}),
+    STEP_ID_V3: (_STEP_TWIN, {"version": 3, "max_shift": (0.06, 0.06, 0.02)}),
     PANDA_ID_V3: (_WIPE, {"obstacle": True, "version": 3, "robot": "panda"}),
-    PANDA_STEP_ID_V3: (_STEP, {"version": 3, "max_shift": (0.06, 0.06, 0.02), "robot": "panda"}),
+    PANDA_STEP_ID_V3: (_STEP_TWIN, {"version": 3, "max_shift": (0.06, 0.06, 0.02), "robot": "panda"}),
 }
 
 

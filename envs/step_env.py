@@ -121,9 +121,9 @@ class ArmarWipeStepEnv(gym.Env):
         self._phase, self._radius = self.dmp.canonical.state(task.times, start.phi0, start.r0)
         self._normal = scene.control_frame()[1][:, 2]
         self._table_normal = scene.table_frame(actual=True)[1][:, 2]
-        self._dirt = DirtField(task._cells_world, self._table_normal, wear_rate=task.wear_rate,
+        self._dirt = DirtField(task.dirt_cells, self._table_normal, wear_rate=task.wear_rate,
                                contact_threshold=task.reward_settings.contact_threshold)
-        self._wear = np.zeros(len(task._cells_world))
+        self._wear = np.zeros(len(task.dirt_cells))
         # the episode so far: commanded path and joints, and the per-step records of a WipeTrace
         self._path = np.zeros((count, 3))
         self._q = np.zeros((count, scene.qpos_adr.size))
@@ -269,7 +269,7 @@ class ArmarWipeStepEnv(gym.Env):
             rec["removed"][k] = (np.minimum(self._wear, 1.0).sum() - done) / max(1, self._wear.size)
         else:
             rec["contact_force"][k] = 0.0 if not np.isfinite(force) else min(force, _MAX_FORCE)
-        task._dirt = 1.0 - np.minimum(self._wear, 1.0)     # what render() shows
+        task.dirt_left = 1.0 - np.minimum(self._wear, 1.0)     # what render() shows
         return bool(unstable)
 
     def _trace(self, steps: int, unstable: bool) -> tuple[WipeTrace, Smoothness]:
@@ -285,7 +285,7 @@ class ArmarWipeStepEnv(gym.Env):
                           1.0 - np.minimum(self._wear, 1.0), rec["arm_contact"], rec["self_contact"],
                           rec["obstacle_contact"], rec["obstacle_shift"], rec["at_limit"], self._sponge_pos,
                           self._penetration, impact_force, impact_step, None, steps, unstable)
-        partial = task._smoothness(self._path[:steps], self._q[:steps])
+        partial = task.smoothness(self._path[:steps], self._q[:steps])
         pad = task.n_steps - steps
         smooth = Smoothness(np.pad(partial.jerk_sq, (0, pad)), partial.jerk_ratio,
                             np.pad(partial.joint_accel, (0, pad)))
@@ -307,7 +307,7 @@ class ArmarWipeStepEnv(gym.Env):
         info: dict[str, Any] = {"reward_terms": terms, "coverage": trace.coverage, "contact_force": float(contact),
                                 "wrist_force": self._measured, "unstable": unstable}
         if last:
-            stats = task._statistics(trace, smooth)
+            stats = task.statistics(trace, smooth)
             valid = not penetrated
             success, causes = outcome(stats, valid, unstable, task.success_joint_accel,
                                       task.task_version.max_jerk_ratio)

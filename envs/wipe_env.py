@@ -413,8 +413,10 @@ class ArmarWipeEnv(gym.Env):
         self.frames: list[np.ndarray] = []
 
         self.context: Context | None = None
-        self._cells_world = np.zeros((0, 3))
-        self._dirt = np.zeros(0)
+        #: the dirt cells' centres on the actual table, ``[N, 3]`` (world), drawn at reset
+        self.dirt_cells = np.zeros((0, 3))
+        #: dirt left per cell ``[N]`` in [0, 1] (after the last episode; what ``render`` shows)
+        self.dirt_left = np.zeros(0)
         self._imitation_jerk: float | None = None
         self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -435,6 +437,14 @@ class ArmarWipeEnv(gym.Env):
         scene = self.scene
         geoms = (*(scene.name("robot", n) for n in self.robot.hand_geoms), scene.name("tool", "sponge"))
         return HandPoints(scene.model, scene.qpos_adr, geoms)
+
+    def force_adaptation(self) -> ForceAdaptation:
+        """A fresh force controller of this env: the admittance law on the pressing depth (with the learned depth
+        profile when ``force_learning`` is on)."""
+        if self.force_learning is None:
+            return ForceAdaptation(self.adaptation_settings, self.dt)
+        return ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period, self.dmp.transients[0].phi0,
+                                    self.force_learning)
 
     @property
     def simulation_settings(self) -> SimulationSettings:
@@ -494,10 +504,10 @@ class ArmarWipeEnv(gym.Env):
         self.scene.place_obstacle(context.obstacle_position if context.obstacle else None)
         cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
         origin, rot = self.scene.table_frame(actual=True)
-        self._cells_world = np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
-        self._dirt = np.ones(len(cells))
+        self.dirt_cells = np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
+        self.dirt_left = np.ones(len(cells))
         self._imitation_jerk = None
-        start = self._solve(context.sponge_start[None])
+        start = self.solve_path(context.sponge_start[None])
         self.scene.set_arm_state(start.q[0])
         self.frames = []
         return self._observation(), {"context": context.vector()}
@@ -593,7 +603,7 @@ class ArmarWipeEnv(gym.Env):
         if (self.cup_clearance is None or not np.all(np.isfinite(path))
                 or _workspace_excess(path, self.robot.workspace) > 0):
             return path
-        return self._clear_cup(path, self._solve(path), {})[0]
+        return self._clear_cup(path, self.solve_path(path), {})[0]
 
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Simulate a given sponge path ``[T_ctrl, 3]`` (nominal table frame) in this episode's context,
@@ -605,7 +615,8 @@ class ArmarWipeEnv(gym.Env):
             raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
         return self._evaluate(None, path)
 
-    def _solve(self, path: np.ndarray) -> IKResult:
+    def solve_path(self, path: np.ndarray) -> IKResult:
+        """The path IK of a sponge path ``[T, 3]`` (nominal table frame): the joint path the env plans for it."""
         world = self.scene.to_world(path)
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
         return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
@@ -628,7 +639,7 @@ class ArmarWipeEnv(gym.Env):
             return {}
         if self._hand_points is None:
             self._hand_points = self._hand()
-        gaps = self._hand_points.gaps(self._solve(np.asarray(path, dtype=np.float64)).q, cup)
+        gaps = self._hand_points.gaps(self.solve_path(np.asarray(path, dtype=np.float64)).q, cup)
         return dict(zip(self._hand_points.names, gaps.T, strict=True))
 
     def _clear_cup(self, path: np.ndarray, solution: IKResult, info: dict) -> tuple[np.ndarray, IKResult]:
@@ -638,12 +649,12 @@ class ArmarWipeEnv(gym.Env):
         cup = self._cup()
         if cup is None:
             return path, solution
-        path, solution, push = self.cup_clearance.apply(path, solution, self._solve, self._hand_points, cup,
+        path, solution, push = self.cup_clearance.apply(path, solution, self.solve_path, self._hand_points, cup,
                                                         self.scene.control_frame()[1], self.dt)
         info["clearance_push"] = push
         return path, solution
 
-    def _smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
+    def smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
         """Jerk of the commanded path relative to the imitation's in this context (v2: per unit of squared speed,
         :meth:`Smoothness.speed_normalised`), and joint accelerations."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
@@ -667,7 +678,7 @@ class ArmarWipeEnv(gym.Env):
         excess = _workspace_excess(path, self.robot.workspace)
         if excess > 0:
             return self._invalid(info, "workspace", excess / 0.1)
-        solution = self._solve(path)
+        solution = self.solve_path(path)
         if self.cup_clearance is not None:
             path, solution = self._clear_cup(path, solution, info)
             excess = _workspace_excess(path, self.robot.workspace)
@@ -682,23 +693,21 @@ class ArmarWipeEnv(gym.Env):
         if speed > self.max_joint_speed:
             return self._invalid(info, "joint_speed", speed / self.max_joint_speed - 1.0)
 
-        smooth = self._smoothness(path, solution.q)
+        smooth = self.smoothness(path, solution.q)
         normal = self.scene.control_frame()[1][:, 2]
         plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper, normal)
         self.scene.set_arm_state(solution.q[0])
-        adaptation = (ForceAdaptation(self.adaptation_settings, self.dt) if self.force_learning is None
-                      else ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period,
-                                                self.dmp.transients[0].phi0, self.force_learning))
-        dirt = DirtField(self._cells_world, self.scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
+        adaptation = self.force_adaptation()
+        dirt = DirtField(self.dirt_cells, self.scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
                          contact_threshold=self.reward_settings.contact_threshold)
         callback = self._capture if self.record_frames or self._viewer is not None else None
-        self._dirt = np.ones(len(self._cells_world))
+        self.dirt_left = np.ones(len(self.dirt_cells))
         if callback is not None:
             self.frames.append(self._frame())
         trace = simulate_wipe(self.scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
                               self.simulation_settings, callback=callback)
-        self._dirt = trace.dirt
-        info.update(self._statistics(trace, smooth))
+        self.dirt_left = trace.dirt
+        info.update(self.statistics(trace, smooth))
         traces: dict[str, np.ndarray] = {}
         info["cost_terms"] = traces
         if trace.penetration > self.penetration_limit:
@@ -710,7 +719,7 @@ class ArmarWipeEnv(gym.Env):
         terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
 
-    def _statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
+    def statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
         live = np.arange(self.n_steps) < trace.steps
         per = self.periodic & live
         force = trace.contact_force[per]
@@ -761,7 +770,7 @@ class ArmarWipeEnv(gym.Env):
         success, causes = outcome(info, valid, unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)
         info.update({"reward_terms": terms, "cost_trace": cost, "valid": valid, "invalid_reason": reason,
                      "unstable": unstable, "is_success": success, "failure_causes": causes,
-                     "n_cells": len(self._cells_world)})
+                     "n_cells": len(self.dirt_cells)})
         return float(reward), info
 
     # ------------------------------------------------------------------ helpers
@@ -773,7 +782,7 @@ class ArmarWipeEnv(gym.Env):
         if self._renderer is None:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         _, rot = self.scene.table_frame(actual=True)
-        return self._renderer.render(self._cells_world, self._dirt if dirt is None else dirt,
+        return self._renderer.render(self.dirt_cells, self.dirt_left if dirt is None else dirt,
                                      0.5 * self.cell_size, rot)
 
     def _capture(self, k: int, dirt_left: Callable[[], np.ndarray]) -> None:

@@ -353,6 +353,23 @@ class WipeSimulation:
         self._last_time = now
         return False
 
+    def box_pose(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The sponge box's pose after control step ``k``: position [3] and orientation (row-major) [9] (world)."""
+        return self.record[k, self._rows.box_pos], self.record[k, self._rows.box_rot]
+
+    def contact(self, k: int) -> np.ndarray:
+        """The sponge-table contact's net force [3] (world, N) after control step ``k``."""
+        a = self.scene.sponge_contact_adr
+        return self.record[k, a + 1:a + 4]
+
+    def self_penetration(self, k: int) -> float:
+        """Deepest penetration (m, >= 0) of the arm into the robot's own body after control step ``k``."""
+        deepest = 0.0
+        for adr in self.scene.self_contact_adr:
+            if self.record[k, adr] > 0:
+                deepest = max(deepest, -float(self.record[k, adr + 1]))
+        return deepest
+
     def dirt_left(self, k: int) -> np.ndarray:
         """Dirt left per cell [N] after control step ``k`` (recomputes the episode so far: for video frames)."""
         a = self.scene.sponge_contact_adr
@@ -360,10 +377,14 @@ class WipeSimulation:
         return _dirt_left(self.dirt, self.record[:, a:a + 4], self.record[:, rows.box_pos],
                           self.record[:, rows.box_rot], self.scene.sponge_half, k)
 
-    def trace(self) -> WipeTrace:
-        """The episode's :class:`WipeTrace` (its first :attr:`steps` control steps are live)."""
+    def trace(self, upto: int | None = None, wear: tuple[np.ndarray, np.ndarray] | None = None) -> WipeTrace:
+        """The episode's :class:`WipeTrace` (its first :attr:`steps` control steps are live), or of its first
+        ``upto`` steps; ``wear``: ``(removed [T], dirt left [N])`` worn step by step, instead of the episode's
+        wear evaluated here."""
         scene, record, rows, count = self.scene, self.record, self._rows, self.count
-        settings, steps = self.settings, self.steps
+        settings = self.settings
+        diverged = self.steps < count
+        steps = self.steps if upto is None else min(self.steps, upto)
         a = scene.sponge_contact_adr
         contact = record[:, a:a + 4]          # found, net force (world)
         box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
@@ -381,7 +402,7 @@ class WipeSimulation:
         sponge_pos = record[:, rows.site_pos].copy()
         contact_force = np.abs(contact[:, 1:] @ table_normal)
         over = np.flatnonzero(contact_force[:steps] > settings.max_force)
-        unstable = steps < count or bool(over.size) or not np.isfinite(contact_force[:steps]).all()
+        unstable = diverged or bool(over.size) or not np.isfinite(contact_force[:steps]).all()
         if over.size:
             steps = min(steps, int(over[0]) + 1)
         live = np.arange(count) < steps
@@ -395,7 +416,8 @@ class WipeSimulation:
         if scene.obstacle_xy is None:
             shift[:] = 0.0
 
-        removed, left = _removal(self.dirt, contact_force, box_pos, box_rot, scene.sponge_half, live)
+        removed, left = (_removal(self.dirt, contact_force, box_pos, box_rot, scene.sponge_half, live) if wear is None
+                         else wear)
         peak = np.maximum(self.peak, contact_force)
         impact_step = -1
         impact_force = 0.0

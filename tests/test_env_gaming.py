@@ -37,7 +37,7 @@ def test_dirt_lives_on_the_table_only(env):
     env.reset(options={**NOMINAL, "patch_centre": [-0.08, 0.0], "patch_size": [0.12, 0.12]})
     u = env.unwrapped
     origin, rot = u.scene.table_frame(actual=True)
-    local = (u._cells_world - origin) @ rot
+    local = (u.dirt_cells - origin) @ rot
     x_lo, x_hi, y_lo, y_hi = u.scene.table_extent
     assert np.all((local[:, 0] > x_lo) & (local[:, 0] < x_hi) & (local[:, 1] > y_lo) & (local[:, 1] < y_hi))
     assert np.abs(local[:, 2]).max() < 1e-12

@@ -56,10 +56,10 @@ def test_wear_needs_strokes_under_force_and_calibration_has_room(adaptive):
     u = adaptive.unwrapped
     adaptive.reset(seed=0, options=NOMINAL)
     half = u.scene.sponge_half
-    dirt = DirtField(u._cells_world, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
+    dirt = DirtField(u.dirt_cells, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
     # the box's x axis points up (its face, the -x side, lies on the table), centred over cell 70
     rot = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).ravel()
-    box = np.tile(u._cells_world[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
+    box = np.tile(u.dirt_cells[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
     rots = np.tile(rot, (3, 1))
     still = dirt.wear(np.full(3, 18.0), np.zeros(3), box, rots, half)
     assert still.max() == 0.0                                       # pressing without sliding removes nothing
@@ -211,7 +211,7 @@ def test_arm_contact_with_the_table_is_detected_and_penalised(adaptive):
     solution = IKResult(q=q, normal_dq=np.zeros_like(q), pos_error=np.zeros(150), rot_error=np.zeros(150))
     plan = JointTargetPlan(solution, u.dt, np.zeros(10), scene.joint_lower, scene.joint_upper)
     adaptation = ForceAdaptation(ForceAdaptationSettings(enabled=False), u.dt)
-    dirt = DirtField(u._cells_world, np.array([0.0, 0.0, 1.0]))
+    dirt = DirtField(u.dirt_cells, np.array([0.0, 0.0, 1.0]))
     trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, dirt, u.frame_skip)
     assert not trace.unstable
     assert trace.arm_contact[:50].sum() == 0 and trace.arm_contact[-20:].mean() > 0.8   # the palm hits the table
@@ -238,13 +238,13 @@ def test_contact_sensor_force_and_coverage_match_the_contact_list(adaptive):
         if k == u.n_steps - 1:
             seen["dirt"] = dirt_left()
 
-    solution = u._solve(u.rollout_path(u.action_map.theta0))
+    solution = u.solve_path(u.rollout_path(u.action_map.theta0))
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
                            scene.control_frame()[1][:, 2])
     scene.set_arm_state(solution.q[0])
     adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
     trace = simulate_wipe(scene, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
-                          DirtField(u._cells_world, normal), u.frame_skip, callback=check)
+                          DirtField(u.dirt_cells, normal), u.frame_skip, callback=check)
     pairs = np.array(seen["pairs"])
     assert pairs[:, 0].max() > 10.0
     assert pairs[:, 1] == pytest.approx(pairs[:, 0], abs=1e-9)
@@ -279,13 +279,13 @@ def test_the_inlined_force_law_is_force_adaptation_update(adaptive):
     u = adaptive.unwrapped
     _, info = run(adaptive, {**NOMINAL, "table_height": -0.03})
     path = u.rollout_path(u.action_map.theta0)
-    solution = u._solve(path)
+    solution = u.solve_path(path)
     scene = u.scene
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
                            scene.control_frame()[1][:, 2])
     scene.set_arm_state(solution.q[0])
     adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
-    trace = simulate_wipe(scene, plan, path[:, 2], adaptation, DirtField(u._cells_world, plan.normal), u.frame_skip)
+    trace = simulate_wipe(scene, plan, path[:, 2], adaptation, DirtField(u.dirt_cells, plan.normal), u.frame_skip)
     assert np.array_equal(trace.contact_force, info["force_trace"])
     replay = ForceAdaptation(u.adaptation_settings, u.dt)
     measured = np.r_[0.0, trace.wrist_force[:-1]]
