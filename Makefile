@@ -5,7 +5,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 # .ci/constraints-cpu.txt pins torch to the small CPU build (the agents extra only bounds torch).
-PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray,docs]"
+PIP_PKGS := -c .ci/constraints-cpu.txt -e ".[agents,dev,ray,docs,panda]"
 export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
 export NO_MKDOCS_2_WARNING ?= 1

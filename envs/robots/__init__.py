@@ -8,11 +8,12 @@ from __future__ import annotations
 
 from .armar3 import ARMAR3
 from .description import BodyClearanceGeoms, RobotDescription, ToolMount
+from .panda import PANDA
 
 __all__ = ["ROBOTS", "BodyClearanceGeoms", "RobotDescription", "ToolMount", "get_robot", "register_robot"]
 
 #: name -> description of every robot the task knows
-ROBOTS: dict[str, RobotDescription] = {"armar3": ARMAR3}
+ROBOTS: dict[str, RobotDescription] = {"armar3": ARMAR3, "panda": PANDA}
 
 
 def register_robot(robot: RobotDescription) -> None:
