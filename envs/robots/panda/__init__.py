@@ -75,7 +75,10 @@ def franka_assets() -> Path:
     """The folder of the Franka Panda MJCF in the installed ``gymnasium-robotics`` (found without importing it).
 
     Raises ModuleNotFoundError naming the extra when the package is missing."""
-    found = importlib.util.find_spec("gymnasium_robotics")
+    try:
+        found = importlib.util.find_spec("gymnasium_robotics")
+    except ImportError:                     # a finder that refuses the name
+        found = None
     if found is None or not found.submodule_search_locations:
         raise ModuleNotFoundError(f"robot 'panda': its model comes from the package gymnasium-robotics, which is not "
                                   f"installed; install it with {_EXTRA}", name="gymnasium_robotics")
