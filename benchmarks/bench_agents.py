@@ -5,7 +5,7 @@ random training contexts (reset seeds in ``[0, 2**30)``), its policy evaluated e
 updates on the validation contexts (the held-out learning curves), then the **final** policy (never a
 "best") evaluated once on the test contexts, which no run trains or selects on. Beside the learners,
 every table shows the imitation (``a = 0``), the obstacle-coupling baseline (``coupling``: the imitation
-with the online lift over the cup of ``rdmp_gym.envs.obstacle_baseline``; no learning), the amplitude-only
+with the online lift over the cup of ``benchmarks/obstacle_baseline.py``; no learning), the amplitude-only
 search (``amplitude``: one θ over the 3 amplitude factors) and the random-return control (``random``:
 contextual REPS fed random returns).
 
@@ -284,7 +284,7 @@ def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Na
 def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[str, dict], np.ndarray, np.ndarray]:
     """The no-learning rows' per-context scores (``imitation``, ``coupling``), the test observations and the
     imitation's path jerk per context."""
-    from rdmp_gym.envs.obstacle_baseline import coupling_baseline_scores
+    from obstacle_baseline import coupling_baseline_scores
 
     with Evaluator(spec, workers) as tester:
         observations = context_observations(tester.env, seeds)

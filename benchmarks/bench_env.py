@@ -33,9 +33,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
+import probes
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
-from rdmp_gym.envs import ENV_ID, probes
+from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import JointTargetPlan
 
 RESULTS = Path(__file__).resolve().parent / "results"

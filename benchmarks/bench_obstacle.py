@@ -80,8 +80,8 @@ def env_baseline() -> list[dict]:
     """The baseline in the MuJoCo env with a virtual point obstacle (no cup body): reward, coverage and clearance
     vs the imitation, default context (12 cm patch, no cup), obstacle at 4 angles on the wiped circle."""
     import gymnasium as gym
+    from obstacle_baseline import run_avoiding
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import run_avoiding
 
     env = gym.make(ENV_ID, n_periods=4.0)
     options = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0],
@@ -110,7 +110,7 @@ def env_baseline() -> list[dict]:
 def _imitation_scores(env, seeds: np.ndarray, approach: float = 0.0) -> dict[str, np.ndarray]:
     """The imitation (action 0; ``approach``: the env's approach action dimension, last) in the contexts of
     ``seeds``, with the same fields as ``coupling_baseline_scores``."""
-    from rdmp_gym.envs.obstacle_baseline import path_jerk_ratio
+    from obstacle_baseline import path_jerk_ratio
 
     rows = []
     for seed in seeds:
@@ -131,7 +131,7 @@ def _imitation_scores(env, seeds: np.ndarray, approach: float = 0.0) -> dict[str
 
 def _planar_scores(env, seeds: np.ndarray) -> dict[str, np.ndarray]:
     """The planar steering term (:func:`run_avoiding`, Hoffmann et al.) in the contexts of ``seeds``."""
-    from rdmp_gym.envs.obstacle_baseline import avoiding_path, path_jerk_ratio
+    from obstacle_baseline import avoiding_path, path_jerk_ratio
 
     rows = []
     for seed in seeds:
@@ -163,8 +163,8 @@ def _summary(scores: dict[str, np.ndarray]) -> dict[str, float]:
 
 def _first_touch(env, seeds: np.ndarray) -> list[float]:
     """Time (s) of the first arm-cup contact of the coupling baseline per seed (-1: none)."""
+    from obstacle_baseline import run_lifting
     from rdmp_gym.envs import wipe_env
-    from rdmp_gym.envs.obstacle_baseline import run_lifting
 
     original, times = wipe_env.simulate_wipe, []
 
@@ -190,9 +190,9 @@ def cup_contexts(count: int = 40, first_seed: int = 10_000) -> dict:
     (``final_test_seeds(20)``) and on the first ``count`` reset seeds from ``first_seed`` whose context has a cup
     (where the first contact of the baseline with the cup happens: approach or wiping)."""
     import gymnasium as gym
+    from obstacle_baseline import coupling_baseline_scores
     from rdmp_gym.agents.protocol import final_test_seeds
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import coupling_baseline_scores
 
     env = gym.make(ENV_ID)
     out = {}

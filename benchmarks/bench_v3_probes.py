@@ -16,7 +16,6 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 
 RESULTS = Path(__file__).resolve().parent / "results"

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from obstacle_baseline import lift_term, lifting_path
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.force_learning import curved_table_scene, period_force_errors
-from rdmp_gym.envs.obstacle_baseline import lift_term, lifting_path
 
 from rdmp_gym.figures import save_figure
 from rdmp_gym.plots import pyplot

@@ -15,11 +15,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from rdmp_gym.envs.approach import LIFT_PROFILE
 
 from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 from rdmp_gym.smoothness import integrated_squared_jerk
-
-from .approach import LIFT_PROFILE
 
 __all__ = ["avoiding_path", "coupling_baseline_scores", "cup_in_path_frame", "cup_position", "lift_term",
            "lifting_path", "path_jerk_ratio", "run_avoiding", "run_lifting"]

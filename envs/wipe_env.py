@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import logging
 import warnings
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, ClassVar
@@ -38,10 +38,9 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import Demonstration, RhythmicDMP, load_dmp, wiping_demonstration
+from rdmp_gym import RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
-from rdmp_gym.fitting import FADE_BEFORE_T, FIT_METHODS
-from rdmp_gym.validation import check_positive
+from rdmp_gym.fitting import FADE_BEFORE_T
 
 from .action import ActionMap
 from .approach import approach_direction, lift_profile
@@ -57,6 +56,7 @@ from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
 from .robots import ARMAR3, RobotDescription, get_robot
 from .scene import TablePose, WipeScene, dirt_grid
+from .settings import EnvConfig, ForceConfig, RenderConfig, RewardConfig, TaskConfig
 from .versions import TASK_VERSIONS, TaskVersion
 from .viewer import HumanViewer
 from .wiping import DirtField, SimulationSettings, WipeTrace, simulate_wipe
@@ -171,7 +171,14 @@ def _saved_dmp(dmp: str | Path | RhythmicDMP, workspace: tuple[np.ndarray, np.nd
 class ArmarWipeEnv(gym.Env):
     """Episodic wiping env; see the module docstring.
 
+    The settings come as one :class:`~rdmp_gym.envs.settings.EnvConfig` (``config``), as keywords (``gym.make``'s
+    way), or both (the keywords change the config); every setting is validated for type and meaning, with an error
+    that names it, and :attr:`config` saves to and loads from JSON.
+
     Args:
+        config: all settings at once (default: ``EnvConfig()``).
+        robot: the robot, a registered name (``"armar3"``, ``"panda"``) or a ``RobotDescription``
+            (:mod:`rdmp_gym.envs.robots`).
         style: synthetic demonstration style 1..4 (1/2 circle, 3/4 figure-eight; 2/4 complex approach).
         demonstration: a user ``rdmp_gym.Demonstration`` ``Y [L, 3]`` in the table frame, in metres: x, y on
             the table, z above its surface (overrides ``style``; checked against the workspace before fitting).
@@ -223,84 +230,66 @@ class ArmarWipeEnv(gym.Env):
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
 
-    def __init__(
-        self,
-        style: int = 1,
-        demonstration: Demonstration | None = None,
-        dmp: str | Path | RhythmicDMP | None = None,
-        n_periodic: int = 40,
-        n_transient: int = 40,
-        fit_method: str = "trajectory",
-        groups: Iterable[str] | str | None = None,
-        scales: Mapping[str, float] | None = None,
-        n_periods: float | None = None,
-        duration: float | None = None,
-        control_rate: float = 100.0,
-        frame_skip: int | None = None,
-        timestep: float | None = None,
-        target_force: float = 18.0,
-        force_band: tuple[float, float] = (5.0, 60.0),
-        force_sigma: float = 6.0,
-        reward_weights: Mapping[str, float] | None = None,
-        adaptation: bool = True,
-        admittance_gain: float = 0.02,
-        force_learning: bool | ForceProfileSettings = False,
-        context_ranges: Mapping[str, tuple] | None = None,
-        obstacle: bool = True,
-        obstacle_probability: float = 0.75,
-        cell_size: float = 0.01,
-        wear_rate: float = 2.0e-3,
-        penetration_limit: float = 0.005,
-        limit_margin: float = 0.02,
-        ik_tolerance: tuple[float, float] = (0.005, float(np.deg2rad(5.0))),
-        max_joint_speed: float | None = None,
-        xml_file: str | Path | None = None,
-        render_mode: str | None = None,
-        width: int = 480,
-        height: int = 480,
-        camera: str | None = "front",
-        record_frames: bool = False,
-        frame_stride: int = 4,
-        version: int = 1,
-        cup_clearance: float | CupClearance | None = None,
-        robot: str | RobotDescription = "armar3",
-    ):
+    def __init__(self, config: EnvConfig | None = None, **settings: Any):
         super().__init__()
-        if isinstance(version, bool) or version not in TASK_VERSIONS:
-            raise ValueError(f"version: expected one of {sorted(TASK_VERSIONS)}, got {version!r}")
+        config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
+        #: every setting of this env (:class:`~rdmp_gym.envs.settings.EnvConfig`; saves to and loads from JSON)
+        self.config = config
         #: what this task version changes (see :mod:`rdmp_gym.envs.versions`)
-        self.task_version: TaskVersion = TASK_VERSIONS[version]
+        self.task_version: TaskVersion = TASK_VERSIONS[config.task.version]
         #: the robot (:mod:`rdmp_gym.envs.robots`)
-        self.robot: RobotDescription = get_robot(robot)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, "
-                             f"got {render_mode!r}")
-        self.render_mode = render_mode
+        self.robot: RobotDescription = get_robot(config.robot)
+        self.render_mode = config.render.render_mode
+        self.dmp = self._imitation(config.task)
+        self._set_groups(config.task)
+        self.scene = WipeScene(self.robot, composed=self.task_version.composed_scene and config.xml_file is None,
+                               xml_file=config.xml_file)
+        config.check_robot(np.c_[self.scene.joint_lower, self.scene.joint_upper])
+        self._set_timing(config)
+        self._set_action(config.task)
+        self._set_force_and_reward(config.force, config.reward)
+        self._set_limits(config.task)
+        self.obstacle = config.context.obstacle
+        self.context_spec = ContextSpec(config.context.ranges, table_extent=self.scene.table_extent,
+                                        obstacle=self.obstacle,
+                                        obstacle_probability=config.context.obstacle_probability,
+                                        obstacle_radius=self.scene.obstacle_radius,
+                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
+                                        near_patch=self.task_version.pad_clearance)
+        self.ik = self._path_ik()
+        #: the clearance term that keeps the hand away from the cup (None: off)
+        self.cup_clearance = _cup_clearance(config.task.cup_clearance)
+        self._hand_points = self._hand() if self.cup_clearance is not None else None
+        self._lead = self.scene.servo_lead()
+        self._engage = self.adaptation_settings.engage_height
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(self.action_map.size,), dtype=np.float32)
+        self.observation_space = gym.spaces.Box(self.context_spec.bound_low.astype(np.float32),
+                                                self.context_spec.bound_high.astype(np.float32),
+                                                shape=(CONTEXT_SIZE,), dtype=np.float32)
+        self._set_rendering(config.render)
+        self.context: Context | None = None
+        #: the dirt cells' centres on the actual table, ``[N, 3]`` (world), drawn at reset
+        self.dirt_cells = np.zeros((0, 3))
+        #: dirt left per cell ``[N]`` in [0, 1] (after the last episode; what ``render`` shows)
+        self.dirt_left = np.zeros(0)
+        self._imitation_jerk: float | None = None
+        self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
-        # --- the DMP and the action map
-        if fit_method not in FIT_METHODS:
-            raise ValueError(f"fit_method: expected one of {FIT_METHODS}, got {fit_method!r}")
-        if dmp is not None:
-            if demonstration is not None:
-                raise ValueError("dmp: give either dmp or demonstration, not both")
-            self.dmp = _saved_dmp(dmp, self.robot.workspace)
-        elif demonstration is not None:
-            if not isinstance(demonstration, Demonstration):
-                raise ValueError("demonstration: expected an rdmp_gym.Demonstration, "
-                                 f"got {type(demonstration).__name__}")
-            if demonstration.n_dims != 3:
-                raise ValueError("demonstration: expected 3 dimensions (x, y, z in the table frame), "
-                                 f"got {demonstration.n_dims}")
-            demonstration.check_frame(*self.robot.workspace, centre_dims=(0, 1), name="demonstration")
-            self.dmp = RhythmicDMP.fit(demonstration, n_periodic=int(n_periodic), n_transient=int(n_transient),
-                                       method=fit_method, **FADE_BEFORE_T)
-        else:
-            if isinstance(style, bool) or style not in (1, 2, 3, 4):
-                raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
-            self.dmp = _fit_style(int(style), int(n_periodic), int(n_transient), str(fit_method))
+    # ------------------------------------------------------------------ construction stages
+    def _imitation(self, task: TaskConfig) -> RhythmicDMP:
+        """The imitation DMP: a saved one, one fitted to the given demonstration, or the built-in style's."""
+        if task.dmp is not None:
+            return _saved_dmp(task.dmp, self.robot.workspace)
+        if task.demonstration is not None:
+            task.demonstration.check_frame(*self.robot.workspace, centre_dims=(0, 1), name="demonstration")
+            return RhythmicDMP.fit(task.demonstration, n_periodic=task.n_periodic, n_transient=task.n_transient,
+                                   method=task.fit_method, **FADE_BEFORE_T)
+        return _fit_style(task.style, task.n_periodic, task.n_transient, task.fit_method)
+
+    def _set_groups(self, task: TaskConfig) -> None:
+        groups = task.groups
         if groups is None:
             groups = DEFAULT_GROUPS + (("sweep",) if self.task_version.sweep else ())
-        groups = (groups,) if isinstance(groups, str) else tuple(groups)
         #: the DMP parameter groups of theta (the ``approach`` and ``sweep_x``/``sweep_y`` dimensions come after
         #: them in the action; the ``sweep`` via points have none of their own)
         self.groups = tuple(group for group in groups if group != "approach")
@@ -309,35 +298,28 @@ class ArmarWipeEnv(gym.Env):
         # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
         self._anchor_z = float(self.dmp.anchor[2])
 
-        # --- the scene, timing and control
-        self.scene = WipeScene(self.robot, composed=self.task_version.composed_scene and xml_file is None,
-                               xml_file=xml_file)
-        model = self.scene.model
-        if timestep is not None:
-            model.opt.timestep = check_positive(timestep, "timestep")
-        if frame_skip is not None:
-            if isinstance(frame_skip, bool) or int(frame_skip) != frame_skip or frame_skip < 1:
-                raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
-            self.frame_skip = int(frame_skip)
-        else:
-            rate = check_positive(control_rate, "control_rate")
-            if rate * model.opt.timestep > 1.0 + 1e-9:
-                raise ValueError(f"control_rate: expected at most the physics rate {1.0 / model.opt.timestep:g} Hz "
-                                 f"(1 / timestep), got {control_rate!r}")
-            self.frame_skip = max(1, round(1.0 / (rate * model.opt.timestep)))
+    def _set_timing(self, config: EnvConfig) -> None:
+        """Physics step, control rate and the episode's control steps."""
+        model, timing, task = self.scene.model, config.timing, config.task
+        if timing.timestep is not None:
+            model.opt.timestep = timing.timestep
+        self.frame_skip = timing.frame_skip_for(model.opt.timestep)
         self.dt = self.frame_skip * model.opt.timestep
         self.control_rate = 1.0 / self.dt
         transient = self.dmp.transients[0].length
+        duration = task.duration
         if duration is None:
-            n_periods = self.task_version.n_periods if n_periods is None else n_periods
-            duration = transient + check_positive(n_periods, "n_periods") * self.dmp.period
-        duration = check_positive(duration, "duration")
+            n_periods = self.task_version.n_periods if task.n_periods is None else task.n_periods
+            duration = transient + n_periods * self.dmp.period
         self.n_steps = max(2, round(duration / self.dt))
         self.times = np.arange(self.n_steps) * self.dt
         self.periodic = self.times >= transient
         if not self.periodic.any():
             raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
 
+    def _set_action(self, task: TaskConfig) -> None:
+        """The action map: the parameter groups, the approach and the covering sweep."""
+        transient = self.dmp.transients[0].length
         directions = {}
         if "sweep" in self.groups:
             self.dmp = _with_covering_sweep(self.dmp, transient, self.times[-1])
@@ -345,80 +327,41 @@ class ArmarWipeEnv(gym.Env):
             directions["approach"] = approach_direction(self.dmp, self.groups, self.times, height=1.0)
         if "sweep" in self.groups:
             directions.update(sweep_directions(self.dmp, self.groups))
-        self.action_map = ActionMap(self.dmp, self.groups, scales, directions, driven=("sweep",) if
+        self.action_map = ActionMap(self.dmp, self.groups, task.scales, directions, driven=("sweep",) if
                                     "sweep" in self.groups else ())
 
-        band = tuple(float(f) for f in force_band)
-        if len(band) != 2 or not (0 <= band[0] < band[1]) or not np.isfinite(band[1]):
-            raise ValueError(f"force_band: expected (min, max) with 0 <= min < max, got {force_band!r}")
-        target_force = check_positive(target_force, "target_force")
-        self.force_band = band
-        self.adaptation_settings = ForceAdaptationSettings(target_force=target_force, enabled=bool(adaptation),
-                                                           gain=float(admittance_gain))
-        if not isinstance(force_learning, (bool, ForceProfileSettings)):
-            raise ValueError("force_learning: expected a bool or a ForceProfileSettings, "
-                             f"got {type(force_learning).__name__}")
-        self.force_learning = (ForceProfileSettings() if force_learning is True
-                               else force_learning or None)
-        self.reward_settings = RewardSettings(target_force=target_force, max_joint_accel=self.robot.max_joint_accel,
-                                              force_sigma=check_positive(force_sigma, "force_sigma"), max_force=band[1],
+    def _set_force_and_reward(self, force: ForceConfig, reward: RewardConfig) -> None:
+        self.force_band = force.force_band
+        self.adaptation_settings = ForceAdaptationSettings(target_force=force.target_force, enabled=force.adaptation,
+                                                           gain=force.admittance_gain)
+        self.force_learning = (ForceProfileSettings() if force.force_learning is True
+                               else force.force_learning or None)
+        self.reward_settings = RewardSettings(target_force=force.target_force,
+                                              max_joint_accel=self.robot.max_joint_accel,
+                                              force_sigma=force.force_sigma, max_force=force.force_band[1],
                                               event_charge=self.task_version.event_charge)
-        self.reward_weights = RewardWeights.from_mapping(reward_weights)
-        self.cell_size = check_positive(cell_size, "cell_size")
-        self.limit_margin = float(limit_margin)
-        if not (np.isfinite(self.limit_margin) and self.limit_margin >= 0):
-            raise ValueError(f"limit_margin: expected a number >= 0, got {limit_margin!r}")
-        if len(ik_tolerance) != 2:
-            raise ValueError("ik_tolerance: expected (position m, angle rad)")
-        self.ik_tolerance = tuple(check_positive(value, "ik_tolerance") for value in ik_tolerance)
-        speed_limit = self.robot.max_joint_speed if max_joint_speed is None else max_joint_speed
-        self.max_joint_speed = check_positive(speed_limit, "max_joint_speed")
-        self.wear_rate = check_positive(wear_rate, "wear_rate")
-        self.penetration_limit = check_positive(penetration_limit, "penetration_limit")
-        if not isinstance(obstacle, (bool, np.bool_)):
-            raise ValueError(f"obstacle: expected True or False, got {obstacle!r}")
-        self.obstacle = bool(obstacle)
-        self.context_spec = ContextSpec(context_ranges, table_extent=self.scene.table_extent, obstacle=self.obstacle,
-                                        obstacle_probability=float(obstacle_probability),
-                                        obstacle_radius=self.scene.obstacle_radius,
-                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
-                                        near_patch=self.task_version.pad_clearance)
+        self.reward_weights = RewardWeights.from_mapping(reward.weights)
 
-        self.ik = self._path_ik()
-        #: the clearance term that keeps the hand away from the cup (None: off)
-        self.cup_clearance = _cup_clearance(cup_clearance)
-        self._hand_points = self._hand() if self.cup_clearance is not None else None
-        self._lead = self.scene.servo_lead()
-        self._engage = self.adaptation_settings.engage_height
+    def _set_limits(self, task: TaskConfig) -> None:
+        self.cell_size = task.cell_size
+        self.limit_margin = task.limit_margin
+        self.ik_tolerance = task.ik_tolerance
+        self.max_joint_speed = self.robot.max_joint_speed if task.max_joint_speed is None else task.max_joint_speed
+        self.wear_rate = task.wear_rate
+        self.penetration_limit = task.penetration_limit
 
-        # --- spaces
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(self.action_map.size,), dtype=np.float32)
-        self.observation_space = gym.spaces.Box(self.context_spec.bound_low.astype(np.float32),
-                                                self.context_spec.bound_high.astype(np.float32),
-                                                shape=(CONTEXT_SIZE,), dtype=np.float32)
-
-        # --- rendering
-        self.frame_stride = int(frame_stride)
-        if self.frame_stride < 1:
-            raise ValueError(f"frame_stride: expected an integer >= 1, got {frame_stride!r}")
+    def _set_rendering(self, render: RenderConfig) -> None:
+        self.frame_stride = render.frame_stride
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.control_rate / self.frame_stride))}
-        self._render_args = (int(width), int(height), camera)
+        self._render_args = (render.width, render.height, render.camera)
         self._renderer: SceneRenderer | None = None
-        self._viewer = HumanViewer(self.scene) if render_mode == "human" else None
-        if render_mode in ("rgb_array", "depth_array") or record_frames:
+        self._viewer = HumanViewer(self.scene) if render.render_mode == "human" else None
+        if render.render_mode in ("rgb_array", "depth_array") or render.record_frames:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
-        self.record_frames = bool(record_frames)
+        self.record_frames = render.record_frames
         #: record the sponge-table force at every physics step into ``info["fine_force_trace"]``
         self.fine_force = False
         self.frames: list[np.ndarray] = []
-
-        self.context: Context | None = None
-        #: the dirt cells' centres on the actual table, ``[N, 3]`` (world), drawn at reset
-        self.dirt_cells = np.zeros((0, 3))
-        #: dirt left per cell ``[N]`` in [0, 1] (after the last episode; what ``render`` shows)
-        self.dirt_left = np.zeros(0)
-        self._imitation_jerk: float | None = None
-        self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
 
     def _path_ik(self) -> PathIK:
         """The path IK of the robot's chain to the sponge's face centre, with its arm-from-body clearance."""

@@ -1,10 +1,15 @@
-"""Shared test setup: headless rendering and one torch thread (set before anything imports them), and a small
+"""Shared test setup: headless rendering and one torch thread (set before anything imports them), the benchmarks' helper
+modules on the path, and a small
 fitted DMP for the input-checking suites (a test module may define its own ``demo`` or ``dmp``)."""
 
 import os
+import sys
+from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+# the experiment scaffolding the tests check (probes, the obstacle baseline) lives with the benchmarks
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 
 import pytest
 

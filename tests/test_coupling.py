@@ -97,8 +97,8 @@ def test_wiping_circle_steers_around_an_obstacle_on_its_path(wiping):
 
 def test_env_baseline_keeps_clear_of_the_obstacle_and_still_wipes():
     gym = pytest.importorskip("gymnasium")
+    from obstacle_baseline import run_avoiding
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import run_avoiding
 
     env = gym.make(ENV_ID, n_periods=3.0)
     options = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
@@ -118,8 +118,8 @@ def test_env_baseline_keeps_clear_of_the_obstacle_and_still_wipes():
 
 def test_env_baseline_reads_the_cup_from_the_context():
     gym = pytest.importorskip("gymnasium")
+    from obstacle_baseline import avoiding_path, cup_position
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import avoiding_path, cup_position
 
     env = gym.make(ENV_ID, n_periods=2.0)
     inner = env.unwrapped
@@ -259,8 +259,8 @@ def test_adaptive_lift_checks_its_input():
 
 def test_env_coupling_baseline_lifts_over_the_cup():
     gym = pytest.importorskip("gymnasium")
+    from obstacle_baseline import coupling_baseline_scores, lift_term, lifting_path
     from rdmp_gym.envs import ENV_ID
-    from rdmp_gym.envs.obstacle_baseline import coupling_baseline_scores, lift_term, lifting_path
 
     env = gym.make(ENV_ID)
     inner = env.unwrapped

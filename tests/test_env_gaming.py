@@ -7,9 +7,10 @@ The figures in the docstrings are measured with the smooth core (issue 7) and th
 
 import gymnasium as gym
 import numpy as np
+import probes
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
-from rdmp_gym.envs import ENV_ID, probes
+from rdmp_gym.envs import ENV_ID
 
 MARGIN = 0.3
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.10, 0.10],

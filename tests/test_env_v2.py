@@ -189,7 +189,7 @@ def test_a_refined_dmp_with_its_sweep_is_the_imitation_of_a_new_env(env, tmp_pat
 
 def test_bad_arguments_raise_clear_errors():
     with pytest.raises(ValueError, match="version"):
-        gym.make(ENV_ID, version=3)
+        gym.make(ENV_ID, version=4)
     with pytest.raises(ValueError, match="start, end"):
         covering_sweep(2.0, 1.0, 3)
     dmp = gym.make(ENV_ID, **FAST).unwrapped.dmp
@@ -222,7 +222,7 @@ def test_the_step_twin_runs_the_v2_task_and_its_coupling_travels():
 def test_cheap_strategies_lose_to_the_imitation(seed):
     """Gaming probes on v2 (full length, a context without the cup): holding still on the patch, pressing and
     lifting on a grid, hovering above the table, and uniformly random actions all score below action 0."""
-    from rdmp_gym.envs import probes
+    import probes
 
     env = gym.make(ENV_ID_V2)
     options = {"obstacle": 0}

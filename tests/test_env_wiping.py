@@ -4,9 +4,10 @@ force adaptation, tilted tables, collisions, divergence."""
 import gymnasium as gym
 import mujoco
 import numpy as np
+import probes
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
-from rdmp_gym.envs import ENV_ID, probes
+from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult, PathIK
 from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
