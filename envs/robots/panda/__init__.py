@@ -45,7 +45,6 @@ PEDESTAL_HEIGHT = 0.85
 _EXTRA = 'pip install "rdmp-gym[panda]"'
 _SOURCE = ("envs", "assets", "kitchen_franka", "franka_assets")
 _LINKS = tuple(f"panda0_link{i}" for i in range(8))
-_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
 
 #: Franka's joint torque limits (N m)
 TORQUE_LIMIT = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
