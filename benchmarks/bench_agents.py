@@ -79,6 +79,9 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")
     parser.add_argument("--agent-seeds", action="append", default=[], metavar="LABEL=N",
                         help="seeds 0..N-1 for one agent instead of --seeds (e.g. fewer for a control; repeatable)")
+    parser.add_argument("--only-seeds", type=int, nargs=2, metavar=("FIRST", "STOP"), default=None,
+                        help="run only the seeds FIRST..STOP-1 and cache them, writing no table (to share the runs "
+                             "of one table between processes; a later call without it gathers the cached runs)")
     parser.add_argument("--budget", type=int, default=1000, help="training episodes per run")
     parser.add_argument("--rollouts", type=int, default=20, help="episodes per update")
     parser.add_argument("--test-contexts", type=int, default=20, help="test contexts (final policy)")
@@ -452,6 +455,10 @@ def main() -> None:
                                eval_every=args.eval_every, shared_context=False)
                    for label, learner in labels.items() for seed in range(counts[label])]
         names = [label for label in labels for _ in range(counts[label])]
+        if args.only_seeds is not None:
+            first, stop = args.only_seeds
+            chosen = [i for i, config in enumerate(configs) if first <= config.seed < stop]
+            configs, names = [configs[i] for i in chosen], [names[i] for i in chosen]
         if args.backend == "ray":
             runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
         else:
@@ -459,6 +466,9 @@ def main() -> None:
         runs = [{**run, "agent": name} for name, run in zip(names, runs, strict=True)]
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+    if args.only_seeds is not None:
+        print(f"cached {len(runs)} run(s) of seeds {args.only_seeds[0]}..{args.only_seeds[1] - 1}")
+        return
     rows = _summary(runs, baselines)
     settings = run_settings(args, env_kwargs, options, seeds)
     document = {"settings": settings, "summary": rows, "baselines": baselines, "runs": runs,
