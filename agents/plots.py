@@ -72,7 +72,7 @@ def plot_recording_fit(t: np.ndarray, recording: np.ndarray, reproduce, path: st
     """A recording ``[L, d]`` at even times ``t [L]`` (from 0) against a reproduction (``reproduce(times) -> [T, d]``):
     positions per dimension, and the acceleration's norm (the recording's Savitzky-Golay-smoothed over 0.15 s,
     the reproduction's from a 1 kHz rollout)."""
-    from rdmp_gym.fitting import smooth_derivatives
+    from rdmp_gym.signals import smooth_derivatives
 
     dt = float(t[1] - t[0])
     reproduction = reproduce(t)

@@ -24,9 +24,9 @@ import numpy as np
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym.fitting import smooth_derivatives
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.recordings import RECORDING_KINDS, realistic_recording, to_demonstration
+from rdmp_gym.signals import smooth_derivatives
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:

@@ -19,7 +19,8 @@ import json
 import numpy as np
 from output import add_save_argument, results_dir
 
-from rdmp_gym.stopping import ending_demonstration, fit_ending, segment_ending
+from rdmp_gym.segmentation import segment_ending
+from rdmp_gym.stopping import ending_demonstration, fit_ending
 
 NAME = "stop.json"
 H = 1e-3

@@ -15,8 +15,9 @@ import numpy as np
 
 from .basis import normalize, periodic_width, von_mises
 from .demonstrations import Demonstration
-from .fitting import FIT_METHODS, fit_weights, forcing_target, smooth_derivatives
+from .fitting import FIT_METHODS, fit_weights, forcing_target
 from .segmentation import Segmentation, segment
+from .signals import smooth_derivatives
 from .transformation import TransformationSystem
 from .validation import as_finite_array, check_count, check_positive, check_time_grid
 

@@ -24,7 +24,6 @@ from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 from .basis import (
     NORMALISATION_EPSILON,
@@ -49,6 +48,7 @@ from .settings import (
     PUBLISHED_ENV_FIT,
     FitSettings,
 )
+from .signals import smooth_derivatives
 from .start import TransientStart, settled_state, start_blend_profiles
 from .transformation import cached_system
 from .validation import check_count, check_nonnegative, check_positive
@@ -77,28 +77,10 @@ __all__ = [
     "join_relief",
     "relative_to_pattern",
     "second_differences",
-    "smooth_derivatives",
     "trajectory_design",
 ]
 
 logger = logging.getLogger(__name__)
-
-
-def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int = 5
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Savitzky-Golay estimates of position, velocity and acceleration of ``Y [L, d]`` sampled every ``dt``.
-
-    ``window`` is the filter length in seconds (rounded to an odd number of samples, at least
-    ``polyorder + 2``). Returns three ``[L, d]`` arrays.
-    """
-    window = check_positive(window, "smoothing")
-    length = max(round(window / dt) | 1, polyorder + 2 + (polyorder % 2))
-    length = min(length, Y.shape[0] - (1 - Y.shape[0] % 2))
-    if length <= polyorder:
-        raise ValueError(f"demos: too few samples ({Y.shape[0]}) to estimate derivatives")
-    kwargs = dict(window_length=length, polyorder=polyorder, axis=0, delta=dt, mode="interp")
-    return (savgol_filter(Y, deriv=0, **kwargs), savgol_filter(Y, deriv=1, **kwargs),
-            savgol_filter(Y, deriv=2, **kwargs))
 
 
 def forcing_target(Y: np.ndarray, Yd: np.ndarray, Ydd: np.ndarray, anchor: np.ndarray, omega: float,

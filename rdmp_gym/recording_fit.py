@@ -5,7 +5,7 @@ working point, departure, rest) with a rhythm on top. Encoding the approach in t
 seconds long: its canonical path starts far out (``r0`` in the hundreds) and its many basis functions must shape
 the whole approach, which they do badly. Here the parts each get the mechanism made for them:
 
-* the slow part found by :func:`rdmp_gym.rhythm.segment_rhythm` (approach, drift) is the anchor's discrete motion,
+* the slow part found by :func:`rdmp_gym.segmentation.segment_rhythm` (approach, drift) is the anchor's discrete motion,
   a :class:`~rdmp_gym.sweep.Sweep` whose via points (every half second or period) are fitted to it by least
   squares (before the rhythm starts to grow, to the whole smoothed motion);
 * the rhythm, relative to that moving anchor, is fitted by :meth:`RhythmicDMP.fit` from shortly before it starts
@@ -36,13 +36,12 @@ from .fitting import (
     SMOOTHNESS_REFERENCE,
     fit_trajectory,
     second_differences,
-    smooth_derivatives,
     trajectory_design,
 )
-from .rhythm import RhythmSegmentation, local_fit, segment_rhythm
-from .segmentation import Segmentation
+from .segmentation import RhythmSegmentation, Segmentation, StopSegmentation, local_fit, segment_rhythm
 from .settings import FitSettings
-from .stopping import StopSegmentation, fit_stop
+from .signals import smooth_derivatives
+from .stopping import fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
@@ -105,7 +104,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
 
     Args:
         demo: the recording on an even grid, outliers removed (:func:`rdmp_gym.recordings.to_demonstration`).
-        period, start, end: hints for :func:`rdmp_gym.rhythm.segment_rhythm` (s; ``None``: detected).
+        period, start, end: hints for :func:`rdmp_gym.segmentation.segment_rhythm` (s; ``None``: detected).
         ending: fit the departure and the final rest as the DMP's stop (``None``: where the recording ends at rest;
             ``True`` raises if it does not).
         via_spacing: time between the anchor's via points (s; default one period, at most ``_VIA_SPACING``).

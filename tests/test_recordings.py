@@ -5,8 +5,7 @@ import pytest
 
 from rdmp_gym.recording_fit import _cycle_cuts, fit_recording, recording_report
 from rdmp_gym.recordings import despike, realistic_recording, to_demonstration
-from rdmp_gym.rhythm import segment_rhythm
-from rdmp_gym.stopping import segment_ending
+from rdmp_gym.segmentation import segment_ending, segment_rhythm
 
 
 def _recording(kind: str, seed: int = 0):

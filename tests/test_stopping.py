@@ -7,7 +7,8 @@ import pytest
 
 from rdmp_gym import RhythmicDMP, load_dmp, save_dmp, wiping_demonstration
 from rdmp_gym.ending import StopRequest
-from rdmp_gym.stopping import ending_demonstration, exit_time, fit_ending, segment_ending
+from rdmp_gym.segmentation import segment_ending
+from rdmp_gym.stopping import ending_demonstration, exit_time, fit_ending
 
 H = 1e-3                                   # evaluation grid (1 kHz)
 
