@@ -36,7 +36,7 @@ import tyro
 
 from rdmp_gym import Demonstration, __version__, save_dmp
 from rdmp_gym.recording_fit import fit_recording, recording_report
-from rdmp_gym.recordings import despike
+from rdmp_gym.signals import despike
 
 from .assessment import evaluate_run, record_best_episode
 from .config import Settings

@@ -1,7 +1,7 @@
 """Whole-recording fits: segmentation against the truth, cycle error against the recording's own cycle-to-cycle
 variation, start and rest error, peak acceleration ratio, and whether ``rdmp-gym fit --demo`` succeeds.
 
-By default on the realistic recordings of :mod:`rdmp_gym.recordings` (3 kinds x ``--seeds`` seeds), against the
+By default on the realistic recordings of :mod:`rdmp_gym.synthetic` (3 kinds x ``--seeds`` seeds), against the
 generator's truth; with ``--data PATH`` also on the user's own recordings (CSV files ``t,x,y,z`` under PATH, or the
 12-column pose files ``*.txt`` of homogeneous transforms that some datasets ship, read at ``--data-rate`` Hz),
 against hand labels where a file ``NAME.labels.json`` beside ``NAME.csv`` gives ``{"rhythm_start": s,
@@ -24,9 +24,10 @@ import numpy as np
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.cli import main as cli_main
 
+from rdmp_gym.demonstrations import to_demonstration
 from rdmp_gym.recording_fit import fit_recording, recording_report
-from rdmp_gym.recordings import RECORDING_KINDS, realistic_recording, to_demonstration
 from rdmp_gym.signals import smooth_derivatives
+from rdmp_gym.synthetic import RECORDING_KINDS, realistic_recording
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:

@@ -10,13 +10,14 @@ matplotlib nor torch, and sets no environment variable. ``rdmp_gym.envs`` (gymna
 from .basis import BasisSet, Fading
 from .canonical import CanonicalSystem
 from .classic import PeriodicDMP
-from .demonstrations import Demonstration, SyntheticTruth, multi_transient_demonstrations, wiping_demonstration
+from .demonstrations import Demonstration, SyntheticTruth
 from .dmp import DMPStepper, RhythmicDMP, StopRequest, TransientStart
 from .parameters import GROUPS, ParameterLayout
 from .segmentation import Segmentation, phase_shift, segment
 from .serialization import load_dmp, save_dmp
 from .settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
 from .sweep import Sweep
+from .synthetic import multi_transient_demonstrations, wiping_demonstration
 
 __version__ = "0.1.0"
 

@@ -1,10 +1,11 @@
-"""Demonstrations: a sampled trajectory ``Y[L, d]`` on an even time grid ``t[L]``, file I/O, and
-synthetic composed-periodic wiping demonstrations (the four styles of Ernesti et al. 2012, Fig. 7).
+"""Demonstrations: a sampled trajectory ``Y[L, d]`` on an even time grid ``t[L]``, and how samples get in and out.
 
-The synthetic signals live in a table frame (metres): x, y in the table plane, z the height above
-the table surface. A demonstration starts at rest at ``start`` and blends into a periodic pattern
-around ``anchor`` with a 7th-order smoothstep, so it is C^3 at the transient length ``T`` and
-exactly periodic (z = anchor z) from ``T`` on.
+* :class:`Demonstration`: the container (validated, read-only), its files (CSV, NPZ) and resampling onto an even
+  grid; :func:`to_demonstration`: a recorder's samples at uneven stamps, outliers removed
+  (:func:`rdmp_gym.signals.despike`), on an even grid.
+* :func:`check_frame`: samples in metres and inside the wiping table's reachable box (:data:`TABLE_WORKSPACE`).
+* :class:`SyntheticTruth`: the true values a synthetic demonstration carries; the generators themselves are in
+  :mod:`rdmp_gym.synthetic`.
 """
 
 from __future__ import annotations
@@ -21,32 +22,15 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from rdmp_gym.signals import despike
 from rdmp_gym.validation import as_finite_array, check_positive, check_time_grid
 
-__all__ = [
-    "TABLE_WORKSPACE",
-    "Demonstration",
-    "SyntheticTruth",
-    "check_frame",
-    "multi_transient_demonstrations",
-    "wiping_demonstration",
-]
+__all__ = ["TABLE_WORKSPACE", "Demonstration", "SyntheticTruth", "check_frame", "to_demonstration"]
 
 #: ``(low [3], high [3])`` box (m) in the table frame that the wiping env's paths must stay inside: x, y on
 #: the table about the dirt patch centre, z above the table surface.
 TABLE_WORKSPACE = ((-0.35, -0.40, -0.05), (0.35, 0.40, 0.30))
 _MILLIMETRE_SPAN = 5.0  # m: a demonstration spanning more than this is taken to be in millimetres
-_DEFAULT_START = (-0.15, 0.20, 0.12)
-_CIRCLE_RADIUS = 0.05
-_EIGHT_HALF_SIZE = (0.06, 0.03)  # figure-eight of 0.12 m x 0.06 m
-_LOOP = (0.10, -0.08, 0.08)  # complex approach: x loop, sideways swing and lift (m)
-# style: (pattern, complex approach, period s, transient length s)
-_STYLES = {
-    1: ("circle", False, 1.50, 2.0),
-    2: ("circle", True, 1.45, 2.5),
-    3: ("eight", False, 1.60, 2.0),
-    4: ("eight", True, 1.55, 2.5),
-}
 
 
 def _readonly(array: np.ndarray) -> np.ndarray:
@@ -310,168 +294,13 @@ def check_frame(Y: np.ndarray, low: Sequence[float], high: Sequence[float], *, c
                          "expected the table frame in metres (x, y on the table, z above the table surface)")
 
 
-def _as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
-    if isinstance(rng, np.random.Generator):
-        return rng
-    if rng is None or (isinstance(rng, (int, np.integer)) and not isinstance(rng, bool)):
-        return np.random.default_rng(rng)
-    raise TypeError(f"rng: expected a numpy.random.Generator, an int seed or None, "
-                    f"got {type(rng).__name__}")
-
-
-def _check_style(style: int) -> tuple[str, bool, float, float]:
-    if isinstance(style, bool) or not isinstance(style, (int, np.integer)) or style not in _STYLES:
-        raise ValueError(f"style: expected 1, 2, 3 or 4, got {style!r}")
-    return _STYLES[int(style)]
-
-
-def _smoothstep7(u: np.ndarray) -> np.ndarray:
-    """7th-order smoothstep: 0 at u <= 0, 1 at u >= 1, derivatives 1..3 zero at both ends."""
-    u = np.clip(u, 0.0, 1.0)
-    return u**4 * (35.0 - 84.0 * u + 70.0 * u**2 - 20.0 * u**3)
-
-
-def _pattern(kind: str, tau: np.ndarray, period: float) -> np.ndarray:
-    """Zero-mean periodic pattern ``[n, 3]`` at pattern times ``tau`` ``[n]``."""
-    angle = 2.0 * np.pi * tau / period
-    if kind == "circle":
-        xy = _CIRCLE_RADIUS * np.column_stack([np.cos(angle), np.sin(angle)])
-    else:
-        xy = np.column_stack([_EIGHT_HALF_SIZE[0] * np.sin(angle),
-                              _EIGHT_HALF_SIZE[1] * np.sin(2.0 * angle)])
-    return np.column_stack([xy, np.zeros_like(angle)])
-
-
-def _composed(t_rel: np.ndarray, *, kind: str, complex_approach: bool, start: np.ndarray,
-              anchor: np.ndarray, period: float, transient_length: float,
-              entrance_time: float) -> np.ndarray:
-    """Noiseless composed-periodic signal ``[L, 3]`` at times ``t_rel`` ``[L]`` (from the start)."""
-    periodic = anchor + _pattern(kind, entrance_time + t_rel - transient_length, period)
-    u = t_rel / transient_length
-    blend = start + _smoothstep7(u)[:, None] * (periodic - start)
-    if complex_approach:
-        v = np.clip(u, 0.0, 1.0)
-        window = 256.0 * (v * (1.0 - v)) ** 4  # 1 at u = 1/2, derivatives 0..3 zero at both ends
-        loop = np.column_stack([np.sin(2.0 * np.pi * v), np.sin(np.pi * v), np.sin(np.pi * v)])
-        blend = blend + window[:, None] * loop * np.asarray(_LOOP)
-    return np.where((u >= 1.0)[:, None], periodic, blend)
-
-
-def _vector3(value: object, default: Sequence[float], name: str) -> np.ndarray:
-    array = as_finite_array(default if value is None else value, name, ndim=1)
-    if array.shape != (3,):
-        raise ValueError(f"{name}: expected 3 values (x, y, z), got shape {array.shape}")
-    return array
-
-
-def _time_grid(duration: float, rate: float) -> np.ndarray:
-    duration = check_positive(duration, "duration")
-    rate = check_positive(rate, "rate")
-    n_samples = int(np.floor(duration * rate + 1e-9)) + 1
-    if n_samples < 2:
-        raise ValueError(f"duration: {duration} s at rate {rate} Hz gives fewer than 2 samples")
-    return np.arange(n_samples, dtype=np.float64) / rate
-
-
-def _check_noise(noise: float) -> float:
-    value = float(as_finite_array(noise, "noise", ndim=0))
-    if value < 0.0:
-        raise ValueError(f"noise: expected a standard deviation >= 0, got {noise!r}")
-    return value
-
-
-def _synthesize(t: np.ndarray, generator: np.random.Generator, noise: float, *, kind: str,
-                complex_approach: bool, start: np.ndarray, anchor: np.ndarray, period: float,
-                transient_length: float, entrance_time: float, name: str) -> Demonstration:
-    entrance = float(np.mod(entrance_time, period))
-    if entrance >= period:  # np.mod can round up to period itself
-        entrance = 0.0
-    clean = _composed(t, kind=kind, complex_approach=complex_approach, start=start, anchor=anchor,
-                      period=period, transient_length=transient_length, entrance_time=entrance)
-    noisy = clean + noise * generator.standard_normal(clean.shape)
-    truth = SyntheticTruth(period=period, transient_length=transient_length, anchor=anchor,
-                           clean=clean, entrance_time=entrance)
-    return Demonstration(t=t, Y=noisy, name=name, truth=truth)
-
-
-def wiping_demonstration(style: int = 1, *, rng: np.random.Generator | int | None = 0,
-                         duration: float = 10.0, rate: float = 100.0, noise: float = 3e-4,
-                         start: Sequence[float] | np.ndarray | None = None,
-                         anchor: Sequence[float] | np.ndarray | None = None,
-                         period: float | None = None, transient_length: float | None = None,
-                         entrance_time: float = 0.0) -> Demonstration:
-    """A synthetic wiping demonstration ``Y[L, 3]`` (table frame, m) in one of the paper's styles.
-
-    Styles: 1 simple approach + circle, 2 complex approach + circle, 3 simple approach +
-    figure-eight, 4 complex approach + figure-eight. The motion starts at rest at ``start``
-    (default (-0.15, 0.20, 0.12)), is exactly periodic around ``anchor`` (default the origin) with
-    z = anchor z from ``transient_length`` on (style default 2 s simple, 2.5 s complex), with period
-    ``period`` (style default about 1.5 s), entering the pattern at pattern time ``entrance_time``.
-    Sampled at ``rate`` Hz over ``[0, duration]``, plus white Gaussian noise of std ``noise`` (m)
-    drawn from ``rng`` (a Generator or a seed). ``truth`` holds the clean signal and true values.
-    """
-    kind, complex_approach, default_period, default_transient = _check_style(style)
-    t = _time_grid(duration, rate)
-    period = check_positive(default_period if period is None else period, "period")
-    transient = check_positive(default_transient if transient_length is None else transient_length,
-                               "transient_length")
-    if transient >= t[-1]:
-        raise ValueError(f"duration: {duration} s must exceed transient_length = {transient} s")
-    entrance = float(as_finite_array(entrance_time, "entrance_time", ndim=0))
-    return _synthesize(t, _as_generator(rng), _check_noise(noise), kind=kind,
-                       complex_approach=complex_approach,
-                       start=_vector3(start, _DEFAULT_START, "start"),
-                       anchor=_vector3(anchor, (0.0, 0.0, 0.0), "anchor"), period=period,
-                       transient_length=transient, entrance_time=entrance,
-                       name=f"wiping style {int(style)}")
-
-
-def _per_demo(value: object, default: np.ndarray, n: int, name: str) -> np.ndarray:
-    array = as_finite_array(default if value is None else value, name, ndim=1)
-    if array.size != n:
-        raise ValueError(f"{name}: expected {n} values (one per demonstration), got {array.size}")
-    return array
-
-
-def multi_transient_demonstrations(n: int = 3, *, rng: np.random.Generator | int | None = 0,
-                                   style: int = 1, duration: float = 10.0, rate: float = 100.0,
-                                   noise: float = 3e-4, period: float | None = None,
-                                   anchor: Sequence[float] | np.ndarray | None = None,
-                                   starts: Sequence[Sequence[float]] | np.ndarray | None = None,
-                                   transient_lengths: Sequence[float] | np.ndarray | None = None,
-                                   entrance_times: Sequence[float] | np.ndarray | None = None,
-                                   ) -> list[Demonstration]:
-    """``n`` synthetic demonstrations ``Y[L, 3]`` sharing ONE periodic pattern (that of ``style``).
-
-    Each has its own start (``starts`` ``[n, 3]``, default on an arc 0.25 m from the anchor, 0.12 m
-    up), transient length (``transient_lengths`` ``[n]``, default evenly from 1.5 s to 2.6 s) and
-    entrance time into the pattern (``entrance_times`` ``[n]``, default ``k * period / n``). Noise
-    is drawn from the one generator ``rng`` in demonstration order. Other arguments as in
-    :func:`wiping_demonstration`.
-    """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n: expected a positive int, got {n!r}")
-    kind, complex_approach, default_period, _ = _check_style(style)
-    t = _time_grid(duration, rate)
-    period = check_positive(default_period if period is None else period, "period")
-    index = np.arange(n)
-    lengths = _per_demo(transient_lengths, 1.5 + 1.1 * index / max(n - 1, 1), n,
-                        "transient_lengths")
-    if np.any(lengths <= 0.0) or np.any(lengths >= t[-1]):
-        raise ValueError(f"transient_lengths: expected values in (0, duration={t[-1]}), "
-                         f"got {lengths}")
-    entrances = _per_demo(entrance_times, index * period / n, n, "entrance_times")
-    anchor_vector = _vector3(anchor, (0.0, 0.0, 0.0), "anchor")
-    angles = 0.75 * np.pi + 2.0 * np.pi * index / n
-    default_starts = anchor_vector + np.column_stack([0.25 * np.cos(angles), 0.25 * np.sin(angles),
-                                                      np.full(n, 0.12)])
-    start_array = as_finite_array(default_starts if starts is None else starts, "starts", ndim=2)
-    if start_array.shape != (n, 3):
-        raise ValueError(f"starts: expected shape ({n}, 3), got {start_array.shape}")
-    generator = _as_generator(rng)
-    noise = _check_noise(noise)
-    return [_synthesize(t, generator, noise, kind=kind, complex_approach=complex_approach,
-                        start=start_array[k], anchor=anchor_vector, period=period,
-                        transient_length=float(lengths[k]), entrance_time=float(entrances[k]),
-                        name=f"wiping style {int(style)}, transient {k + 1} of {n}")
-            for k in range(n)]
+def to_demonstration(t: np.ndarray, Y: np.ndarray, rate: float = 100.0, *, name: str = "",
+                     outliers: bool = True) -> Demonstration:
+    """Samples ``Y [L, d]`` at uneven stamps ``t [L]`` (s) as a :class:`Demonstration` on an even grid at
+    ``rate`` Hz: outliers removed first (:func:`despike`, unless ``outliers=False``), then a cubic spline."""
+    t = check_time_grid(t, "t", uniform=False, min_length=4)
+    Y = as_finite_array(Y, "Y", ndim=(1, 2))
+    Y = Y[:, None] if Y.ndim == 1 else Y
+    if Y.shape[0] != t.size:
+        raise ValueError(f"Y: expected {t.size} rows (one per time stamp), got shape {Y.shape}")
+    return Demonstration.from_samples(t, despike(Y) if outliers else Y, name=name, rate=rate)

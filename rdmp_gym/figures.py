@@ -14,8 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .canonical import CanonicalSystem
-from .demonstrations import Demonstration, multi_transient_demonstrations, wiping_demonstration
+from .demonstrations import Demonstration
 from .dmp import PAPER_SETTINGS, RhythmicDMP
+from .ending import plan_stop
 from .frequency import follow_rhythm
 from .plots import (
     plot_basis_activations,
@@ -26,7 +27,8 @@ from .plots import (
     pyplot,
 )
 from .smoothness import finite_derivatives
-from .stopping import ending_demonstration, fit_ending, plan_stop
+from .stopping import fit_ending
+from .synthetic import ending_demonstration, multi_transient_demonstrations, wiping_demonstration
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

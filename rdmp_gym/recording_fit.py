@@ -1,13 +1,14 @@
 """Fit a whole recording: the slow motion as the anchor's travel, the rhythm with a short entry, and the ending.
 
-A person's recording (:mod:`rdmp_gym.recordings`) is a discrete motion (rest, approach with pauses, drift of the
-working point, departure, rest) with a rhythm on top. Encoding the approach in the paper's transient makes it
-seconds long: its canonical path starts far out (``r0`` in the hundreds) and its many basis functions must shape
-the whole approach, which they do badly. Here the parts each get the mechanism made for them:
+A person's recording (:func:`rdmp_gym.synthetic.realistic_recording` draws one) is a discrete motion (rest,
+approach with pauses, drift of the working point, departure, rest) with a rhythm on top. Encoding the approach in
+the paper's transient makes it seconds long: its canonical path starts far out (``r0`` in the hundreds) and its
+many basis functions must shape the whole approach, which they do badly. Here the parts each get the mechanism
+made for them:
 
-* the slow part found by :func:`rdmp_gym.segmentation.segment_rhythm` (approach, drift) is the anchor's discrete motion,
-  a :class:`~rdmp_gym.sweep.Sweep` whose via points (every half second or period) are fitted to it by least
-  squares (before the rhythm starts to grow, to the whole smoothed motion);
+* the slow part found by :func:`rdmp_gym.segmentation.segment_rhythm` (approach, drift) is the anchor's discrete
+  motion, a :class:`~rdmp_gym.sweep.Sweep` whose via points (every half second or period) are fitted to it by
+  least squares (before the rhythm starts to grow, to the whole smoothed motion);
 * the rhythm, relative to that moving anchor, is fitted by :meth:`RhythmicDMP.fit` from shortly before it starts
   to grow, so the paper's transient encodes only the entry into the rhythm; the canonical system then starts
   earlier on the same path, where no basis function is active yet (the forcing term is 0 there and the anchor's
@@ -103,7 +104,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     """Fit a DMP to a whole recording: rest, approach, rhythm with a drifting working point, departure, rest.
 
     Args:
-        demo: the recording on an even grid, outliers removed (:func:`rdmp_gym.recordings.to_demonstration`).
+        demo: the recording on an even grid, outliers removed (:func:`rdmp_gym.demonstrations.to_demonstration`).
         period, start, end: hints for :func:`rdmp_gym.segmentation.segment_rhythm` (s; ``None``: detected).
         ending: fit the departure and the final rest as the DMP's stop (``None``: where the recording ends at rest;
             ``True`` raises if it does not).

@@ -1,17 +1,19 @@
-"""Filters of sampled signals ``Y [L, d]`` on an even grid: smoothed derivatives (Savitzky-Golay).
+"""Filters of sampled signals ``Y [L, d]``: outliers (:func:`despike`) and smoothed derivatives (Savitzky-Golay).
 
 The fit (:mod:`rdmp_gym.fitting`), the segmentation of whole recordings (:mod:`rdmp_gym.segmentation`) and the
-stop's fit read velocities and accelerations of noisy samples through :func:`smooth_derivatives`.
+stop's fit read velocities and accelerations of noisy samples through :func:`smooth_derivatives`; a recorder's
+samples lose their outliers through :func:`despike` (:func:`rdmp_gym.demonstrations.to_demonstration`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import median_filter
 from scipy.signal import savgol_filter
 
-from .validation import check_positive
+from .validation import as_finite_array, check_positive
 
-__all__ = ["smooth_derivatives"]
+__all__ = ["despike", "smooth_derivatives"]
 
 
 def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int = 5
@@ -29,3 +31,21 @@ def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int =
     kwargs = dict(window_length=length, polyorder=polyorder, axis=0, delta=dt, mode="interp")
     return (savgol_filter(Y, deriv=0, **kwargs), savgol_filter(Y, deriv=1, **kwargs),
             savgol_filter(Y, deriv=2, **kwargs))
+
+
+def despike(Y: np.ndarray, window: int = 7, threshold: float = 6.0) -> np.ndarray:
+    """``Y [L, d]`` with outliers replaced by the running median (a Hampel filter).
+
+    A sample is an outlier where it differs from the median of the ``window`` samples around it by more than
+    ``threshold`` times the median absolute difference over the whole signal (1.4826 MAD: the noise's standard
+    deviation for Gaussian noise; at least 1e-3 of the signal's range), in any dimension.
+    """
+    Y = as_finite_array(Y, "Y", ndim=2)
+    if window < 3 or window % 2 == 0:
+        raise ValueError(f"window: expected an odd number >= 3, got {window!r}")
+    median = median_filter(Y, size=(window, 1), mode="nearest")
+    deviation = np.abs(Y - median)
+    scale = 1.4826 * np.median(deviation, axis=0)
+    floor = 1e-3 * np.maximum(np.ptp(Y, axis=0), 1e-12)   # a noise-free signal: only jumps of its size
+    outlier = deviation > threshold * np.maximum(scale, floor)
+    return np.where(outlier, median, Y)

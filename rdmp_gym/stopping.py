@@ -19,78 +19,35 @@ so from ``T_s`` on the canonical state rests at the origin (one basis function c
 to the demonstrated rest), the anchor is the goal, and the critically damped spring (4) brings the
 arm to rest at the goal. Fitting keeps the start and periodic weights of :meth:`RhythmicDMP.fit` and
 solves one ridge problem for the stop weights on the demonstration from the exit to its end.
+
+This module fits the stop (:func:`fit_ending`, :func:`fit_stop`). The formulation's objects (:class:`Ending`, the
+gates, when a requested stop happens) are in :mod:`rdmp_gym.ending`; the demonstration's segmentation is
+:func:`rdmp_gym.segmentation.segment_ending`; a synthetic demonstration that ends is
+:func:`rdmp_gym.synthetic.ending_demonstration`.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
 
 import numpy as np
 
 from .basis import normalize
 from .canonical import CanonicalSystem
-from .demonstrations import (
-    _DEFAULT_START,
-    Demonstration,
-    SyntheticTruth,
-    _as_generator,
-    _check_noise,
-    _check_style,
-    _composed,
-    _smoothstep7,
-    _time_grid,
-    _vector3,
-)
+from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
-from .ending import Ending, StopFading, StopPlan, StopRequest, exit_time, minimum_jerk, minimum_jerk_inverse, plan_stop
+from .ending import Ending, StopFading, minimum_jerk, minimum_jerk_inverse
 from .fitting import forcing_target
 from .segmentation import StopSegmentation, segment_ending
 from .settings import FitSettings
 from .signals import smooth_derivatives
 from .transformation import TransformationSystem
-from .validation import check_positive
 
-__all__ = ["Ending", "StopFading", "StopPlan", "StopRequest", "ending_demonstration", "exit_time",
-           "fit_ending", "fit_stop", "minimum_jerk", "plan_stop"]
+__all__ = ["fit_ending", "fit_stop"]
 
 logger = logging.getLogger(__name__)
 
-# ---------------------------------------------------------------------------------- demonstrations
-def ending_demonstration(style: int = 1, *, rng: np.random.Generator | int | None = 0, n_periods: float = 3.0,
-                         stop_length: float = 1.5, rest: float = 1.0,
-                         goal: Sequence[float] | np.ndarray = (0.12, -0.10, 0.10), rate: float = 100.0,
-                         noise: float = 3e-4, start: Sequence[float] | np.ndarray | None = None,
-                         anchor: Sequence[float] | np.ndarray | None = None, period: float | None = None,
-                         transient_length: float | None = None) -> Demonstration:
-    """A synthetic wiping demonstration ``Y[L, 3]`` that ends: approach, ``n_periods`` periods, then a stop.
 
-    The start and the periodic part are those of :func:`rdmp_gym.wiping_demonstration` (``style``).
-    At ``t_e = transient_length + n_periods * period`` the arm lifts off and comes to rest at ``goal``
-    (a 7th-order smoothstep of length ``stop_length`` from the running pattern to the goal, so C3), and
-    stays there for ``rest`` seconds. ``truth.clean`` holds the noiseless signal.
-    """
-    kind, complex_approach, default_period, default_transient = _check_style(style)
-    period = check_positive(default_period if period is None else period, "period")
-    transient = check_positive(default_transient if transient_length is None else transient_length,
-                               "transient_length")
-    n_periods = check_positive(n_periods, "n_periods")
-    stop_length = check_positive(stop_length, "stop_length")
-    rest = check_positive(rest, "rest")
-    exit_at = transient + n_periods * period
-    t = _time_grid(exit_at + stop_length + rest, rate)
-    anchor = _vector3(anchor, (0.0, 0.0, 0.0), "anchor")
-    running = _composed(t, kind=kind, complex_approach=complex_approach,
-                        start=_vector3(start, _DEFAULT_START, "start"), anchor=anchor, period=period,
-                        transient_length=transient, entrance_time=0.0)
-    blend = _smoothstep7((t - exit_at) / stop_length)[:, None]
-    clean = running + blend * (_vector3(goal, (0.0, 0.0, 0.0), "goal") - running)
-    noisy = clean + _check_noise(noise) * _as_generator(rng).standard_normal(clean.shape)
-    truth = SyntheticTruth(period=period, transient_length=transient, anchor=anchor, clean=clean)
-    return Demonstration(t=t, Y=noisy, name=f"wiping style {int(style)} with a stop", truth=truth)
-
-
-# ---------------------------------------------------------------------------------- fitting
 def _stop_basis(canonical: CanonicalSystem, exit_phase: float, r_exit: float, length: float, first: float,
                 n_stop: int, overlap: float) -> tuple[np.ndarray, np.ndarray]:
     """Centres ``[S, 2]`` on the stop path at times uniform in ``[first, length]`` (the last at the origin),

@@ -5,12 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rdmp_gym.demonstrations import (
-    Demonstration,
-    SyntheticTruth,
-    multi_transient_demonstrations,
-    wiping_demonstration,
-)
+from rdmp_gym.demonstrations import Demonstration, SyntheticTruth
+from rdmp_gym.synthetic import multi_transient_demonstrations, wiping_demonstration
 
 STYLES = (1, 2, 3, 4)
 

@@ -5,7 +5,8 @@ import pytest
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
 from rdmp_gym.frequency import AdaptiveFrequencyStepper, _first_order_hold, follow_rhythm
-from rdmp_gym.stopping import ending_demonstration, fit_ending
+from rdmp_gym.stopping import fit_ending
+from rdmp_gym.synthetic import ending_demonstration
 from rdmp_gym.transformation import TransformationSystem
 
 DT = 2e-3

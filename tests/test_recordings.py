@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
+from rdmp_gym.demonstrations import to_demonstration
 from rdmp_gym.recording_fit import _cycle_cuts, fit_recording, recording_report
-from rdmp_gym.recordings import despike, realistic_recording, to_demonstration
 from rdmp_gym.segmentation import segment_ending, segment_rhythm
+from rdmp_gym.signals import despike
+from rdmp_gym.synthetic import realistic_recording
 
 
 def _recording(kind: str, seed: int = 0):

@@ -10,12 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rdmp_gym.demonstrations import (
-    Demonstration,
-    multi_transient_demonstrations,
-    wiping_demonstration,
-)
+from rdmp_gym.demonstrations import Demonstration
 from rdmp_gym.segmentation import Segmentation, phase_shift, segment
+from rdmp_gym.synthetic import multi_transient_demonstrations, wiping_demonstration
 
 STYLES = (1, 2, 3, 4)
 SEEDS = (0, 1, 2)

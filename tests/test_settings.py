@@ -10,7 +10,8 @@ import pytest
 from rdmp_gym import RhythmicDMP, wiping_demonstration
 from rdmp_gym.fitting import FADE_BEFORE_T, PAPER_SETTINGS, fit_rhythmic
 from rdmp_gym.settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
-from rdmp_gym.stopping import ending_demonstration, fit_ending
+from rdmp_gym.stopping import fit_ending
+from rdmp_gym.synthetic import ending_demonstration
 
 
 @pytest.fixture(scope="module")

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, load_dmp, save_dmp, wiping_demonstration
-from rdmp_gym.ending import StopRequest
+from rdmp_gym.ending import StopRequest, exit_time
 from rdmp_gym.segmentation import segment_ending
-from rdmp_gym.stopping import ending_demonstration, exit_time, fit_ending
+from rdmp_gym.stopping import fit_ending
+from rdmp_gym.synthetic import ending_demonstration
 
 H = 1e-3                                   # evaluation grid (1 kHz)
 

@@ -147,7 +147,8 @@ def test_sweep_dimensions_must_match(dmp):
 
 
 def test_a_stop_after_the_travel_comes_to_rest_at_its_goal():
-    from rdmp_gym.stopping import ending_demonstration, fit_ending
+    from rdmp_gym.stopping import fit_ending
+    from rdmp_gym.synthetic import ending_demonstration
 
     dmp = fit_ending(ending_demonstration(1, rng=1))
     travelling = dmp.with_sweep(Sweep(np.array([1.0, 2.5, 4.0]), np.array([[0.06, 0.0, 0.0], [0.06, 0.05, 0.0]])))

@@ -83,7 +83,7 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     """Find the rhythm in a whole recording and the rests around it (see the module docstring).
 
     Args:
-        demo: the recording on an even grid (outliers removed, e.g. :func:`rdmp_gym.recordings.to_demonstration`).
+        demo: the recording on an even grid (outliers removed, e.g. :func:`rdmp_gym.demonstrations.to_demonstration`).
         period: the known period (s); estimated when ``None``.
         start, end: the known start and end of the full-size rhythm (s from ``demo.t[0]``); detected when ``None``.
         begin, full: shares of the rhythm's typical amplitude at which it starts to grow and is full-size.
