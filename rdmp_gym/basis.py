@@ -4,7 +4,8 @@ Periodic (on the limit cycle):  ``phi_i(phi, r) = g(r) exp(v_i (cos(phi - c_i) -
 Transient (along a canonical path): ``psi_j(phi, r) = a(r) exp(-vbar_j |pol(phi, r) - q_j|^2)``
 
 ``g`` is 1 up to ``mu1`` and fades to ``delta`` at ``mu2``; ``a`` is 1 from ``mu2`` and fades to
-``delta`` at ``mu1``; both use ``exp(-v_tilde (r - mu_x)**k)``.
+``delta`` at ``mu1``; both use ``exp(-v_tilde (r - mu_x)**k)`` (:class:`FadeBand`, whose mirror image gates the
+stop: :class:`rdmp_gym.ending.StopFading`).
 
 The forcing term (5) is the normalised mixture ``sum_b Psi_b w_b / sum_b Psi_b``. Where a perturbed
 canonical path leaves every support, the raw sum underflows and the bare mixture jumps between whichever
@@ -24,8 +25,8 @@ import numpy as np
 from .canonical import CanonicalSystem
 from .validation import check_nonnegative, check_positive
 
-__all__ = ["SMOOTH_FLOOR", "BasisSet", "Fading", "normalize", "periodic_width", "transient_basis_along_path",
-           "transient_times", "von_mises"]
+__all__ = ["GATE_FLOOR", "SMOOTH_FLOOR", "BasisSet", "FadeBand", "Fading", "normalize", "periodic_width",
+           "transient_basis_along_path", "transient_times", "von_mises"]
 
 NORMALISATION_EPSILON = 1e-10
 """Added to the sum of activations in the normalised mixture (5) by default; keeps it finite off every support."""
@@ -41,9 +42,50 @@ GATE_FLOOR = 1e-16
 off (a change of at most 1e-16 in any activation, far below the float64 resolution of the mixture)."""
 
 
+class FadeBand:
+    """Two gates that hand one family of basis functions over to another across the radii ``[inner, outer]``
+    (the fading of eqs. (8)-(9)), for the start and the stop alike.
+
+    :meth:`inner_gate` is 1 for ``r <= inner`` and fades above it; :meth:`outer_gate` is 1 for ``r >= outer`` and
+    fades below it; each is ``delta`` at the other edge: ``exp(-v_tilde d**k)`` of the distance ``d`` past its own
+    edge, exactly 0 below :data:`GATE_FLOOR`. A subclass names the edges (``inner``, ``outer``) and holds ``k``
+    and ``delta``: :class:`Fading` (the start: periodic family inside ``mu1``, transient family outside ``mu2``)
+    and :class:`rdmp_gym.ending.StopFading` (the stop: stop family inside ``nu2``, periodic family outside
+    ``nu1``).
+    """
+
+    @property
+    def inner(self) -> float:
+        """The radius up to which :meth:`inner_gate` is 1."""
+        raise NotImplementedError
+
+    @property
+    def outer(self) -> float:
+        """The radius from which :meth:`outer_gate` is 1 (> ``inner``)."""
+        raise NotImplementedError
+
+    @property
+    def v_tilde(self) -> float:
+        """Fading steepness chosen so that each gate is ``delta`` at the other edge."""
+        return -np.log(self.delta) / (self.outer - self.inner) ** self.k
+
+    def inner_gate(self, r: np.ndarray) -> np.ndarray:
+        """1 for ``r <= inner``, fading above; same shape as ``r``."""
+        return self._fade(np.maximum(r - self.inner, 0.0))
+
+    def outer_gate(self, r: np.ndarray) -> np.ndarray:
+        """1 for ``r >= outer``, fading below; same shape as ``r``."""
+        return self._fade(np.maximum(self.outer - r, 0.0))
+
+    def _fade(self, distance: np.ndarray) -> np.ndarray:
+        gate = np.exp(-self.v_tilde * distance**self.k)
+        return np.where(gate < GATE_FLOOR, 0.0, gate)
+
+
 @dataclass(frozen=True)
-class Fading:
-    """The fading functions ``g`` (periodic gate) and ``a`` (transient gate) of eqs. (8)-(9).
+class Fading(FadeBand):
+    """The fading functions ``g`` (periodic gate) and ``a`` (transient gate) of eqs. (8)-(9): a
+    :class:`FadeBand` across ``[mu1, mu2]``.
 
     Args:
         mu1: radius below which only the periodic basis is active (the paper uses 1.2 mu).
@@ -69,21 +111,20 @@ class Fading:
             raise ValueError(f"delta: must lie in (0, 1), got {self.delta!r}")
 
     @property
-    def v_tilde(self) -> float:
-        """Fading steepness chosen so that ``g(mu2) = a(mu1) = delta``."""
-        return -np.log(self.delta) / (self.mu2 - self.mu1) ** self.k
+    def inner(self) -> float:
+        return self.mu1
+
+    @property
+    def outer(self) -> float:
+        return self.mu2
 
     def periodic_gate(self, r: np.ndarray) -> np.ndarray:
         """``g(r)``: 1 for r <= mu1, fading above; same shape as ``r``."""
-        return self._fade(np.maximum(r - self.mu1, 0.0))
+        return self.inner_gate(r)
 
     def transient_gate(self, r: np.ndarray) -> np.ndarray:
         """``a(r)``: 1 for r >= mu2, fading below; same shape as ``r``."""
-        return self._fade(np.maximum(self.mu2 - r, 0.0))
-
-    def _fade(self, distance: np.ndarray) -> np.ndarray:
-        gate = np.exp(-self.v_tilde * distance**self.k)
-        return np.where(gate < GATE_FLOOR, 0.0, gate)
+        return self.outer_gate(r)
 
 
 def normalize(activations: np.ndarray, floor: float = NORMALISATION_EPSILON) -> np.ndarray:

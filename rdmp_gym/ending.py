@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .basis import GATE_FLOOR
+from .basis import FadeBand
 from .validation import as_finite_array, check_positive
 
 __all__ = ["Ending", "StopFading", "StopPlan", "StopRequest", "exit_time", "minimum_jerk", "minimum_jerk_inverse",
@@ -49,8 +49,9 @@ def minimum_jerk_inverse(value: float) -> float:
 
 
 @dataclass(frozen=True)
-class StopFading:
-    """The inner-side gates of the stop: ``g_s`` (periodic family) and ``a_s`` (stop family).
+class StopFading(FadeBand):
+    """The inner-side gates of the stop: ``g_s`` (periodic family) and ``a_s`` (stop family), the start's
+    :class:`~rdmp_gym.basis.FadeBand` mirrored: across ``[nu2, nu1]``, the stop family inside, the periodic outside.
 
     Args:
         nu1: radius below which the periodic family fades (``g_s(nu1) = 1``, ``a_s(nu1) = delta``).
@@ -72,20 +73,20 @@ class StopFading:
             raise ValueError(f"delta: must lie in (0, 1), got {self.delta!r}")
 
     @property
-    def v_tilde(self) -> float:
-        return -np.log(self.delta) / (self.nu1 - self.nu2) ** self.k
+    def inner(self) -> float:
+        return self.nu2
 
-    def _fade(self, distance: np.ndarray) -> np.ndarray:
-        gate = np.exp(-self.v_tilde * distance**self.k)
-        return np.where(gate < GATE_FLOOR, 0.0, gate)
+    @property
+    def outer(self) -> float:
+        return self.nu1
 
     def periodic_gate(self, r: np.ndarray) -> np.ndarray:
         """``g_s(r)``: 1 for r >= nu1, fading below; same shape as ``r``."""
-        return self._fade(np.maximum(self.nu1 - r, 0.0))
+        return self.outer_gate(r)
 
     def stop_gate(self, r: np.ndarray) -> np.ndarray:
         """``a_s(r)``: 1 for r <= nu2, fading above; same shape as ``r``."""
-        return self._fade(np.maximum(r - self.nu2, 0.0))
+        return self.inner_gate(r)
 
 
 @dataclass(frozen=True, eq=False)
