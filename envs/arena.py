@@ -74,10 +74,10 @@ def compose_scene(robot: RobotDescription, prefix: str = "robot/", tool: str = "
 
 def _check_names(spec: mujoco.MjSpec, robot: RobotDescription) -> None:
     """ValueError naming the field of ``robot`` whose body, site, joint or geom its MJCF lacks."""
-    wanted = {"root_body": (spec.body, [robot.root_body]), "arm_root": (spec.body, [robot.arm_root]),
-              "body_links": (spec.body, list(robot.body_links)), "tool_mount": (spec.body, [robot.tool_mount.body]),
-              "ft_site": (spec.site, [robot.ft_site]), "joints": (spec.joint, list(robot.joints)),
-              "hand_geoms": (spec.geom, list(robot.hand_geoms))}
+    wanted = dict(root_body=(spec.body, [robot.root_body]), arm_root=(spec.body, [robot.arm_root]),
+                  body_links=(spec.body, list(robot.body_links)), tool_mount=(spec.body, [robot.tool_mount.body]),
+                  ft_site=(spec.site, [robot.ft_site]), joints=(spec.joint, list(robot.joints)),
+                  hand_geoms=(spec.geom, list(robot.hand_geoms)))
     for field, (find, names) in wanted.items():
         missing = [n for n in names if find(n) is None]
         if missing:
