@@ -1,4 +1,4 @@
-"""Training runs: one loop for every agent (update, evaluate the policy, log, checkpoint, keep the best).
+"""Training runs: one loop for every agent, which runs the updates and calls the callbacks around them.
 
 An agent does one update per call of ``train_update`` (``rollouts`` training episodes) and maps
 context observations to actions with ``policy_actions``. :class:`ESAgent` wraps the ask/tell learners
@@ -6,9 +6,10 @@ context observations to actions with ``policy_actions``. :class:`ESAgent` wraps 
 
 Seeds: the run seed makes a ``SeedSequence`` whose children drive the learner, the training episodes'
 reset seeds (drawn from ``[0, 2**30)``), the perturbed start and the contexts that standardise a
-contextual learner's features; the same config gives the same log. The policy is evaluated after every
-update on the first ``eval_episodes`` validation contexts (:mod:`rdmp_gym.agents.protocol`), which no
-training episode uses; "best" is chosen there, never on the test contexts.
+contextual learner's features; the same config gives the same log. What happens around the updates (the
+policy's evaluation on the first ``eval_episodes`` validation contexts of :mod:`rdmp_gym.agents.protocol`, which
+no training episode uses, the best policy chosen there and never on the test contexts, the log, the checkpoint)
+is done by callbacks (:mod:`rdmp_gym.agents.callbacks`).
 """
 
 from __future__ import annotations
@@ -18,8 +19,7 @@ import logging
 import platform
 import subprocess
 import time
-from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from datetime import datetime, timezone
 from importlib import metadata
@@ -27,21 +27,22 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
-from tqdm.auto import tqdm
-
-from rdmp_gym import save_dmp
 
 from . import sb3_config  # noqa: F401  (declares PPO and SAC)
+from .callbacks import Callback, TrainingState, default_callbacks, merge_callbacks
 from .config import Settings, check_choice, check_range
+from .errors import NoValidEpisodesError
 from .evaluation import Evaluator
+from .imitation import load_demonstration
 from .learners import EpisodeBatch, Learner, SearchSpace, make_learner
-from .protocol import TRAIN_SEED_LIMIT, context_observations, success, validation_seeds
+from .plots import plot_learning_curve
+from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
 from .registry import REGISTRY, agent_spec
 from .runs import RunDirectory, write_atomic
 from .tasks import WIPE_ID, TaskSpec, task_options
 
-__all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "batch_summary", "environment_record",
-           "load_run_config", "train"]
+__all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "environment_record", "load_run_config",
+           "train"]
 
 logger = logging.getLogger(__name__)
 
@@ -216,26 +217,6 @@ class ESAgent:
         return None
 
 
-def _number(value: float) -> float | None:
-    """A float for JSON; None for NaN."""
-    value = float(value)
-    return None if np.isnan(value) else value
-
-
-def _nanmean(values: np.ndarray) -> float:
-    return float(np.mean(values)) if np.all(np.isfinite(values)) else float("nan")
-
-
-def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
-    """Mean/best return, mean coverage, force-in-band fraction, success rate and valid fraction of a batch."""
-    return {f"{prefix}return_mean": _number(np.mean(batch.returns)),
-            f"{prefix}success": _number(np.mean(success(batch))),
-            f"{prefix}return_best": _number(np.max(batch.returns)),
-            f"{prefix}coverage": _number(_nanmean(batch.coverage)),
-            f"{prefix}force_in_band": _number(_nanmean(batch.force_in_band)),
-            f"{prefix}valid": _number(np.mean(batch.valid))}
-
-
 def _seed_streams(seed: int) -> dict[str, np.random.Generator]:
     names = ("learner", "episodes", "start", "features")
     children = np.random.SeedSequence(seed).spawn(len(names))
@@ -278,10 +259,6 @@ def _make_agent(config: TrainConfig, evaluator: Evaluator, streams: dict[str, np
 
 MUTABLE_ON_RESUME = ("updates", "workers")
 _PACKAGES = ("rdmp-gym", "numpy", "scipy", "gymnasium", "mujoco", "cma", "stable-baselines3", "torch", "filelock")
-
-
-class NoValidEpisodesError(ValueError):
-    """Every episode of the first update was invalid: the learner would only see a constant penalty."""
 
 
 def _git_commit() -> dict[str, Any]:
@@ -378,8 +355,6 @@ def _start_files(run: RunDirectory, config: TrainConfig) -> TrainConfig:
     provenance: dict[str, Any] = {"sessions": [{"started": "new", **record}]}
     stored = config
     if config.demo:
-        from .imitation import load_demonstration
-
         source = Path(config.demo).resolve()
         load_demonstration(str(source))                  # a clear error for a missing or broken file
         copy = run.path / f"demo{source.suffix.lower()}"
@@ -409,8 +384,8 @@ def _resume_session(run: RunDirectory, config: TrainConfig) -> None:
 
 def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
           changes: Mapping[str, Any] | None = None, labels: Mapping[str, str] | None = None,
-          progress: bool = False, backend: str = "local",
-          ray_address: str | None = None) -> RunDirectory:
+          progress: bool = False, backend: str = "local", ray_address: str | None = None,
+          callbacks: Iterable[Callback] | None = None) -> RunDirectory:
     """Train an agent and write the run directory ``out`` (see :mod:`rdmp_gym.agents.runs`).
 
     Args:
@@ -424,136 +399,92 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
         labels: names for ``changes`` keys in error messages (e.g. the command-line flags).
         progress: show a progress bar.
         backend, ray_address: where the episodes run (see :class:`Evaluator`); the numbers do not depend on it.
+        callbacks: run after the default set (:func:`~rdmp_gym.agents.callbacks.default_callbacks`: evaluation,
+            best policy, log, checkpoint, first-update guard, progress bar); one that is an instance of a
+            default's class takes that default's place (see :mod:`rdmp_gym.agents.callbacks`).
     Returns:
         the run directory.
     """
     run = RunDirectory(out)
     if not resume and (config is None or changes):
         raise ValueError("config: a new run needs a config (and no changes)")
+    chosen = merge_callbacks(default_callbacks(progress), callbacks)
     with run.open(new=not resume):
         config = _resumed_config(run, config, changes or {}, labels or {}) if resume \
             else replace(config, demo=str(Path(config.demo).resolve()) if config.demo else "")
         streams = _seed_streams(config.seed)
         with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
             initial = _initial_action(config, evaluator, streams["start"])
-            eval_seeds = validation_seeds(config.eval_episodes)
+            seeds = validation_seeds(config.eval_episodes)
             observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
-                                     for s in eval_seeds])
+                                     for s in seeds])
             agent = _make_agent(config, evaluator, streams, initial, run.path)
             try:
                 if resume:
                     _resume_session(run, config)
                 else:
                     run.write_config(_start_files(run, config).to_dict())
-                _loop(config, run, agent, evaluator, eval_seeds, observations, resume, progress)
+                state = TrainingState(config, run, agent, evaluator, seeds, observations)
+                fresh = _restore(state) if resume else True
+                _run_updates(state, chosen, fresh)
             finally:
                 agent.close()
-        from .plots import plot_learning_curve
-
         plot_learning_curve(run.read_log(), run.curve_png, title=f"{config.agent} on {config.env_id}")
     return run
 
 
-def _restore(run: RunDirectory, agent: Agent, state: dict[str, Any], config: TrainConfig
-             ) -> tuple[int, int, dict[str, Any] | None, float]:
-    """Validate a checkpoint's state and load it into ``agent``; ``(update, episodes, best, elapsed)``."""
+def _run_updates(state: TrainingState, callbacks: Callback, fresh: bool) -> None:
+    """The training loop: updates until ``config.updates`` or until a callback stops it, the callbacks called
+    at their points (``fresh``: a new run, whose start is update 0)."""
+    callbacks.on_training_start(state)
+    try:
+        if fresh:
+            _after_update(state, callbacks, None)
+        while state.update < state.config.updates and not state.stopped:
+            batch = state.agent.train_update()
+            state.update += 1
+            state.episodes += batch.size
+            _after_update(state, callbacks, batch)
+    finally:
+        callbacks.on_training_end(state)
+
+
+def _after_update(state: TrainingState, callbacks: Callback, batch: EpisodeBatch | None) -> None:
+    state.batch, state.record, state.evaluation = batch, {}, None
+    if callbacks.on_update(state) is False and state.update < state.config.updates:
+        state.stopped = True
+        logger.info("training: stopped by a callback after update %d of %d", state.update, state.config.updates)
+
+
+def _restore(state: TrainingState) -> bool:
+    """Load a resumed run's checkpoint (validated) into ``state``; whether the run starts fresh (none yet)."""
+    run, config = state.run, state.config
+    checkpoint = run.load_checkpoint()
+    if checkpoint is None:
+        run.truncate_log(-1)   # killed before its first checkpoint: start over
+        return True
     where = f"{run.checkpoint_path}"
     fix = "delete checkpoint.json and checkpoint-*.* to restart the run, or start a new run"
     for key in ("update", "episodes"):
-        if isinstance(state.get(key), bool) or not isinstance(state.get(key), int) or state[key] < 0:
-            raise ValueError(f"{where}: '{key}' is {state.get(key)!r}, expected a count >= 0; {fix}")
-    elapsed, best = state.get("elapsed"), state.get("best")
+        value = checkpoint.get(key)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ValueError(f"{where}: '{key}' is {value!r}, expected a count >= 0; {fix}")
+    elapsed, best = checkpoint.get("elapsed"), checkpoint.get("best")
     if isinstance(elapsed, bool) or not isinstance(elapsed, (int, float)) or not np.isfinite(elapsed) or elapsed < 0:
         raise ValueError(f"{where}: 'elapsed' is {elapsed!r}, expected seconds >= 0; {fix}")
     if best is not None and (not isinstance(best, dict) or not isinstance(best.get("eval_return_mean"), (int, float))):
         raise ValueError(f"{where}: 'best' has no number 'eval_return_mean'; {fix}")
-    if not isinstance(state.get("agent"), dict):
+    if not isinstance(checkpoint.get("agent"), dict):
         raise ValueError(f"{where}: 'agent' is missing; {fix}")
-    if state["update"] > config.updates:
-        raise ValueError(f"updates: the run already has {state['update']} updates, more than {config.updates}; "
-                         f"pass --updates {state['update']} or more")
+    if checkpoint["update"] > config.updates:
+        raise ValueError(f"updates: the run already has {checkpoint['update']} updates, more than {config.updates}; "
+                         f"pass --updates {checkpoint['update']} or more")
     try:
-        agent.load_state_dict(state["agent"])
+        state.agent.load_state_dict(checkpoint["agent"])
     except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"{where}: the state does not fit this run's agent ({error}); {fix}") from error
-    return state["update"], state["episodes"], best, float(elapsed)
-
-
-def _invalid_reasons(evaluator: Evaluator, config: TrainConfig, batch: EpisodeBatch, fallback_seed: int
-                     ) -> dict[str, int]:
-    """Re-run the (cheap, unsimulated) invalid episodes here and count their ``info['invalid_reason']``."""
-    env, counts = evaluator.env, Counter()
-    for action, seed in zip(batch.actions, batch.seeds, strict=True):
-        env.reset(seed=int(seed) if seed >= 0 else fallback_seed, options=config.task.options())
-        info = env.step(np.asarray(action, dtype=np.float32))[4]
-        counts[str(info.get("invalid_reason") or "unknown")] += 1
-    return dict(counts.most_common())
-
-
-def _save_refined_dmp(env: Any, params: np.ndarray, path: Path) -> None:
-    """Write the env's DMP with the refined ``params [P]`` (its action groups) as ``dmp.json`` (core format),
-    for ``gym.make(env_id, dmp=path)`` or ``rdmp_gym.load_dmp``; envs without a DMP write nothing."""
-    if hasattr(env, "dmp") and hasattr(env, "groups"):
-        save_dmp(env.dmp.with_params(params, env.groups), path)
-
-
-def _loop(config: TrainConfig, run: RunDirectory, agent: Agent, evaluator: Evaluator, eval_seeds: np.ndarray,
-          observations: np.ndarray, resume: bool, progress: bool) -> None:
-    state = run.load_checkpoint() if resume else None
-    if state is None:
-        update, episodes, best, elapsed = 0, 0, None, 0.0
-        if resume:
-            run.truncate_log(-1)   # killed before its first checkpoint: start over
-    else:
-        update, episodes, best, elapsed = _restore(run, agent, state, config)
-        run.truncate_log(update)
-        logger.info("resuming %s at update %d (%d episodes)", run.path, update, episodes)
-    started = time.perf_counter() - elapsed
-
-    def evaluate_and_log(batch: EpisodeBatch | None) -> None:
-        nonlocal best
-        record: dict[str, Any] = {"update": update, "episodes": episodes,
-                                  "exploration": _number(agent.exploration)}
-        if batch is not None:
-            record.update(batch_summary(batch, ""))
-        if update % config.eval_every and update < config.updates:
-            record["best_eval_return"] = None if best is None else best["eval_return_mean"]
-            record["time_s"] = round(time.perf_counter() - started, 3)
-            run.append_log(record)
-            run.save_checkpoint({"agent": agent.state_dict(), "update": update, "episodes": episodes,
-                                 "best": best, "elapsed": record["time_s"]})
-            return
-        actions = agent.policy_actions(observations)
-        evaluations = 1 + update // config.eval_every + (1 if update % config.eval_every else 0)
-        record["eval_episodes"] = evaluations * len(eval_seeds)
-        record.update(batch_summary(evaluator.run(actions, eval_seeds), "eval_"))
-        if best is None or record["eval_return_mean"] > best["eval_return_mean"]:
-            best = {**{k: v for k, v in record.items() if k.startswith("eval_")}, "update": update,
-                    "eval_seed": int(eval_seeds[0])}
-            params = evaluator.env.unwrapped.action_to_params(actions[0])
-            run.save_best(actions[0], params, best)
-            _save_refined_dmp(evaluator.env.unwrapped, params, run.path / "dmp.json")
-        record["best_eval_return"] = best["eval_return_mean"]
-        record["time_s"] = round(time.perf_counter() - started, 3)
-        run.append_log(record)
-        run.save_checkpoint({"agent": agent.state_dict(), "update": update, "episodes": episodes,
-                             "best": best, "elapsed": record["time_s"]})
-
-    if state is None:
-        evaluate_and_log(None)
-    bar = tqdm(total=config.updates, initial=update, disable=not progress, desc=config.agent, unit="update")
-    with bar:
-        while update < config.updates:
-            batch = agent.train_update()
-            update += 1
-            episodes += batch.size
-            evaluate_and_log(batch)
-            if update == 1 and not np.any(batch.valid):
-                reasons = _invalid_reasons(evaluator, config, batch, int(eval_seeds[0]))
-                raise NoValidEpisodesError(
-                    f"training: all {batch.size} episodes of the first update were invalid (invalid_reason: "
-                    f"{', '.join(f'{k} x{v}' for k, v in reasons.items())}); the learner would only see a constant "
-                    "penalty. Check the demonstration's units (metres, table frame) and the env settings; "
-                    f"the run stopped at update 1 in {run.path}")
-            bar.update(1)
-            bar.set_postfix(ret=f"{best['eval_return_mean']:.3g}")
+    state.update, state.episodes, state.best = checkpoint["update"], checkpoint["episodes"], best
+    state.clock_start = time.perf_counter() - float(elapsed)
+    run.truncate_log(state.update)
+    logger.info("resuming %s at update %d (%d episodes)", run.path, state.update, state.episodes)
+    return False
