@@ -20,7 +20,7 @@ from .ending import Ending, StopPlan, StopRequest, plan_stop
 from .fitting import PAPER_SETTINGS, fit_rhythmic
 from .parameters import ParameterLayout, group_key
 from .settings import DEFAULT_FIT, FitSettings
-from .start import TransientStart, settled_state, start_blend_profiles
+from .start import TransientStart, blend_shift, settled_state, start_blend_profiles
 from .sweep import Sweep
 from .transformation import cached_system
 from .validation import as_finite_array, check_positive, check_time_grid
@@ -61,23 +61,6 @@ class _StartState(NamedTuple):
     def rows(self, rows: np.ndarray) -> _StartState:
         return _StartState(self.y0[rows], self.yd0[rows], None if self.blend_length is None
                            else self.blend_length[rows])
-
-
-def _blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, velocity_offset: np.ndarray,
-                 omega: float, alpha_z: float) -> np.ndarray:
-    """Anchor shift ``[B, T, d]`` whose response is exactly ``e(t) = dy P0(t) + dv P1(t)`` (lengths ``[B]``,
-    offsets ``[B, d]``): ``dg = e + de/dt / (beta_z Omega) + d2e/dt2 / (alpha_z beta_z Omega^2)``."""
-    beta_z = alpha_z / 4.0
-    lengths, row_length = np.unique(length, return_inverse=True)          # the profiles once per distinct length
-    with np.errstate(all="ignore"):      # a tempo so small that omega**2 underflows: inf/NaN, refused by _simulate
-        gains = 1.0 / np.array([1.0, beta_z * omega, alpha_z * beta_z * np.float64(omega) ** 2])
-        profiles = np.stack([gains @ start_blend_profiles(elapsed, float(value)) for value in lengths])
-        if lengths.size > 1:
-            profiles = profiles[row_length.ravel()]                                     # [B, 2, T]
-        shift = profiles[:, 0, :, None] * offset[:, None, :]
-        for dim in range(shift.shape[-1]):          # one coordinate at a time: a [B, T] temporary, not [B, T, d]
-            shift[..., dim] += profiles[:, 1] * velocity_offset[:, None, dim]
-        return shift
 
 
 def travel_input(sweep: Sweep, tau: np.ndarray, points: np.ndarray | None, omega: float, alpha_z: float
@@ -299,7 +282,7 @@ class RhythmicDMP:
         path = anchors
         if blend_length is not None:
             y_settled, yd_settled = self._settled(canonical, weights, inits, anchors, amplitudes, transform)
-            path = _blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled, omega, self.alpha_z)
+            path = blend_shift(elapsed, blend_length, y0 - y_settled, yd0 - yd_settled, omega, self.alpha_z)
             path += anchors[:, None, :]
         travel = 0.0 if sweeps is None else travel_input(self.sweep, elapsed * tempo, sweeps, self.canonical.omega,
                                                          self.alpha_z)                            # [B, T, d]
@@ -664,7 +647,7 @@ class DMPStepper:
                 self.dmp.sweep, times * self.canonical.tempo, None, self.dmp.canonical.omega, self.dmp.alpha_z)
             anchor = self.anchor + travel
             if self.start_offsets is not None:
-                anchor = anchor + _blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
+                anchor = anchor + blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
                                                self.start_offsets[1][None], self.omega, self.dmp.alpha_z)[0]
             if self.stop is None:
                 forcing = self.dmp.basis.forcing(phi, r, self.dmp.weights)

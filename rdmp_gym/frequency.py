@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .dmp import _blend_shift
 from .ending import StopPlan, StopRequest
+from .start import blend_shift
 from .validation import as_finite_array, check_positive
 
 __all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "follow_rhythm"]
@@ -173,7 +173,7 @@ class AdaptiveFrequencyStepper:
             forcing = dmp.ending.forcing(dmp.basis, phi, r, tau, self.stop.rotation, dmp.weights, dmp.ending.weights)
             anchor = dmp.anchor + dmp.ending.anchor_blend(tau)[:, None] * (self.stop.goal[0] - dmp.anchor)
         if self.start_offsets is not None:
-            anchor = anchor + _blend_shift(times, np.array([start.length]), self.start_offsets[0][None],
+            anchor = anchor + blend_shift(times, np.array([start.length]), self.start_offsets[0][None],
                                            self.start_offsets[1][None], self.omega_fit, dmp.alpha_z)[0]
         return dmp.alpha_z * dmp.alpha_z / 4.0 * anchor + dmp.amplitude * forcing
 

@@ -3,9 +3,11 @@
 * :class:`TransientStart`: where the canonical system starts for one encoded transient and where its
   demonstration started.
 * :func:`start_blend_profiles`: the quintic profiles that move a start offset away over the transient (C2).
+* :func:`blend_shift`: the anchor shift that makes the spring follow those profiles exactly.
 * :func:`settled_state`: the state the forcing term holds at the start (the spring's equilibrium, at rest).
 
-Both the fit (:mod:`rdmp_gym.fitting`) and the rollout (:mod:`rdmp_gym.dmp`) use them.
+The fit (:mod:`rdmp_gym.fitting`), the rollout (:mod:`rdmp_gym.dmp`) and the online steppers
+(:mod:`rdmp_gym.frequency`) use them.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TransientStart", "settled_state", "start_blend_profiles"]
+__all__ = ["TransientStart", "blend_shift", "settled_state", "start_blend_profiles"]
 
 
 @dataclass(frozen=True)
@@ -62,3 +64,24 @@ def settled_state(forcing: np.ndarray, anchor: np.ndarray, alpha_z: float) -> tu
     follows the forcing term with no fast transient of its own (for a demonstration that starts at rest,
     this is about its start)."""
     return anchor + forcing / (alpha_z * alpha_z / 4.0), np.zeros_like(anchor + forcing)
+
+
+def blend_shift(elapsed: np.ndarray, length: np.ndarray, offset: np.ndarray, velocity_offset: np.ndarray,
+                omega: float, alpha_z: float) -> np.ndarray:
+    """Anchor shift ``[B, T, d]`` whose response is exactly ``e(t) = dy P0(t) + dv P1(t)`` (lengths ``[B]``,
+    offsets ``[B, d]``): ``dg = e + de/dt / (beta_z Omega) + d2e/dt2 / (alpha_z beta_z Omega^2)``.
+
+    The smooth start of a rollout (and of an online stepper) moves a start offset away by shifting the anchor by
+    this over the first ``length`` seconds (``elapsed [T]``, s); a tempo so small that ``omega**2`` underflows gives
+    inf/NaN, which the caller refuses."""
+    beta_z = alpha_z / 4.0
+    lengths, row_length = np.unique(length, return_inverse=True)          # the profiles once per distinct length
+    with np.errstate(all="ignore"):      # a tempo so small that omega**2 underflows: inf/NaN (see above)
+        gains = 1.0 / np.array([1.0, beta_z * omega, alpha_z * beta_z * np.float64(omega) ** 2])
+        profiles = np.stack([gains @ start_blend_profiles(elapsed, float(value)) for value in lengths])
+        if lengths.size > 1:
+            profiles = profiles[row_length.ravel()]                                     # [B, 2, T]
+        shift = profiles[:, 0, :, None] * offset[:, None, :]
+        for dim in range(shift.shape[-1]):          # one coordinate at a time: a [B, T] temporary, not [B, T, d]
+            shift[..., dim] += profiles[:, 1] * velocity_offset[:, None, dim]
+        return shift
