@@ -17,8 +17,8 @@ from typing import Any
 
 # name -> the submodule that defines it (add new public names here)
 _EXPORTS = {
-    "evaluate_run": "assessment", "record_best_episode": "assessment",
-    "Evaluator": "evaluation",
+    "evaluate_run": "report", "record_best_episode": "report",
+    "Evaluator": "pool",
     "fit_dmp": "imitation", "load_demonstration": "imitation",
     **dict.fromkeys(("CMAES", "PI2", "PIBB", "BBRLConfig", "CMAESConfig", "ContextualConfig", "EpisodeBatch", "Learner",
                      "PI2Config", "PIBBConfig", "make_learner"), "learners"),

@@ -40,8 +40,8 @@ from tqdm.auto import tqdm
 from rdmp_gym import save_dmp
 
 from .errors import NoValidEpisodesError
-from .evaluation import Evaluator
 from .learners import EpisodeBatch
+from .pool import Evaluator
 from .protocol import success
 from .runs import RunDirectory
 

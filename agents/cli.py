@@ -38,13 +38,13 @@ from rdmp_gym import Demonstration, __version__, save_dmp
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import despike
 
-from .assessment import evaluate_run, record_best_episode
 from .config import Settings
 from .errors import WorkerError
 from .imitation import fit_dmp, load_demonstration
 from .learners import CONTEXTUAL
 from .plots import plot_fit, plot_recording_fit
 from .protocol import interval
+from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
 from .tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, failure_contexts
 from .training import AGENTS, START_MODES, TrainConfig, load_run_config, train

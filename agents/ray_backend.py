@@ -1,6 +1,6 @@
 """Ray execution backend: episodes as tasks on Ray actors that each hold one environment (built once).
 
-Used by :class:`rdmp_gym.agents.evaluation.Evaluator` with ``backend="ray"``. It joins the cluster at
+Used by :class:`rdmp_gym.agents.pool.Evaluator` with ``backend="ray"``. It joins the cluster at
 ``ray_address`` (or ``RAY_ADDRESS``) or, with neither, starts a local Ray instance with ``workers``
 CPUs (and stops it again on ``close``). On a cluster every node needs ``rdmp-gym`` installed (the
 actors import it) and any ``--demo`` file at the same path. Needs ``pip install 'rdmp-gym[ray]'``.

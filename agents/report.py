@@ -19,9 +19,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .config import check_choice
-from .evaluation import Evaluator
 from .learners import CONTEXTUAL, policy_from_state
 from .plots import plot_policy_comparison
+from .pool import Evaluator
 from .protocol import PolicyScores, context_observations, evaluate_actions, final_test_seeds, interval, path_jerk
 from .runs import RunDirectory, write_atomic
 from .training import TrainConfig, load_run_config

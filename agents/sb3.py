@@ -9,7 +9,7 @@ random streams restart). Its checkpoint is SB3's own ``.zip``, of which only the
 objects, is never loaded.
 
 With the ``length`` option > 0 the policy acts on a latent vector that a fixed smooth map turns into the action
-(:mod:`rdmp_gym.agents.smooth_actions`); the agents' batches, policy actions and evaluation are actions.
+(:mod:`rdmp_gym.agents.sb3_smooth_actions`); the agents' batches, policy actions and evaluation are actions.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from .learners.base import EpisodeBatch
 from .sb3_config import PPOConfig, SACConfig
-from .smooth_actions import SmoothActions, SmoothActionVecEnv
+from .sb3_smooth_actions import SmoothActions, SmoothActionVecEnv
 from .tasks import TaskSpec, episode_metrics
 
 __all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]

@@ -20,7 +20,7 @@ them does not import torch.
   ±1, up to 85), every weight was executed at a face and the path had 2.7x the imitation's jerk; 3e-3 gave
   test success 0.47 and 1.34x (2 seeds x 2000 episodes);
 * ``length`` (5 on ``ArmarWipe-v2``) makes the policy act on a latent vector that a fixed smooth map turns
-  into the action (``agents/smooth_actions.py``): the exploration and the learned mean are smooth along the
+  into the action (``agents/sb3_smooth_actions.py``): the exploration and the learned mean are smooth along the
   movement; with ``length`` 0 (v1) the ~250 weights get independent noise and the learned mean was 37x as
   jerky as the imitation on v2;
 * ``target_kl`` (0.05) stops an update's epochs once the policy has moved that far (SB3 stops at
@@ -60,7 +60,7 @@ class SB3Settings(Settings):
         batch_size: minibatch size.
         hidden: units in each of the two hidden layers of the networks.
         length: correlation length of the exploration in neighbouring DMP weights: the policy acts on a latent
-            vector mapped smoothly to the action (:mod:`rdmp_gym.agents.smooth_actions`); 0 = on the action itself.
+            vector mapped smoothly to the action (:mod:`rdmp_gym.agents.sb3_smooth_actions`); 0 = on the action itself.
     """
 
     sigma: float = 0.6

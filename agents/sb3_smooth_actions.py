@@ -3,8 +3,8 @@
 
 SB3's policies are independent (diagonal) Gaussians, so exploring the DMP weights directly is white noise
 along the movement, and a mean learned from it is as rough. Here ``A`` is the symmetric square root of the smooth
-correlation of neighbouring weights (:func:`.learners.smooth.smooth_factor`), each column a smooth bump, so that
-the learned mean ``A z`` is smooth whatever ``z`` is, with every row scaled to unit norm: noise of
+correlation of neighbouring weights (:func:`.learners.smooth_exploration.smooth_factor`), each column a smooth
+bump, so that the learned mean ``A z`` is smooth whatever ``z`` is, with every row scaled to unit norm: noise of
 standard deviation ``sigma`` on ``z`` is executed as noise of standard deviation ``sigma`` on every action
 dimension (as without ``A``), correlated over about ``length`` neighbouring weights of each degree of freedom.
 Single parameters (initial conditions, amplitude factors, ``approach``, ``sweep_*``) keep identity rows.
@@ -22,7 +22,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
 from .learners.contextual import action_layout
-from .learners.smooth import smooth_factor
+from .learners.smooth_exploration import smooth_factor
 
 __all__ = ["SmoothActionVecEnv", "SmoothActions"]
 

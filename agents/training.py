@@ -32,10 +32,10 @@ from . import sb3_config  # noqa: F401  (declares PPO and SAC)
 from .callbacks import Callback, TrainingState, default_callbacks, merge_callbacks
 from .config import Settings, check_choice, check_range
 from .errors import NoValidEpisodesError
-from .evaluation import Evaluator
 from .imitation import load_demonstration
 from .learners import EpisodeBatch, Learner, SearchSpace, make_learner
 from .plots import plot_learning_curve
+from .pool import Evaluator
 from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
 from .registry import REGISTRY, agent_spec
 from .runs import RunDirectory, write_atomic

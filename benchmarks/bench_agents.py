@@ -51,8 +51,7 @@ import rdmp_gym.envs  # noqa: F401  (registers the env)
 from field_report import episodes_to
 from field_report import write as write_field_report
 from output import SCRATCH, add_save_argument, results_dir
-from rdmp_gym.agents.assessment import trained_actions
-from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.protocol import (
     PolicyScores,
     context_observations,
@@ -61,6 +60,7 @@ from rdmp_gym.agents.protocol import (
     interval,
     path_jerk,
 )
+from rdmp_gym.agents.report import trained_actions
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train

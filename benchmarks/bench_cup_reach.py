@@ -8,7 +8,7 @@ For the first ``--contexts`` cup contexts among the test and validation seeds of
    9.5 cm (cup radius + sponge half length) of the cup, for the transient weights alone and for all
    groups; each is run as an episode (touch, shift, coverage, success, jerk, peak joint acceleration);
 3. what the learners' smooth exploration reaches: the same linearised lift for 2000 samples
-   ``squash(0.3 · ε)``, ``ε`` from :class:`~rdmp_gym.agents.learners.smooth.SmoothNoise` (length 5),
+   ``squash(0.3 · ε)``, ``ε`` from :class:`~rdmp_gym.agents.learners.smooth_exploration.SmoothNoise` (length 5),
    i.e. the contextual learners' first batch around the imitation;
 4. how much lift is needed: the imitation's path raised by ``h`` around the cup (a hand-made path,
    ``run_path``), for h = 1, 2, 3, 4, 6 cm.
@@ -28,7 +28,7 @@ import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
-from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash
+from rdmp_gym.agents.learners.smooth_exploration import SmoothNoise, block_layout, squash
 from rdmp_gym.agents.protocol import final_test_seeds, validation_seeds
 
 NEAR = 0.035 + 0.06          # cup radius + about half the sponge's length (m)

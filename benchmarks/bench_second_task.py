@@ -22,10 +22,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the envs)
 from output import add_save_argument, results_dir
-from rdmp_gym.agents.assessment import trained_actions
-from rdmp_gym.agents.evaluation import Evaluator
 from rdmp_gym.agents.field_metrics import probability_of_improvement, stratified_interval
+from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.protocol import context_observations, final_test_seeds
+from rdmp_gym.agents.report import trained_actions
 from rdmp_gym.agents.tasks import TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs import TRACKING_ID

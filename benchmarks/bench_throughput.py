@@ -44,7 +44,7 @@ import mujoco
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
-from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 
 _TICK = os.sysconf("SC_CLK_TCK")

@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
-from rdmp_gym.agents.evaluation import Evaluator, WorkerError
+from rdmp_gym.agents.pool import Evaluator, WorkerError
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train

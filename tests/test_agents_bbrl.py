@@ -11,7 +11,7 @@ import pytest
 import torch
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
 from rdmp_gym.agents.learners.bbrl import gaussian_kl, sample_weights
-from rdmp_gym.agents.learners.smooth import squash, unsquash
+from rdmp_gym.agents.learners.smooth_exploration import squash, unsquash
 
 torch.set_num_threads(1)
 N = 12

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
 from rdmp_gym.agents.learners.contextual import policy_from_state
-from rdmp_gym.agents.learners.smooth import SmoothNoise, block_layout, squash, unsquash
+from rdmp_gym.agents.learners.smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID
@@ -191,7 +191,7 @@ def test_contextual_training_run_on_the_tracking_task(tmp_path, agent):
     evaluated = [r for r in records if r.get("eval_return_mean") is not None]
     assert [r["update"] for r in evaluated] == [0, 2, 4]
     assert evaluated[-1]["eval_return_mean"] > evaluated[0]["eval_return_mean"]
-    from rdmp_gym.agents.assessment import evaluate_run
+    from rdmp_gym.agents.report import evaluate_run
 
     result = evaluate_run(run.path, 3)
     assert result["policy"] == "last" and len(result["trained"]["jerk_ratio"]) == 3
@@ -209,7 +209,7 @@ def test_sac_trains_on_the_one_step_task(tmp_path):
     assert [r["episodes"] for r in records] == [0, 4, 8]
     assert records[0]["exploration"] == pytest.approx(0.05, rel=1e-3)
     assert all(np.isfinite(r["eval_return_mean"]) and np.isfinite(r["return_mean"]) for r in records[1:])
-    from rdmp_gym.agents.assessment import evaluate_run
+    from rdmp_gym.agents.report import evaluate_run
 
     assert np.isfinite(evaluate_run(tmp_path / "sac", 2)["trained"]["return_mean"])
 
@@ -275,7 +275,7 @@ def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_th
 
 def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
     """With ``replay=0.5`` half of the second update's rollouts revisit contexts of the first (tracking task)."""
-    from rdmp_gym.agents.evaluation import Evaluator
+    from rdmp_gym.agents.pool import Evaluator
     from rdmp_gym.agents.protocol import context_observations
     from rdmp_gym.agents.tasks import TaskSpec
     from rdmp_gym.agents.training import ESAgent

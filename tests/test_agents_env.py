@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1)
 import torch
-from rdmp_gym.agents.assessment import evaluate_run
 from rdmp_gym.agents.cli import main
-from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.pool import Evaluator
+from rdmp_gym.agents.report import evaluate_run
 from rdmp_gym.agents.tasks import WIPE_ID, TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 

@@ -7,7 +7,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 import pytest
-from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.tasks import TaskSpec
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID

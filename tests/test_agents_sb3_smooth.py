@@ -13,7 +13,7 @@ pytest.importorskip("stable_baselines3")
 from rdmp_gym.agents import sb3
 from rdmp_gym.agents.learners.contextual import action_layout
 from rdmp_gym.agents.sb3 import PPOAgent, SACAgent
-from rdmp_gym.agents.smooth_actions import SmoothActions
+from rdmp_gym.agents.sb3_smooth_actions import SmoothActions
 from rdmp_gym.agents.tasks import WIPE_ID, WIPE_V2_ID, TaskSpec, task_options
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID

@@ -15,9 +15,9 @@ import filelock
 import numpy as np
 import pytest
 from rdmp_gym.agents import runs as runs_module
-from rdmp_gym.agents.assessment import evaluate_run
 from rdmp_gym.agents.cli import main
-from rdmp_gym.agents.evaluation import Evaluator
+from rdmp_gym.agents.pool import Evaluator
+from rdmp_gym.agents.report import evaluate_run
 from rdmp_gym.agents.runs import RunDirectory, RunLockedError
 from rdmp_gym.agents.training import NoValidEpisodesError, TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID

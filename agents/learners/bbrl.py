@@ -50,7 +50,7 @@ import torch
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
 from .bbrl_config import BASELINES, CREDITS, BBRLConfig
 from .contextual import SearchSpace, group_factors, select_groups
-from .smooth import smooth_factor, squash, unsquash
+from .smooth_exploration import smooth_factor, squash, unsquash
 
 __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
 

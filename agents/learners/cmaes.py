@@ -24,7 +24,7 @@ import numpy as np
 from ..config import Settings, check_choice, check_range
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs
-from .smooth import exploration_factor
+from .smooth_exploration import exploration_factor
 
 __all__ = ["CMAES", "CMAESConfig"]
 

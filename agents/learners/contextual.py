@@ -4,8 +4,9 @@ Policy: ``u = W x(s) + ε``, ``x(s) = [1, φ(s)]`` with standardised context fea
 observation minus its centre, over its scale; a *gated* feature, such as the cup's position, which is
 only defined when its indicator, the cup's presence, is 1, is standardised over the contexts where it
 is defined and is 0 where it is not), ``W = [θ̄, K]`` ``[n, F + 1]``; the executed action is
-``squash(u)`` in ``(-1, 1)`` (:func:`~rdmp_gym.agents.learners.smooth.squash`, monotone; nothing is clipped).
-``ε`` is smooth per weight block (:class:`~rdmp_gym.agents.learners.smooth.SmoothNoise`) with one
+``squash(u)`` in ``(-1, 1)`` (:func:`~rdmp_gym.agents.learners.smooth_exploration.squash`, monotone; nothing is
+clipped).
+``ε`` is smooth per weight block (:class:`~rdmp_gym.agents.learners.smooth_exploration.SmoothNoise`) with one
 standard deviation per block. Each update keeps the last ``reuse`` batches and weights their samples:
 
 * ``reps``: contextual REPS (Kupcsik et al. 2013; Deisenroth, Neumann, Peters 2013, sec. 2.4.2):
@@ -38,7 +39,7 @@ from scipy.optimize import minimize
 from ..config import Settings, check_choice, check_range
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
-from .smooth import SmoothNoise, block_layout, squash, unsquash
+from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = [
     "WEIGHTINGS",

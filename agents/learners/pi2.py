@@ -27,7 +27,7 @@ import numpy as np
 from ..config import Settings, check_range
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights
-from .smooth import exploration_factor
+from .smooth_exploration import exploration_factor
 
 __all__ = ["PI2", "PI2Config"]
 
@@ -69,7 +69,7 @@ class PI2(Learner):
         time_weights: ``[T, n]`` activation of each action dimension at each control step, in [0, 1].
         config: the settings.
         factor: ``[n, n]`` shape of the exploration noise (``sigma · factor ε``; default the identity), e.g.
-            :func:`~rdmp_gym.agents.learners.smooth.smooth_factor`.
+            :func:`~rdmp_gym.agents.learners.smooth_exploration.smooth_factor`.
     """
 
     name = "pi2"

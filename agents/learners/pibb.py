@@ -16,7 +16,7 @@ import numpy as np
 from ..config import Settings, check_choice, check_range
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights
-from .smooth import exploration_factor
+from .smooth_exploration import exploration_factor
 
 __all__ = ["PIBB", "PIBBConfig"]
 
@@ -65,7 +65,7 @@ class PIBB(Learner):
         rng: source of the samples.
         config: the settings.
         factor: ``[n, n]`` shape of the initial exploration (``Sigma_0 = sigma² factor factorᵀ``; default the
-            identity), e.g. :func:`~rdmp_gym.agents.learners.smooth.smooth_factor`.
+            identity), e.g. :func:`~rdmp_gym.agents.learners.smooth_exploration.smooth_factor`.
     """
 
     name = "pibb"
