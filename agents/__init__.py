@@ -32,7 +32,8 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 #: Python modules of the optional extras (``agents``, ``tensorboard``): a missing one is a missing extra.
-EXTRA_MODULES = ("gymnasium", "mujoco", "imageio", "cma", "tqdm", "stable_baselines3", "torch", "tensorboard")
+EXTRA_MODULES = ("gymnasium", "mujoco", "imageio", "cma", "tqdm", "stable_baselines3", "torch", "filelock",
+                 "matplotlib", "tensorboard")
 
 
 def __getattr__(name: str) -> Any:

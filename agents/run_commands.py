@@ -1,4 +1,4 @@
-"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the job of ``make run``).
+"""``rdmp-gym train``, ``evaluate`` and ``main`` (the job of ``make run``); they need the ``agents`` extra.
 
 Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses: the
 run's (:class:`TrainCommand`), the task's (:class:`TaskFlags`) and the chosen learner's settings
@@ -9,11 +9,11 @@ run's (:class:`TrainCommand`), the task's (:class:`TaskFlags`) and the chosen le
     rdmp-gym train --agent bbrl --options.sigma-factors approach 3 amplitude 2 --out runs/wide
     rdmp-gym train --out runs/bbrl --resume --updates 300       # continue (and extend) a run
     rdmp-gym evaluate runs/bbrl --episodes 20 --video   # final policy on the 20 test contexts
-    rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
     rdmp-gym main --out runs/main
 
 A run saves its configuration as ``config.json``; ``--resume`` reads it back and applies only the flags given
-(``--updates`` and ``--workers`` may change, any other differing setting is an error naming it).
+(``--updates`` and ``--workers`` may change, any other differing setting is an error naming it). The launcher
+:mod:`rdmp_gym.agents.cli` calls :func:`command_train`, :func:`command_evaluate` and :func:`command_main`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,6 @@ import json
 import logging
 import os
 import shutil
-import sys
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -34,22 +33,18 @@ from typing import Any, Literal
 import numpy as np
 import tyro
 
-from rdmp_gym import Demonstration, __version__, save_dmp
-from rdmp_gym.recording_fit import fit_recording, recording_report
-from rdmp_gym.signals import despike
-
 from .config import Settings
-from .errors import WorkerError
-from .imitation import fit_dmp, load_demonstration
+from .imitation import load_demonstration
 from .learners import CONTEXTUAL
-from .plots import plot_fit, plot_recording_fit
+from .plots import plot_fit
 from .protocol import interval
 from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
 from .tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, failure_contexts
 from .training import AGENTS, START_MODES, TrainConfig, load_run_config, train
 
-__all__ = ["EvaluateCommand", "FitCommand", "MainCommand", "TaskFlags", "TrainCommand", "main", "train_config"]
+__all__ = ["EvaluateCommand", "MainCommand", "TaskFlags", "TrainCommand", "command_evaluate", "command_main",
+           "command_train", "train_config"]
 
 logger = logging.getLogger(__name__)
 
@@ -160,40 +155,6 @@ class EvaluateCommand:
     """log progress details"""
 
 
-@dataclass
-class FitCommand:
-    """Fit the rhythmic DMP to a built-in style or to a whole recording (rest, approach, rhythm, departure, rest)."""
-
-    style: int = 1
-    """built-in demonstration style 1-4"""
-    demo: str = ""
-    """a CSV/NPZ demonstration instead of --style (default: none)"""
-    time_column: str = "t"
-    """name of the CSV's time column (seconds)"""
-    rate: float | None = None
-    """resample --demo onto an even grid at this rate in Hz (default: 100 Hz)"""
-    n_periodic: int = 40
-    """periodic basis functions"""
-    n_transient: int | None = None
-    """transient basis functions (default: 40 for --style, 20 for the entry of a whole --demo recording)"""
-    method: Literal["trajectory", "ridge", "lwr"] = "trajectory"
-    """regression (trajectory: the rollout itself matches the samples)"""
-    period: float | None = None
-    """the rhythm's period in s (default: detected)"""
-    start: float | None = None
-    """time (s from the first sample) from which the rhythm runs at full size (default: detected)"""
-    end: float | None = None
-    """time (s) at which the rhythm ends (default: detected)"""
-    ending: bool | None = None
-    """fit the departure and the final rest as the DMP's stop (default: where the recording ends at rest)"""
-    plot: bool = False
-    """write fit.png (recording vs reproduction: position and acceleration)"""
-    out: str = "runs/fit"
-    """output directory"""
-    verbose: bool = False
-    """log progress details"""
-
-
 def _env_kwargs(task: TaskFlags) -> dict[str, Any]:
     """The ``gym.make`` keywords of the task flags (the main job's env keywords under them on its env)."""
     kwargs = {name: getattr(task, name) for name in ("style", "n_periodic", "n_transient", "duration")
@@ -225,7 +186,7 @@ def train_config(command: TrainCommand, options: Settings | None = None) -> Trai
     """The training run of a ``train``/``main`` command (``options``: the learner's settings; default: the task's
     defaults for the agent, the main job's options for its learner)."""
     if options is None:
-        options = MAIN_OPTIONS if command.agent == MAIN_AGENT else {}
+        options = MAIN_OPTIONS if command.agent == MAIN_AGENT and command.env == MAIN_ENV else {}
     return TrainConfig(agent=command.agent, updates=command.updates, rollouts=command.rollouts, seed=command.seed,
                        workers=command.workers, env_id=command.env, env_kwargs=_env_kwargs(command),
                        reset_options=dict(command.reset_option) or None, options=options, start=command.start,
@@ -292,7 +253,7 @@ def _train_or_resume(command: TrainCommand, config: TrainConfig, out: str | Path
                  ray_address=command.ray_address)
 
 
-def _command_train(argv: Sequence[str]) -> None:
+def command_train(argv: Sequence[str]) -> None:
     command, config = _parse_run(TrainCommand, argv, "rdmp-gym train")
     _setup(command)
     run = _train_or_resume(command, config, command.out)
@@ -303,7 +264,7 @@ def _command_train(argv: Sequence[str]) -> None:
         print(f"wrote {record_best_episode(run.path)}")
 
 
-def _command_evaluate(argv: Sequence[str]) -> None:
+def command_evaluate(argv: Sequence[str]) -> None:
     command = tyro.cli(EvaluateCommand, args=argv, prog="rdmp-gym evaluate")
     _setup(command)
     result = evaluate_run(command.run, command.episodes, workers=command.workers, policy=command.policy,
@@ -312,53 +273,6 @@ def _command_evaluate(argv: Sequence[str]) -> None:
     _print_comparison(result)
     print(f"wrote {Path(command.run) / 'evaluation.json'} and evaluation.png" +
           (f" and {result['video']}" if "video" in result else ""))
-
-
-def _command_fit(argv: Sequence[str]) -> None:
-    args = tyro.cli(FitCommand, args=argv, prog="rdmp-gym fit")
-    _setup(args)
-    out = Path(args.out)
-    if args.demo:
-        _fit_whole_recording(args, out)
-        return
-    demo = load_demonstration(args.style)
-    dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
-    out.mkdir(parents=True, exist_ok=True)
-    save_dmp(dmp, out / "dmp.json")
-    reproduction = dmp.rollout(demo.t)
-    rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
-    print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
-    if args.plot:
-        plot_fit(demo.t - demo.t[0], demo.Y, reproduction, out / "fit.png", title=f"{demo.name}: demonstration vs DMP")
-        print(f"wrote {out / 'fit.png'}")
-
-
-def _fit_whole_recording(args: FitCommand, out: Path) -> None:
-    """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP."""
-    loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
-    demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
-    result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
-                           n_periodic=args.n_periodic, method=args.method,
-                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
-    out.mkdir(parents=True, exist_ok=True)
-    save_dmp(result.dmp, out / "dmp.json")
-    seg, report = result.segmentation, recording_report(demo, result)
-    rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
-    print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")
-    rest_error = "-" if report["rest_error"] is None else f"{1000 * report['rest_error']:.2f} mm"
-    print(f"cycle error {1000 * report['cycle_error']:.2f} mm vs cycle-to-cycle variation "
-          f"{1000 * report['cycle_variation']:.2f} mm (x{report['error_ratio']:.2f}); start error "
-          f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
-          f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
-          f"recording, x{report['acceleration_ratio']:.2f})")
-    (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
-                                                 "rhythm_end": seg.rhythm_end, "rest_time": seg.rest_time,
-                                                 "stop_at": result.stop_at, **report}, indent=2) + "\n")
-    print(f"wrote {out / 'dmp.json'} and {out / 'report.json'}")
-    if args.plot:
-        plot_recording_fit(demo.t - demo.t[0], demo.Y, result.reproduce, out / "fit.png",
-                           title=f"{demo.name}: recording vs DMP")
-        print(f"wrote {out / 'fit.png'}")
 
 
 def _interval_text(summary: dict[str, Any], metric: str) -> str:
@@ -403,7 +317,7 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
     return demo.name
 
 
-def _command_main(argv: Sequence[str]) -> None:
+def command_main(argv: Sequence[str]) -> None:
     from rdmp_gym.figures import write_paper_figures  # matplotlib: the plots extra
 
     command, config = _parse_run(MainCommand, argv, "rdmp-gym main")
@@ -447,40 +361,3 @@ def _setup(command: Any) -> None:
         except ModuleNotFoundError:
             return
         torch.set_num_threads(1)
-
-
-COMMANDS = {"train": _command_train, "evaluate": _command_evaluate, "fit": _command_fit, "main": _command_main}
-_ABOUT = {"train": TrainCommand, "evaluate": EvaluateCommand, "fit": FitCommand, "main": MainCommand}
-
-
-def _usage() -> str:
-    lines = [f"usage: rdmp-gym {{{','.join(COMMANDS)}}} [--help] ...  (rdmp-gym {__version__})", ""]
-    lines += [f"  {name:9s} {(kind.__doc__ or '').strip()}" for name, kind in _ABOUT.items()]
-    return "\n".join(lines)
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``rdmp-gym``; returns the exit status."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if not argv or argv[0] in ("-h", "--help"):
-        print(_usage())
-        return 0 if argv else 2
-    if argv[0] == "--version":
-        print(f"rdmp-gym {__version__}")
-        return 0
-    name = argv[0]
-    if name not in COMMANDS:
-        print(f"{_usage()}\nrdmp-gym: error: unknown command {name!r}", file=sys.stderr)
-        return 2
-    try:
-        COMMANDS[name](argv[1:])
-    except SystemExit as exit_:                      # tyro's --help (0) and its errors (2)
-        return exit_.code if isinstance(exit_.code, int) else 2
-    except (ValueError, TypeError, OSError, FloatingPointError, ImportError, WorkerError) as error:
-        print(f"rdmp-gym {name}: error: {error}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

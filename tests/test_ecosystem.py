@@ -262,7 +262,7 @@ def test_make_run_can_be_run_twice(tmp_path):
 
 def test_the_comparison_table_leaves_out_gains_a_task_does_not_measure(capsys):
     """A task without dirt (the tracking env) has no coverage: its paired gain is "-", not an error."""
-    from rdmp_gym.agents.cli import _print_comparison
+    from rdmp_gym.agents.run_commands import _print_comparison
 
     def scores(success: list[bool]) -> dict:
         return {"intervals": {}, "success": success, "coverage": [None] * len(success)}
@@ -273,7 +273,7 @@ def test_the_comparison_table_leaves_out_gains_a_task_does_not_measure(capsys):
 
 
 def test_the_comparison_says_which_criteria_each_policy_misses_and_where(capsys):
-    from rdmp_gym.agents.cli import _print_comparison
+    from rdmp_gym.agents.run_commands import _print_comparison
 
     def scores(failures: list[str]) -> dict:
         return {"intervals": {}, "success": [not f for f in failures], "coverage": [0.9] * 3, "failures": failures}

@@ -2,7 +2,6 @@
 and names the extra the other commands need, ``--version``, defaults in every help text, ``--time-column``
 and ``--rate``, a non-episodic ``--env`` is a clear error."""
 
-import argparse
 import os
 import subprocess
 import sys
@@ -57,7 +56,7 @@ import sys
 class _Block:
     def find_spec(self, name, path=None, target=None):
         if name.split(".")[0] in {"gymnasium", "mujoco", "cma", "tqdm", "stable_baselines3", "torch", "imageio",
-                                   "matplotlib"}:
+                                   "matplotlib", "filelock", "ray", "tensorboard"}:
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
 sys.meta_path.insert(0, _Block())
 from rdmp_gym.agents.cli import main
@@ -74,35 +73,41 @@ def _core_only(*args, cwd):
 def test_core_install_runs_help_and_fit_and_names_the_extra_for_train(tmp_path):
     help_text = _core_only("--help", cwd=tmp_path)
     assert help_text.returncode == 0 and "fit" in help_text.stdout and "agents extra" in help_text.stdout
+    assert _core_only("fit", "--help", cwd=tmp_path).returncode == 0
     fit = _core_only("fit", "--n-periodic", "10", "--n-transient", "10", "--out", str(tmp_path / "fit"), cwd=tmp_path)
     assert fit.returncode == 0, fit.stderr
-    assert (tmp_path / "fit" / "dmp.json").is_file()
-    train = _core_only("train", "--out", str(tmp_path / "run"), "--agent", "pi2", cwd=tmp_path)
-    assert train.returncode == 2 and 'pip install "rdmp-gym[agents]"' in train.stderr
-    assert "Traceback" not in train.stderr and not (tmp_path / "run").exists()
+    assert (tmp_path / "fit" / "dmp.json").is_file() and "RMS error" in fit.stdout
+    demo = wiping_demonstration(1, rng=0)
+    np.savetxt(tmp_path / "rec.csv", np.column_stack([demo.t, demo.Y]), delimiter=",", header="t,x,y,z", comments="")
+    whole = _core_only("fit", "--demo", str(tmp_path / "rec.csv"), "--n-periodic", "12", "--n-transient", "12",
+                       "--out", str(tmp_path / "whole"), cwd=tmp_path)
+    assert whole.returncode == 0, whole.stderr
+    assert (tmp_path / "whole" / "report.json").is_file()
+    plot = _core_only("fit", "--plot", "--out", str(tmp_path / "plot"), cwd=tmp_path)
+    assert plot.returncode == 2 and 'pip install "rdmp-gym[plots]"' in plot.stderr and "Traceback" not in plot.stderr
+    for command in ("train", "evaluate", "main"):
+        args = [str(tmp_path / "run")] if command == "evaluate" else ["--out", str(tmp_path / "run")]
+        refused = _core_only(command, *args, cwd=tmp_path)
+        assert refused.returncode == 2 and 'pip install "rdmp-gym[agents]"' in refused.stderr, command
+        assert "Traceback" not in refused.stderr and not (tmp_path / "run").exists()
 
 
 def test_version_flag(capsys):
-    with pytest.raises(SystemExit) as stop:
-        cli.main(["--version"])
-    assert stop.value.code == 0
+    assert cli.main(["--version"]) == 0
     assert capsys.readouterr().out.strip() == f"rdmp-gym {cli.__version__}"
 
 
-def _subparsers(parser):
-    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    return action.choices
+def test_every_command_has_help_with_defaults_and_the_launcher_describes_it_as_its_flags_do(capsys):
+    from rdmp_gym.agents.fit_command import FitCommand
+    from rdmp_gym.agents.run_commands import EvaluateCommand, MainCommand, TrainCommand
 
-
-def test_every_option_help_states_its_default():
-    parser = cli._parser()
-    for name, sub in [("rdmp-gym", parser), *_subparsers(parser).items()]:
-        formatter = sub._get_formatter()
-        for action in sub._actions:
-            if not action.option_strings or action.default is argparse.SUPPRESS or action.required:
-                continue
-            text = formatter._expand_help(action) if action.help else ""
-            assert "default" in text, f"{name} {action.option_strings}: {text!r}"
+    kinds = {"train": TrainCommand, "evaluate": EvaluateCommand, "fit": FitCommand, "main": MainCommand}
+    assert set(kinds) == set(cli.COMMANDS)
+    for name, kind in kinds.items():
+        assert cli.COMMANDS[name][2] == kind.__doc__, name
+        assert cli.main([name, "--help"]) == 0
+        text = " ".join(capsys.readouterr().out.replace("│", " ").split())
+        assert kind.__doc__ in text and "(default: " in text, name
 
 
 def test_fit_reads_a_time_column_and_resamples_uneven_stamps(tmp_path, capsys):

@@ -1,0 +1,90 @@
+"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the job of ``make run``).
+
+This launcher imports a command's module only when that command runs: ``fit``
+(:mod:`rdmp_gym.agents.fit_command`) needs only the core install, ``train``, ``evaluate`` and ``main``
+(:mod:`rdmp_gym.agents.run_commands`) the ``agents`` extra, and say so when it is missing::
+
+    rdmp-gym train --out runs/bbrl                      # the main job's learner (bbrl) on the current task
+    rdmp-gym train --agent cpi2 --updates 30 --options.sigma 0.2 --out runs/cpi2
+    rdmp-gym train --out runs/bbrl --resume --updates 300       # continue (and extend) a run
+    rdmp-gym evaluate runs/bbrl --episodes 20 --video   # final policy on the 20 test contexts
+    rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
+    rdmp-gym main --out runs/main
+
+Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses
+(:class:`~rdmp_gym.agents.run_commands.TrainCommand`, :class:`~rdmp_gym.agents.fit_command.FitCommand`, ...).
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+
+from rdmp_gym import __version__
+
+from . import EXTRA_MODULES
+from .errors import WorkerError
+
+__all__ = ["COMMANDS", "main"]
+
+#: command -> (its module, its function, what it does, whether it needs the agents extra)
+COMMANDS: dict[str, tuple[str, str, str, bool]] = {
+    "train": ("run_commands", "command_train", "Train an agent: bbrl with the main job's settings on the current "
+              "task unless --agent / --env say otherwise.", True),
+    "evaluate": ("run_commands", "command_evaluate",
+                 "Evaluate a run's final policy against the imitation on the test contexts.", True),
+    "fit": ("fit_command", "command_fit", "Fit the rhythmic DMP to a built-in style or to a whole recording (rest, "
+            "approach, rhythm, departure, rest).", False),
+    "main": ("run_commands", "command_main", "Imitation, the paper's figures, contextual refinement and evaluation "
+             "on test contexts, end to end.", True),
+}
+EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
+
+
+def _usage() -> str:
+    lines = [f"usage: rdmp-gym {{{','.join(COMMANDS)}}} [--help] ...  (rdmp-gym {__version__})", ""]
+    lines += [f"  {name:9s} {about}" for name, (_, _, about, _) in COMMANDS.items()]
+    extra = [name for name, (*_, needs_extra) in COMMANDS.items() if needs_extra]
+    lines += ["", f"{', '.join(extra)} need the agents extra ({EXTRA_HINT}); fit needs only the core install.",
+              "rdmp-gym COMMAND --help lists a command's flags and their defaults."]
+    return "\n".join(lines)
+
+
+def _command(name: str) -> Callable[[Sequence[str]], None]:
+    """The function of command ``name``; a missing module of an extra is an ``ImportError`` naming the extra."""
+    module_name, function, _, _ = COMMANDS[name]
+    try:
+        module = importlib.import_module(f"{__package__}.{module_name}")
+    except ModuleNotFoundError as error:
+        if error.name and error.name.split(".")[0] in EXTRA_MODULES:
+            raise ImportError(f"needs the agents extra (missing module {error.name!r}): {EXTRA_HINT}") from error
+        raise
+    return getattr(module, function)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``rdmp-gym``; returns the exit status."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        print(_usage())
+        return 0 if argv else 2
+    if argv[0] == "--version":
+        print(f"rdmp-gym {__version__}")
+        return 0
+    name = argv[0]
+    if name not in COMMANDS:
+        print(f"{_usage()}\nrdmp-gym: error: unknown command {name!r}", file=sys.stderr)
+        return 2
+    try:
+        _command(name)(argv[1:])
+    except SystemExit as exit_:                      # tyro's --help (0) and its errors (2)
+        return exit_.code if isinstance(exit_.code, int) else 2
+    except (ValueError, TypeError, OSError, FloatingPointError, ImportError, WorkerError) as error:
+        print(f"rdmp-gym {name}: error: {error}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,118 @@
+"""``rdmp-gym fit``: the rhythmic DMP fitted to a built-in style or to a whole recording. Needs only the core
+install (and the ``plots`` extra for ``--plot``)."""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Literal
+
+import numpy as np
+import tyro
+
+from rdmp_gym import Demonstration, save_dmp
+from rdmp_gym.recording_fit import fit_recording, recording_report
+from rdmp_gym.signals import despike
+
+from .imitation import fit_dmp, load_demonstration
+
+__all__ = ["FitCommand", "command_fit"]
+
+
+@dataclass
+class FitCommand:
+    """Fit the rhythmic DMP to a built-in style or to a whole recording (rest, approach, rhythm, departure, rest)."""
+
+    style: int = 1
+    """built-in demonstration style 1-4"""
+    demo: str = ""
+    """a CSV/NPZ demonstration instead of --style (default: none)"""
+    time_column: str = "t"
+    """name of the CSV's time column (seconds)"""
+    rate: float | None = None
+    """resample --demo onto an even grid at this rate in Hz (default: 100 Hz)"""
+    n_periodic: int = 40
+    """periodic basis functions"""
+    n_transient: int | None = None
+    """transient basis functions (default: 40 for --style, 20 for the entry of a whole --demo recording)"""
+    method: Literal["trajectory", "ridge", "lwr"] = "trajectory"
+    """regression (trajectory: the rollout itself matches the samples)"""
+    period: float | None = None
+    """the rhythm's period in s (default: detected)"""
+    start: float | None = None
+    """time (s from the first sample) from which the rhythm runs at full size (default: detected)"""
+    end: float | None = None
+    """time (s) at which the rhythm ends (default: detected)"""
+    ending: bool | None = None
+    """fit the departure and the final rest as the DMP's stop (default: where the recording ends at rest)"""
+    plot: bool = False
+    """write fit.png (recording vs reproduction: position and acceleration; needs the plots extra)"""
+    out: str = "runs/fit"
+    """output directory"""
+    verbose: bool = False
+    """log progress details"""
+
+
+def command_fit(argv: Sequence[str]) -> None:
+    """``rdmp-gym fit ARGS``: write ``dmp.json`` (and ``fit.png`` with ``--plot``) into ``--out``."""
+    args = tyro.cli(FitCommand, args=argv, prog="rdmp-gym fit")
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    out = Path(args.out)
+    plots = _plots() if args.plot else None
+    if args.demo:
+        _fit_whole_recording(args, out, plots)
+        return
+    demo = load_demonstration(args.style)
+    dmp = fit_dmp(demo, args.n_periodic, args.n_transient or 40, args.method)
+    out.mkdir(parents=True, exist_ok=True)
+    save_dmp(dmp, out / "dmp.json")
+    reproduction = dmp.rollout(demo.t)
+    rms = float(np.sqrt(np.mean(np.sum((demo.Y - reproduction) ** 2, axis=1))))
+    print(f"{dmp}: RMS error {1000 * rms:.3f} mm over {demo.duration:.3g} s; wrote {out / 'dmp.json'}")
+    if plots is not None:
+        plots.plot_fit(demo.t - demo.t[0], demo.Y, reproduction, out / "fit.png",
+                       title=f"{demo.name}: demonstration vs DMP")
+        print(f"wrote {out / 'fit.png'}")
+
+
+def _plots() -> ModuleType:
+    """The figures module (matplotlib: the ``plots`` extra; an ``ImportError`` naming it when missing)."""
+    try:
+        from . import plots  # matplotlib: the plots extra
+    except ModuleNotFoundError as error:
+        raise ImportError(f"--plot: needs the plots extra (missing module {error.name!r}): "
+                          'pip install "rdmp-gym[plots]"') from error
+    return plots
+
+
+def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) -> None:
+    """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP."""
+    loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
+    demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
+    result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
+                           n_periodic=args.n_periodic, method=args.method,
+                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
+    out.mkdir(parents=True, exist_ok=True)
+    save_dmp(result.dmp, out / "dmp.json")
+    seg, report = result.segmentation, recording_report(demo, result)
+    rest = "no final rest" if seg.rest_time is None else f"at rest from {seg.rest_time:.2f} s"
+    print(f"{demo.name}: period {seg.period:.3f} s, rhythm {seg.rhythm_start:.2f}-{seg.rhythm_end:.2f} s, {rest}")
+    rest_error = "-" if report["rest_error"] is None else f"{1000 * report['rest_error']:.2f} mm"
+    print(f"cycle error {1000 * report['cycle_error']:.2f} mm vs cycle-to-cycle variation "
+          f"{1000 * report['cycle_variation']:.2f} mm (x{report['error_ratio']:.2f}); start error "
+          f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
+          f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
+          f"recording, x{report['acceleration_ratio']:.2f})")
+    (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
+                                                 "rhythm_end": seg.rhythm_end, "rest_time": seg.rest_time,
+                                                 "stop_at": result.stop_at, **report}, indent=2) + "\n")
+    print(f"wrote {out / 'dmp.json'} and {out / 'report.json'}")
+    if plots is not None:
+        plots.plot_recording_fit(demo.t - demo.t[0], demo.Y, result.reproduce, out / "fit.png",
+                           title=f"{demo.name}: recording vs DMP")
+        print(f"wrote {out / 'fit.png'}")
