@@ -12,6 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from rdmp_gym.signals import smooth_derivatives
+
 __all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison", "plot_recording_fit"]
 
 
@@ -72,8 +74,6 @@ def plot_recording_fit(t: np.ndarray, recording: np.ndarray, reproduce, path: st
     """A recording ``[L, d]`` at even times ``t [L]`` (from 0) against a reproduction (``reproduce(times) -> [T, d]``):
     positions per dimension, and the acceleration's norm (the recording's Savitzky-Golay-smoothed over 0.15 s,
     the reproduction's from a 1 kHz rollout)."""
-    from rdmp_gym.signals import smooth_derivatives
-
     dt = float(t[1] - t[0])
     reproduction = reproduce(t)
     fine = np.arange(0.0, t[-1], 1e-3)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import WorkerError
 from .tasks import TaskSpec, run_episode
 
 __all__ = ["EnvActor", "RayPool", "import_ray"]
@@ -87,8 +88,6 @@ class RayPool:
     def map(self, actions: np.ndarray, seeds: Sequence[int]) -> list[dict[str, Any]]:
         """Ordered results of one episode per ``(action [n], seed)``."""
         from ray.exceptions import RayActorError
-
-        from .errors import WorkerError
 
         ray = import_ray()
         jobs = list(zip(actions, seeds, strict=True))

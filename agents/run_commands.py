@@ -33,6 +33,8 @@ from typing import Any, Literal
 import numpy as np
 import tyro
 
+from rdmp_gym.figures import write_paper_figures
+
 from .config import Settings
 from .imitation import load_demonstration
 from .learners import CONTEXTUAL
@@ -318,8 +320,6 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
 
 
 def command_main(argv: Sequence[str]) -> None:
-    from rdmp_gym.figures import write_paper_figures  # matplotlib: the plots extra
-
     command, config = _parse_run(MainCommand, argv, "rdmp-gym main")
     _setup(command)
     out = Path(command.out)

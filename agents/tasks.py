@@ -8,6 +8,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
 from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID
 
 from .imitation import load_demonstration
@@ -82,8 +83,6 @@ class TaskSpec:
 
     def make(self, render_mode: str | None = None) -> gym.Env:
         """Build the environment (importing the packages that register the ids)."""
-        import rdmp_gym.envs  # noqa: F401  (registers rdmp_gym/ArmarWipe-v1 and rdmp_gym/DMPTracking-v0)
-
         kwargs = dict(self.env_kwargs)
         if render_mode is not None:
             kwargs["render_mode"] = render_mode

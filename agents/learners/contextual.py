@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from rdmp_gym.envs.context import CONTEXT_FIELDS
 from scipy.optimize import minimize
 
 from ..config import Settings, check_choice, check_range
@@ -257,7 +258,7 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
 def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
     fields = getattr(base, "context_fields", None)
     if fields is None and hasattr(base, "context_spec"):
-        from rdmp_gym.envs.context import CONTEXT_FIELDS as fields
+        fields = CONTEXT_FIELDS
     return fields
 
 
