@@ -16,6 +16,7 @@ Results are cached per context under ``runs/benchmarks/solvable-cache/`` so an i
 
     python benchmarks/bench_solvable.py --save                               # ArmarWipe-v2, 60 contexts
     python benchmarks/bench_solvable.py --env-id rdmp_gym/ArmarWipe-v1 --contexts 20 --save
+    python benchmarks/bench_solvable.py --env-id rdmp_gym/PandaWipe-v3 --contexts 50 --budget 32 --save
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ GRID_SWEEP = (0.0, 0.33, 0.67)
 
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--env-id", default=ENV_ID_V2, help="an ArmarWipe env id")
+    parser.add_argument("--env-id", default=ENV_ID_V2, help="a wiping env id (ArmarWipe-v2, PandaWipe-v3, ...)")
     parser.add_argument("--contexts", type=int, default=60, help="test contexts (the agents' final_test_seeds)")
     parser.add_argument("--budget", type=int, default=64, help="CMA-ES episodes per context")
     parser.add_argument("--sigma", type=float, default=0.3, help="CMA-ES initial step (action units)")
@@ -155,7 +156,9 @@ def main() -> None:
                       ("reached", "some action succeeds"), ("agree", "return and success agree")):
         part = summary[key]
         print(f"{text:>28}: {part['estimate']:.3f} [{part['low']:.3f}, {part['high']:.3f}] of {part['n']} contexts")
-    name = "solvable_" + args.env_id.rsplit("-", 1)[-1]
+    task, version = args.env_id.split("/")[-1].rsplit("-", 1)
+    robot = task.removesuffix("Wipe").lower()                      # ArmarWipe-v2 -> solvable_v2 (as published)
+    name = f"solvable_{version}" if robot == "armar" else f"solvable_{robot}_{version}"
     out = results_dir(args.save) / f"{name}.json"
     out.write_text(json.dumps({"settings": vars(args), "contexts": rows, "summary": summary}, indent=1))
     print(f"wrote {out}")
