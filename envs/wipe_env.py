@@ -51,6 +51,7 @@ from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPla
 from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .ik import BodyClearance, IKResult, PathIK
+from .info import void_statistics
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
@@ -663,6 +664,7 @@ class ArmarWipeEnv(gym.Env):
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
 
     def statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
+        """The episode's statistics (:mod:`rdmp_gym.envs.info`) from its trace and the smoothness of its path."""
         live = np.arange(self.n_steps) < trace.steps
         per = self.periodic & live
         force = trace.contact_force[per]
@@ -698,12 +700,7 @@ class ArmarWipeEnv(gym.Env):
         traces: dict[str, np.ndarray] = {}
         info["cost_terms"] = traces
         terms, cost = invalid_reward(severity, self.n_steps, self.reward_weights, traces)
-        info.update({"coverage": 0.0, "force_mean": 0.0, "force_sd": 0.0, "force_error_mean": 0.0,
-                     "force_in_band_fraction": 0.0, "contact_fraction": 0.0, "max_force": 0.0, "max_wrist_force": 0.0,
-                     "impact_force": 0.0, "jerk_ratio": float("nan"), "peak_joint_accel": float("nan"),
-                     "arm_collision_fraction": 0.0, "self_collision_fraction": 0.0, "penetration": 0.0,
-                     "obstacle_touch_steps": 0, "obstacle_shift": 0.0, "joint_limit_fraction": 0.0, "steps": 0,
-                     "force_trace": np.zeros(self.n_steps), "dirt_removed_trace": np.zeros(self.n_steps)})
+        info.update(void_statistics(self.n_steps))
         logger.debug("invalid parameters (%s, severity %.3g)", reason, severity)
         return self._finish(info, terms, cost, valid=False, reason=reason, unstable=False)
 
