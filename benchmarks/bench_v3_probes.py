@@ -12,13 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 from collections import Counter
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
+from output import add_save_argument, results_dir
 
-RESULTS = Path(__file__).resolve().parent / "results"
 MEANINGLESS = {"target_force": 80.0, "cell_size": 1.0, "cup_clearance": 1.0, "limit_margin": 5.0,
                "control_rate": 2.0, "obstacle": 0.3}
 
@@ -67,7 +66,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--contexts", type=int, default=12)
     parser.add_argument("--random", type=int, default=60)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--save", action="store_true", help="write benchmarks/results/v3_probes.json")
+    add_save_argument(parser)
     args = parser.parse_args(argv)
     result = {}
     for env_id in args.env_id:
@@ -79,8 +78,9 @@ def main(argv: list[str] | None = None) -> None:
               f"{actions['random']['jerk_ratio_range'][1]:.1f}x), causes {actions['random']['failure_causes']}")
         for key, error in result[env_id]["settings"].items():
             print(f"    {key}={MEANINGLESS[key]!r}: {'ACCEPTED' if error is None else error}")
-    if args.save:
-        (RESULTS / "v3_probes.json").write_text(json.dumps({"settings": vars(args), "results": result}, indent=1))
+    path = results_dir(args.save) / "v3_probes.json"
+    path.write_text(json.dumps({"settings": vars(args), "results": result}, indent=1) + "\n")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
