@@ -26,7 +26,7 @@ _EXPORTS = {
     "RunDirectory": "runs",
     "WIPE_ID": "tasks", "TaskSpec": "tasks",
     "TRACKING_ID": "rdmp_gym.envs.registration", "TrackingEnv": "rdmp_gym.envs.tracking",
-    "AGENTS": "training", "TrainConfig": "training", "train": "training",
+    "AGENTS": "train_config", "TrainConfig": "train_config", "train": "training",
 }
 
 __all__ = sorted(_EXPORTS)

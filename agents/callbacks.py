@@ -32,7 +32,7 @@ import time
 from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -44,9 +44,7 @@ from .learners import EpisodeBatch
 from .pool import Evaluator
 from .protocol import success
 from .runs import RunDirectory
-
-if TYPE_CHECKING:                   # for the annotations only: the loop's module imports this one
-    from .training import Agent, TrainConfig
+from .train_config import Agent, TrainConfig
 
 __all__ = ["BestPolicyCallback", "Callback", "CallbackList", "CheckpointCallback", "EvaluateCallback",
            "FirstUpdateGuard", "LogCallback", "NoValidEpisodesError", "PolicyEvaluation", "ProgressBar",

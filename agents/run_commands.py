@@ -43,7 +43,8 @@ from .protocol import interval
 from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
 from .tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, failure_contexts
-from .training import AGENTS, START_MODES, TrainConfig, load_run_config, train
+from .train_config import AGENTS, START_MODES, TrainConfig
+from .training import load_run_config, train
 
 __all__ = ["EvaluateCommand", "MainCommand", "TaskFlags", "TrainCommand", "command_evaluate", "command_main",
            "command_train", "train_config"]

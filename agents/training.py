@@ -20,155 +20,31 @@ import platform
 import subprocess
 import time
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import replace
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
-from . import sb3_config  # noqa: F401  (declares PPO and SAC)
 from .callbacks import Callback, TrainingState, default_callbacks, merge_callbacks
-from .config import Settings, check_choice, check_range
 from .errors import NoValidEpisodesError
 from .imitation import load_demonstration
 from .learners import EpisodeBatch, Learner, SearchSpace, make_learner
 from .plots import plot_learning_curve
 from .pool import Evaluator
 from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
-from .registry import REGISTRY, agent_spec
+from .registry import agent_spec
 from .runs import RunDirectory, write_atomic
-from .tasks import WIPE_ID, TaskSpec, task_options
+from .train_config import AGENTS, Agent, TrainConfig
 
 __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "environment_record", "load_run_config",
            "train"]
 
 logger = logging.getLogger(__name__)
 
-#: every registered agent's name (the ask/tell learners, ``ppo`` and ``sac``)
-AGENTS = tuple(REGISTRY)
-START_MODES = ("imitation", "perturbed", "shrunk")
 _FEATURE_CONTEXTS = 64   # training contexts whose mean and spread standardise a contextual learner's features
-_SEED_LIMIT = 2**31 - 1
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """Everything that defines a training run (stored as ``config.json``).
-
-    Attributes:
-        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``creps``, ``cpibb``, ``cpi2``, ``pi2``, ``pibb``,
-            ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``.
-        updates: number of updates.
-        rollouts: training episodes per update.
-        seed: run seed.
-        workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
-            (PPO's parallel envs are its own setting ``envs``).
-        env_id: the episodic env.
-        env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
-        reset_options: options for every reset (e.g. a fixed context), or None.
-        options: the agent's settings: its typed settings object (``PI2Config``, ``BBRLConfig``, ``PPOConfig``, ...,
-            used as given), or a mapping of their fields over the task's defaults for the agent
-            (``tasks.task_options``: e.g. a contextual search on the wiping task starts from
-            ``tasks.CONTEXTUAL_SEARCH_DEFAULTS``). Stored as the typed object.
-        start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
-            ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
-            a smaller, damped movement; the initial conditions as fitted).
-        perturbation: size of the perturbed or shrunk start.
-        demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
-        eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
-        eval_every: evaluate the policy every this many updates (and after the last one).
-        shared_context: all rollouts of one update use the same reset seed (same context); the contextual
-            learners (``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context per rollout.
-    """
-
-    agent: str = "pi2"
-    updates: int = 30
-    rollouts: int = 10
-    seed: int = 0
-    workers: int = 1
-    env_id: str = WIPE_ID
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
-    reset_options: dict[str, Any] | None = None
-    options: Settings | Mapping[str, Any] = field(default_factory=dict)
-    start: str = "imitation"
-    perturbation: float = 0.3
-    demo: str = ""
-    eval_episodes: int = 1
-    shared_context: bool = True
-    eval_every: int = 1
-
-    def __post_init__(self) -> None:
-        check_choice(self.agent, "agent", AGENTS)
-        check_range(self.updates, "updates", 1, None)
-        check_range(self.rollouts, "rollouts", 2, None)
-        check_range(self.seed, "seed", 0, _SEED_LIMIT)
-        check_range(self.workers, "workers", 1, None)
-        check_range(self.perturbation, "perturbation", 0.0, 1.0)
-        check_range(self.eval_episodes, "eval_episodes", 1, None)
-        check_range(self.eval_every, "eval_every", 1, None)
-        check_choice(self.start, "start", START_MODES)
-        if not isinstance(self.env_kwargs, Mapping):
-            raise TypeError(f"env_kwargs: expected a mapping, got {type(self.env_kwargs).__name__}")
-        if self.reset_options is not None and not isinstance(self.reset_options, Mapping):
-            raise TypeError(f"reset_options: expected a mapping or None, got {type(self.reset_options).__name__}")
-        settings = agent_spec(self.agent).config
-        if isinstance(self.options, Mapping):
-            merged = task_options(self.env_id, self.agent, self.options, self.env_kwargs)
-            object.__setattr__(self, "options", settings.from_dict(merged, self.agent))
-        elif type(self.options) is not settings:
-            raise TypeError(f"options: expected {settings.__name__} or a mapping for {self.agent}, "
-                            f"got {type(self.options).__name__}")
-
-    @classmethod
-    def from_dict(cls, values: Mapping[str, Any]) -> TrainConfig:
-        """Build from a mapping (e.g. ``config.json``, also as earlier versions wrote it); unknown keys are a
-        ``ValueError``, values of the wrong type a ``TypeError`` naming the field."""
-        values = dict(values)
-        known = {item.name for item in fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(f"config: unknown option(s) {unknown}; expected some of {sorted(known)}")
-        for name, kind in (("agent", str), ("env_id", str), ("start", str), ("demo", str), ("shared_context", bool)):
-            if name in values and not isinstance(values[name], kind):
-                raise TypeError(f"config.{name}: expected {kind.__name__}, got {values[name]!r}")
-        for name in ("updates", "rollouts", "seed", "workers", "eval_episodes", "eval_every"):
-            if name in values and (isinstance(values[name], bool) or not isinstance(values[name], int)):
-                raise TypeError(f"config.{name}: expected an integer, got {values[name]!r}")
-        if isinstance(values.get("options", {}), Mapping):
-            spec = agent_spec(values.get("agent", cls.agent))
-            values["options"] = spec.config.from_dict(values.get("options"), spec.name)
-        return cls(**values)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly fields (the options as a JSON object)."""
-        values = {item.name: getattr(self, item.name) for item in fields(self)}
-        return {**values, "env_kwargs": dict(self.env_kwargs), "options": self.options.to_dict(),
-                "reset_options": None if self.reset_options is None else dict(self.reset_options)}
-
-    @property
-    def task(self) -> TaskSpec:
-        """The task the run trains on."""
-        return TaskSpec(self.env_id, dict(self.env_kwargs),
-                        None if self.reset_options is None else dict(self.reset_options), self.demo)
-
-
-class Agent(Protocol):
-    """What the training loop needs from an agent."""
-
-    @property
-    def exploration(self) -> float: ...
-
-    def train_update(self) -> EpisodeBatch: ...
-
-    def policy_actions(self, observations: np.ndarray) -> np.ndarray: ...
-
-    def state_dict(self) -> dict[str, Any]: ...
-
-    def load_state_dict(self, state: dict[str, Any]) -> None: ...
-
-    def close(self) -> None: ...
 
 
 class ESAgent:
