@@ -44,10 +44,10 @@ from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
 from .tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, failure_contexts
 from .train_config import AGENTS, START_MODES, TrainConfig
-from .training import load_run_config, train
+from .training import MUTABLE_ON_RESUME, load_run_config, train
 
 __all__ = ["EvaluateCommand", "MainCommand", "TaskFlags", "TrainCommand", "command_evaluate", "command_main",
-           "command_train", "train_config"]
+           "command_train", "parse_evaluate", "parse_main", "parse_train", "train_config"]
 
 logger = logging.getLogger(__name__)
 
@@ -122,6 +122,11 @@ class TrainCommand(TaskFlags):
     verbose: bool = False
     """log progress details"""
 
+    @property
+    def run_path(self) -> Path:
+        """The run directory the command trains (and ``--resume`` continues)."""
+        return Path(self.out)
+
 
 @dataclass
 class MainCommand(TrainCommand):
@@ -134,6 +139,11 @@ class MainCommand(TrainCommand):
     eval_every: int = 20
     episodes: int = 20
     """test contexts"""
+
+    @property
+    def run_path(self) -> Path:
+        """The run directory: ``train`` in the output directory."""
+        return Path(self.out) / "train"
 
 
 @dataclass
@@ -188,17 +198,24 @@ def _prepare_demo(task: TaskFlags) -> str:
 def train_config(command: TrainCommand, options: Settings | None = None) -> TrainConfig:
     """The training run of a ``train``/``main`` command (``options``: the learner's settings; default: the task's
     defaults for the agent, the main job's options for its learner)."""
-    if options is None:
-        options = MAIN_OPTIONS if command.agent == MAIN_AGENT and command.env == MAIN_ENV else {}
     return TrainConfig(agent=command.agent, updates=command.updates, rollouts=command.rollouts, seed=command.seed,
                        workers=command.workers, env_id=command.env, env_kwargs=_env_kwargs(command),
-                       reset_options=dict(command.reset_option) or None, options=options, start=command.start,
+                       reset_options=dict(command.reset_option) or None,
+                       options=_default_options(command) if options is None else options, start=command.start,
                        perturbation=command.perturbation, demo=_prepare_demo(command),
                        eval_episodes=command.eval_episodes, eval_every=command.eval_every,
                        shared_context=command.agent not in CONTEXTUAL)
 
 
+def _default_options(command: TrainCommand) -> Settings:
+    """The learner's settings of a new run: the task's defaults for the agent (the main job's for its learner)."""
+    options = MAIN_OPTIONS if command.agent == MAIN_AGENT and command.env == MAIN_ENV else {}
+    return TrainConfig(agent=command.agent, env_id=command.env, env_kwargs=_env_kwargs(command),
+                       options=options).options
+
+
 _TASK_FLAGS = ("style", "n_periodic", "n_transient", "duration", "groups", "dmp")
+_FLAG_NAMES = {"env_id": "--env"}
 
 
 def _saved_command(kind: type[TrainCommand], saved: TrainConfig, out: str) -> TrainCommand:
@@ -217,49 +234,115 @@ def _saved_command(kind: type[TrainCommand], saved: TrainConfig, out: str) -> Tr
                 eval_episodes=saved.eval_episodes, eval_every=saved.eval_every, resume=True, **flags)
 
 
-def _parse_run(kind: type[TrainCommand], argv: Sequence[str], prog: str) -> tuple[TrainCommand, TrainConfig]:
-    """Parse a ``train``/``main`` command line into the command and its training run.
+def _parse_flags(kind: type[TrainCommand], argv: Sequence[str], prog: str, *, read_run: bool = True
+                 ) -> tuple[TrainCommand, TrainConfig | None]:
+    """Parse a ``train``/``main`` command line into the command, with the learner's settings as ``options``, and
+    (for ``--resume`` with ``read_run``) the saved run it continues.
 
     The agent (and for ``--resume`` the saved run) decides which learner settings exist, so a first pass reads
     the run's flags and a second parses everything, the learner's ``--options.NAME`` flags included, with the
-    defaults of the task (or of the saved run). Dict settings (``sigma_factors``) add to the defaults'.
+    defaults of the task (or of the saved run). Dict settings (``sigma_factors``) add to the defaults'. Without
+    ``read_run`` a ``--resume`` line is parsed over the task's defaults (no run directory is read).
     """
     first = tyro.cli(kind, args=argv, prog=prog, add_help=False, return_unknown_args=True)[0]
-    if first.resume:
-        saved = load_run_config(RunDirectory(first.out or kind.out))
-        defaults, options = _saved_command(kind, saved, first.out or kind.out), saved.options
+    read_run = read_run and first.resume
+    if read_run and not first.out:
+        raise ValueError("--out: the run directory is required")
+    saved = load_run_config(RunDirectory(first.run_path)) if read_run else None
+    if saved is not None:
+        defaults, options = _saved_command(kind, saved, first.out), saved.options
     else:
-        defaults, options = first, train_config(first).options
+        defaults, options = first, _default_options(first)
     dicts = {item.name: getattr(options, item.name) for item in dataclasses.fields(options)
              if isinstance(getattr(options, item.name), dict)}
     flags = dataclasses.make_dataclass(kind.__name__, [("options", type(options), field(default=None))],
                                        bases=(kind,))
+    flags.__module__ = kind.__module__
     values = {item.name: getattr(defaults, item.name) for item in dataclasses.fields(kind)}
     start = flags(**{**values, "env_option": {}, "reset_option": {}},      # tyro fixes the keys of a given dict
                   options=dataclasses.replace(options, **{key: {} for key in dicts}))
     parsed = tyro.cli(flags, args=argv, prog=prog, default=start, description=kind.__doc__)
     given = dataclasses.replace(parsed.options, **{name: {**value, **getattr(parsed.options, name)}
                                                    for name, value in dicts.items()})
-    command = kind(**{**{item.name: getattr(parsed, item.name) for item in dataclasses.fields(kind)},
-                      **{name: {**values[name], **getattr(parsed, name)} for name in ("env_option", "reset_option")}})
+    command = flags(**{**{item.name: getattr(parsed, item.name) for item in dataclasses.fields(kind)},
+                       **{name: {**values[name], **getattr(parsed, name)} for name in ("env_option", "reset_option")}},
+                    options=given)
     if not command.out:
         raise ValueError("--out: the run directory is required")
-    config = train_config(command, given)
-    if first.resume:                     # not a flag: the saved run's (runs of the library may set it either way)
+    return command, saved
+
+
+def parse_train(argv: Sequence[str]) -> TrainCommand:
+    """The ``train`` command line parsed into its :class:`TrainCommand` (the learner's settings as ``options``),
+    without running it or reading a run directory (a ``--resume`` line is parsed over the task's defaults)."""
+    return _parse_flags(TrainCommand, argv, "rdmp-gym train", read_run=False)[0]
+
+
+def parse_main(argv: Sequence[str]) -> MainCommand:
+    """The ``main`` command line parsed into its :class:`MainCommand`, without running it (see :func:`parse_train`)."""
+    return _parse_flags(MainCommand, argv, "rdmp-gym main", read_run=False)[0]  # type: ignore[return-value]
+
+
+def parse_evaluate(argv: Sequence[str]) -> EvaluateCommand:
+    """The ``evaluate`` command line parsed into its :class:`EvaluateCommand`, without running it."""
+    return tyro.cli(EvaluateCommand, args=argv, prog="rdmp-gym evaluate")
+
+
+def _flag(key: str) -> str:
+    """The command-line flag of a setting of the run (``key``: a field, or ``field.entry`` of a dict field)."""
+    name, _, entry = key.partition(".")
+    if not entry:
+        return _FLAG_NAMES.get(name, "--" + name.replace("_", "-"))
+    if name == "options":
+        return "--options." + entry.replace("_", "-")
+    if name == "env_kwargs":
+        return "--" + entry.replace("_", "-") if entry in _TASK_FLAGS else f"--env-option {entry}"
+    return f"--reset-option {entry}"
+
+
+def _resume_changes(saved: TrainConfig, config: TrainConfig) -> dict[str, Any]:
+    """What the flags of a resumed run change in its saved configuration: ``updates`` and ``workers`` always, every
+    other field (or entry of a dict field) only where it differs, keyed as :func:`train` takes ``changes``."""
+    before, after = saved.to_dict(), config.to_dict()
+    changes: dict[str, Any] = {}
+    for name, value in after.items():
+        if name in ("env_kwargs", "options", "reset_options"):
+            old = before[name] or {}
+            changes.update({f"{name}.{key}": entry for key, entry in (value or {}).items() if old.get(key) != entry})
+        elif name in MUTABLE_ON_RESUME or value != before[name]:
+            changes[name] = value
+    return changes
+
+
+def _parse_run(kind: type[TrainCommand], argv: Sequence[str], prog: str
+               ) -> tuple[TrainCommand, TrainConfig, TrainConfig | None]:
+    """A ``train``/``main`` command line: the command, its training run and (``--resume``) the saved run."""
+    command, saved = _parse_flags(kind, argv, prog)
+    if saved is not None and command.agent != saved.agent:      # the run's learner settings are its agent's
+        raise ValueError(f"--agent: {command.agent!r} differs from the run's {saved.agent!r} "
+                         f"({RunDirectory(command.run_path).config_path}); a resumed run keeps its configuration, "
+                         f"only {' and '.join(MUTABLE_ON_RESUME)} may change")
+    config = train_config(command, command.options)  # type: ignore[attr-defined]
+    if saved is not None:                # not a flag: the saved run's (runs of the library may set it either way)
         config = dataclasses.replace(config, shared_context=saved.shared_context)
-    return command, config
+    return command, config, saved
 
 
-def _train_or_resume(command: TrainCommand, config: TrainConfig, out: str | Path) -> RunDirectory:
-    """A new run, or (``--resume``) the saved run changed only by the given flags."""
-    return train(config, out, resume=command.resume, progress=True, backend=command.backend,
-                 ray_address=command.ray_address)
+def _train_or_resume(command: TrainCommand, config: TrainConfig, saved: TrainConfig | None) -> RunDirectory:
+    """A new run, or (``--resume``) the saved run changed only by the given flags (a differing setting is an error
+    naming its flag)."""
+    if saved is None:
+        return train(config, command.run_path, progress=True, backend=command.backend,
+                     ray_address=command.ray_address)
+    changes = _resume_changes(saved, config)
+    return train(None, command.run_path, resume=True, changes=changes, labels={key: _flag(key) for key in changes},
+                 progress=True, backend=command.backend, ray_address=command.ray_address)
 
 
 def command_train(argv: Sequence[str]) -> None:
-    command, config = _parse_run(TrainCommand, argv, "rdmp-gym train")
+    command, config, saved = _parse_run(TrainCommand, argv, "rdmp-gym train")
     _setup(command)
-    run = _train_or_resume(command, config, command.out)
+    run = _train_or_resume(command, config, saved)
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
           f"best policy return {last['best_eval_return']:.4g}")
@@ -268,7 +351,7 @@ def command_train(argv: Sequence[str]) -> None:
 
 
 def command_evaluate(argv: Sequence[str]) -> None:
-    command = tyro.cli(EvaluateCommand, args=argv, prog="rdmp-gym evaluate")
+    command = parse_evaluate(argv)
     _setup(command)
     result = evaluate_run(command.run, command.episodes, workers=command.workers, policy=command.policy,
                           video=command.video, progress=True, backend=command.backend,
@@ -321,7 +404,7 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
 
 
 def command_main(argv: Sequence[str]) -> None:
-    command, config = _parse_run(MainCommand, argv, "rdmp-gym main")
+    command, config, saved = _parse_run(MainCommand, argv, "rdmp-gym main")
     _setup(command)
     out = Path(command.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -332,7 +415,7 @@ def command_main(argv: Sequence[str]) -> None:
     print(f"[3/4] {config.agent}: {config.updates} updates x {config.rollouts} rollouts on random training contexts, "
           f"{config.workers} worker(s); policy checked on {config.eval_episodes} validation contexts every "
           f"{config.eval_every} updates")
-    run = _train_or_resume(command, config, out / "train")
+    run = _train_or_resume(command, config, saved)
     curve = [(r["episodes"], r["eval_success"], r["eval_coverage"]) for r in run.read_log()
              if r.get("eval_coverage") is not None]
     print("held-out (validation) curve, episodes: success rate / coverage  " +

@@ -101,8 +101,10 @@ def test_resume_takes_the_runs_config_and_only_extending_flags(tmp_path, capsys)
     capsys.readouterr()
     assert _cli_train(out, "--resume", "--updates", "4", "--n-periodic", "9") == 2
     assert "--n-periodic" in capsys.readouterr().err
-    assert _cli_train(out, "--resume", "--option", "sigma=0.5") == 2
-    assert "--option sigma" in capsys.readouterr().err
+    assert _cli_train(out, "--resume", "--options.sigma", "0.5") == 2
+    assert "--options.sigma" in capsys.readouterr().err
+    assert _cli_train(out, "--resume", "--env-option", "weight_scale", "0.4") == 2
+    assert "--env-option weight_scale" in capsys.readouterr().err
     assert _cli_train(out, "--resume", "--updates", "2") == 2           # cannot shrink a run
     assert "--updates 3 or more" in capsys.readouterr().err
     assert _updates(out) == [0, 1, 2, 3]
