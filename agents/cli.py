@@ -20,47 +20,66 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from rdmp_gym import __version__
 
 from . import EXTRA_MODULES
 from .errors import WorkerError
 
-__all__ = ["COMMANDS", "main"]
+__all__ = ["COMMANDS", "main", "parse"]
 
-#: command -> (its module, its function, what it does, whether it needs the agents extra)
-COMMANDS: dict[str, tuple[str, str, str, bool]] = {
-    "train": ("run_commands", "command_train", "Train an agent: bbrl with the main job's settings on the current "
-              "task unless --agent / --env say otherwise.", True),
-    "evaluate": ("run_commands", "command_evaluate",
+#: command -> (its module, its function, its parse-only function, what it does, whether it needs the agents extra)
+COMMANDS: dict[str, tuple[str, str, str, str, bool]] = {
+    "train": ("run_commands", "command_train", "parse_train", "Train an agent: bbrl with the main job's settings on "
+              "the current task unless --agent / --env say otherwise.", True),
+    "evaluate": ("run_commands", "command_evaluate", "parse_evaluate",
                  "Evaluate a run's final policy against the imitation on the test contexts.", True),
-    "fit": ("fit_command", "command_fit", "Fit the rhythmic DMP to a built-in style or to a whole recording (rest, "
-            "approach, rhythm, departure, rest).", False),
-    "main": ("run_commands", "command_main", "Imitation, the paper's figures, contextual refinement and evaluation "
-             "on test contexts, end to end.", True),
+    "fit": ("fit_command", "command_fit", "parse_fit", "Fit the rhythmic DMP to a built-in style or to a whole "
+            "recording (rest, approach, rhythm, departure, rest).", False),
+    "main": ("run_commands", "command_main", "parse_main", "Imitation, the paper's figures, contextual refinement "
+             "and evaluation on test contexts, end to end.", True),
 }
 EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
 
 
 def _usage() -> str:
     lines = [f"usage: rdmp-gym {{{','.join(COMMANDS)}}} [--help] ...  (rdmp-gym {__version__})", ""]
-    lines += [f"  {name:9s} {about}" for name, (_, _, about, _) in COMMANDS.items()]
+    lines += [f"  {name:9s} {about}" for name, (*_, about, _) in COMMANDS.items()]
     extra = [name for name, (*_, needs_extra) in COMMANDS.items() if needs_extra]
     lines += ["", f"{', '.join(extra)} need the agents extra ({EXTRA_HINT}); fit needs only the core install.",
               "rdmp-gym COMMAND --help lists a command's flags and their defaults."]
     return "\n".join(lines)
 
 
-def _command(name: str) -> Callable[[Sequence[str]], None]:
-    """The function of command ``name``; a missing module of an extra is an ``ImportError`` naming the extra."""
-    module_name, function, _, _ = COMMANDS[name]
+def _command(name: str, parse_only: bool = False) -> Callable[[Sequence[str]], Any]:
+    """The function of command ``name`` (or its parse-only function); a missing module of an extra is an
+    ``ImportError`` naming the extra."""
+    module_name, function, parser, _, _ = COMMANDS[name]
     try:
         module = importlib.import_module(f"{__package__}.{module_name}")
     except ModuleNotFoundError as error:
         if error.name and error.name.split(".")[0] in EXTRA_MODULES:
             raise ImportError(f"needs the agents extra (missing module {error.name!r}): {EXTRA_HINT}") from error
         raise
-    return getattr(module, function)
+    return getattr(module, parser if parse_only else function)
+
+
+def parse(argv: Sequence[str]) -> Any:
+    """Parse an ``rdmp-gym`` command line (without the program name, e.g. ``["train", "--out", "runs/x"]``) into
+    its command's dataclass, without running it: :class:`~rdmp_gym.agents.run_commands.TrainCommand` (the
+    learner's settings as ``options``), ``MainCommand``, ``EvaluateCommand`` or
+    :class:`~rdmp_gym.agents.fit_command.FitCommand`. A ``--resume`` line is parsed over the task's defaults
+    (no run directory is read).
+
+    Raises:
+        SystemExit: from the parser, for an unknown flag or a bad value (code 2) or ``--help`` (code 0).
+        ValueError: an unknown command, or values the parser accepts that make no command (no ``--out``).
+    """
+    argv = list(argv)
+    if not argv or argv[0] not in COMMANDS:
+        raise ValueError(f"command: expected one of {sorted(COMMANDS)}, got {argv[0] if argv else 'none'!r}")
+    return _command(argv[0], parse_only=True)(argv[1:])
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -20,7 +20,7 @@ from rdmp_gym.signals import despike
 
 from .imitation import fit_dmp, load_demonstration
 
-__all__ = ["FitCommand", "command_fit"]
+__all__ = ["FitCommand", "command_fit", "parse_fit"]
 
 
 @dataclass
@@ -57,9 +57,14 @@ class FitCommand:
     """log progress details"""
 
 
+def parse_fit(argv: Sequence[str]) -> FitCommand:
+    """The ``fit`` command line parsed into its :class:`FitCommand`, without running it."""
+    return tyro.cli(FitCommand, args=argv, prog="rdmp-gym fit")
+
+
 def command_fit(argv: Sequence[str]) -> None:
     """``rdmp-gym fit ARGS``: write ``dmp.json`` (and ``fit.png`` with ``--plot``) into ``--out``."""
-    args = tyro.cli(FitCommand, args=argv, prog="rdmp-gym fit")
+    args = parse_fit(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     out = Path(args.out)

@@ -101,10 +101,12 @@ def _command_lines() -> list[tuple[str, str]]:
 @pytest.mark.parametrize(("where", "command"), _command_lines(), ids=[where for where, _ in _command_lines()])
 def test_documented_command_parses(where, command):
     """The documented ``rdmp-gym`` command lines name existing commands and flags with valid values."""
-    from rdmp_gym.agents.cli import _parser
+    from rdmp_gym.agents.cli import parse
 
     try:
-        _parser().parse_args(shlex.split(command)[1:])
+        parse(shlex.split(command)[1:])
     except SystemExit as exit_:
         if exit_.code:
             pytest.fail(f"{where}: `{command}` does not parse (exit {exit_.code})")
+    except ValueError as error:
+        pytest.fail(f"{where}: `{command}` does not make a command: {error}")
