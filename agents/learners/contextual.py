@@ -34,7 +34,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from rdmp_gym.envs.context import CONTEXT_FIELDS
 from scipy.optimize import minimize
 
 from ..config import Settings, check_choice, check_range
@@ -256,8 +255,15 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
 
 
 def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
+    """The env's context fields: its own ``context_fields``, else for the wiping envs (which have a
+    ``context_spec``) their ``CONTEXT_FIELDS``.
+
+    The table is imported here, where such an env already runs (its package is loaded), rather than at the top:
+    importing the learners loads neither gymnasium nor MuJoCo.
+    """
     fields = getattr(base, "context_fields", None)
     if fields is None and hasattr(base, "context_spec"):
+        from rdmp_gym.envs.context import CONTEXT_FIELDS  # the env's package: loaded with the env itself
         fields = CONTEXT_FIELDS
     return fields
 
