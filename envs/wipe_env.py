@@ -45,8 +45,8 @@ from rdmp_gym.fitting import FADE_BEFORE_T
 from .action import ActionMap
 from .approach import approach_direction, lift_profile
 from .clearance import Cup, CupClearance, HandPoints
+from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .context import SIZE as CONTEXT_SIZE
-from .context import Context, ContextSpec
 from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
@@ -154,6 +154,23 @@ def _cup_clearance(value: float | CupClearance | None) -> CupClearance | None:
     return CupClearance(margin=float(value))
 
 
+def _check_reach(spec: ContextSpec, robot: RobotDescription) -> None:
+    """ValueError naming ``context_ranges`` unless every drawable patch (with the pad around its edge) and sponge
+    start lies inside the robot's workspace (the nominal table frame)."""
+    low, high = robot.workspace
+    centre, size = CONTEXT_FIELDS["patch_centre"], CONTEXT_FIELDS["patch_size"]
+    start = CONTEXT_FIELDS["sponge_start"]
+    reach = spec.high[size[0]:size[0] + 2] / 2 + 0.05                       # half the patch + the pad's reach
+    patch_low = spec.low[centre[0]:centre[0] + 2] - reach
+    patch_high = spec.high[centre[0]:centre[0] + 2] + reach
+    starts = slice(start[0], start[0] + 3)
+    if (np.any(patch_low < low[:2]) or np.any(patch_high > high[:2]) or np.any(spec.low[starts] < low)
+            or np.any(spec.high[starts] > high)):
+        raise ValueError(f"context_ranges: the drawn patches {patch_low}..{patch_high} or sponge starts "
+                         f"{spec.low[starts]}..{spec.high[starts]} leave the robot {robot.name!r}'s workspace "
+                         f"{low}..{high} (table frame, m)")
+
+
 def _saved_dmp(dmp: str | Path | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
     """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against ``workspace``."""
     if not isinstance(dmp, RhythmicDMP):
@@ -257,6 +274,7 @@ class ArmarWipeEnv(gym.Env):
                                         obstacle_radius=self.scene.obstacle_radius,
                                         patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
                                         near_patch=self.task_version.pad_clearance)
+        _check_reach(self.context_spec, self.robot)
         self.ik = self._path_ik()
         #: the clearance term that keeps the hand away from the cup (None: off)
         self.cup_clearance = _cup_clearance(config.task.cup_clearance)

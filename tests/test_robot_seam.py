@@ -117,3 +117,11 @@ def test_no_module_outside_a_robots_folder_names_its_parts(robot):
     found = [f"{path.relative_to(ENVS)}: {match.group(0)}" for path in ENVS.rglob("*.py")
              if "robots" not in path.relative_to(ENVS).parts for match in pattern.finditer(path.read_text())]
     assert not found
+
+
+def test_contexts_beyond_a_robots_reach_are_refused_by_name():
+    import dataclasses
+
+    small = dataclasses.replace(MINI, workspace=(np.array([-0.1, -0.1, -0.05]), np.array([0.1, 0.1, 0.3])))
+    with pytest.raises(ValueError, match="context_ranges"):
+        ArmarWipeEnv(robot=small, version=3)
