@@ -20,33 +20,49 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 from rdmp_gym import __version__
 
 from . import EXTRA_MODULES
 from .errors import WorkerError
 
-__all__ = ["COMMANDS", "main", "parse"]
+__all__ = ["COMMANDS", "Command", "main", "parse"]
 
-#: command -> (its module, its function, its parse-only function, what it does, whether it needs the agents extra)
-COMMANDS: dict[str, tuple[str, str, str, str, bool]] = {
-    "train": ("run_commands", "command_train", "parse_train", "Train an agent: bbrl with the main job's settings on "
-              "the current task unless --agent / --env say otherwise.", True),
-    "evaluate": ("run_commands", "command_evaluate", "parse_evaluate",
-                 "Evaluate a run's final policy against the imitation on the test contexts.", True),
-    "fit": ("fit_command", "command_fit", "parse_fit", "Fit the rhythmic DMP to a built-in style or to a whole "
-            "recording (rest, approach, rhythm, departure, rest).", False),
-    "main": ("run_commands", "command_main", "parse_main", "Imitation, the paper's figures, contextual refinement "
-             "and evaluation on test contexts, end to end.", True),
+
+class Command(NamedTuple):
+    """A command of the launcher: where it lives and what it does."""
+
+    module: str
+    """its module in this package"""
+    function: str
+    """the function that runs it (takes the command line after the command's name)"""
+    about: str
+    """what it does (the first line of its help)"""
+    needs_extra: bool
+    """whether it needs the agents extra"""
+    parser: str
+    """the function that parses its command line into its dataclass without running it"""
+
+
+COMMANDS: dict[str, Command] = {
+    "train": Command("run_commands", "command_train", "Train an agent: bbrl with the main job's settings on the "
+                     "current task unless --agent / --env say otherwise.", True, "parse_train"),
+    "evaluate": Command("run_commands", "command_evaluate",
+                        "Evaluate a run's final policy against the imitation on the test contexts.", True,
+                        "parse_evaluate"),
+    "fit": Command("fit_command", "command_fit", "Fit the rhythmic DMP to a built-in style or to a whole recording "
+                   "(rest, approach, rhythm, departure, rest).", False, "parse_fit"),
+    "main": Command("run_commands", "command_main", "Imitation, the paper's figures, contextual refinement and "
+                    "evaluation on test contexts, end to end.", True, "parse_main"),
 }
 EXTRA_HINT = 'pip install "rdmp-gym[agents]"'
 
 
 def _usage() -> str:
     lines = [f"usage: rdmp-gym {{{','.join(COMMANDS)}}} [--help] ...  (rdmp-gym {__version__})", ""]
-    lines += [f"  {name:9s} {about}" for name, (*_, about, _) in COMMANDS.items()]
-    extra = [name for name, (*_, needs_extra) in COMMANDS.items() if needs_extra]
+    lines += [f"  {name:9s} {command.about}" for name, command in COMMANDS.items()]
+    extra = [name for name, command in COMMANDS.items() if command.needs_extra]
     lines += ["", f"{', '.join(extra)} need the agents extra ({EXTRA_HINT}); fit needs only the core install.",
               "rdmp-gym COMMAND --help lists a command's flags and their defaults."]
     return "\n".join(lines)
@@ -55,14 +71,14 @@ def _usage() -> str:
 def _command(name: str, parse_only: bool = False) -> Callable[[Sequence[str]], Any]:
     """The function of command ``name`` (or its parse-only function); a missing module of an extra is an
     ``ImportError`` naming the extra."""
-    module_name, function, parser, _, _ = COMMANDS[name]
+    command = COMMANDS[name]
     try:
-        module = importlib.import_module(f"{__package__}.{module_name}")
+        module = importlib.import_module(f"{__package__}.{command.module}")
     except ModuleNotFoundError as error:
         if error.name and error.name.split(".")[0] in EXTRA_MODULES:
             raise ImportError(f"needs the agents extra (missing module {error.name!r}): {EXTRA_HINT}") from error
         raise
-    return getattr(module, parser if parse_only else function)
+    return getattr(module, command.parser if parse_only else command.function)
 
 
 def parse(argv: Sequence[str]) -> Any:
