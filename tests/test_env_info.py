@@ -2,7 +2,6 @@
 
 import gymnasium as gym
 import numpy as np
-
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from rdmp_gym.envs.info import EPISODE_KEYS, SCALAR_STATISTICS, STEP_KEYS, TRACE_STATISTICS
 
