@@ -21,7 +21,7 @@ from scipy.interpolate import CubicSpline
 
 from .kinematics import ChainKinematics, ChainState
 
-__all__ = ["BodyClearance", "IKResult", "PathIK"]
+__all__ = ["BodyClearance", "IKResult", "IKSettings", "PathIK"]
 
 
 @dataclass(frozen=True)
@@ -123,15 +123,12 @@ class BodyClearance:
         return np.concatenate(clearance, axis=1), np.concatenate(gradients, axis=1) if gradient else None
 
 
-class PathIK:
-    """Damped least-squares IK of the sponge site along a path, vectorised over the path.
+@dataclass(frozen=True)
+class IKSettings:
+    """How :class:`PathIK` iterates.
 
-    Args:
-        kinematics: the arm chain; its site is the (uncompressed) sponge face centre and the site's
-            +x axis is the sponge's outward "up" axis (the face normal is -x).
-        posture: joint configuration [n] preferred in the null space of the task.
-        joint_weights: per-joint mobility [n] in (0, 1] (a small value makes a joint move less).
-        damping: damping factor lambda of the least-squares step.
+    Attributes:
+        damping: damping factor lambda of the least-squares step (> 0).
         limit_margin: distance kept from every joint limit (radians).
         nullspace_gain: fraction of the posture error corrected per iteration.
         limit_zone: width (rad) of the band inside each limit from which the null-space task pushes
@@ -140,18 +137,42 @@ class PathIK:
         tolerance: after ``min_iterations``, the coarse pass stops when the position errors (m) or the
             joint updates (rad) of all its points are below this (and the angle errors below ``rot_tolerance``).
         rot_tolerance: angle error (rad) below which the coarse pass may stop (1e-3 rad = 0.06 deg).
-        clearance: optional arm-to-body clearance; a path whose solution comes closer than
-            ``clearance_margin`` (m) to the body is solved again with a null-space task that pushes the
-            arm out to the margin (paths that keep clear are solved without it, unchanged).
-        clearance_margin: clearance (m) the arm keeps from the body.
+        clearance_margin: clearance (m) the arm keeps from the body (with a :class:`BodyClearance`).
         clearance_gain: fraction of the clearance deficit corrected per iteration.
     """
 
+    damping: float = 0.01
+    limit_margin: float = 0.01
+    nullspace_gain: float = 0.1
+    limit_zone: float = 0.15
+    limit_gain: float = 0.5
+    tolerance: float = 1e-4
+    rot_tolerance: float = 1e-3
+    clearance_margin: float = 0.01
+    clearance_gain: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not self.damping > 0:
+            raise ValueError("damping: expected a positive number")
+
+
+class PathIK:
+    """Damped least-squares IK of the sponge site along a path, vectorised over the path.
+
+    Args:
+        kinematics: the arm chain; its site is the (uncompressed) sponge face centre and the site's
+            +x axis is the sponge's outward "up" axis (the face normal is -x).
+        posture: joint configuration [n] preferred in the null space of the task.
+        joint_weights: per-joint mobility [n] in (0, 1] (a small value makes a joint move less).
+        clearance: optional arm-to-body clearance; a path whose solution comes closer than
+            ``settings.clearance_margin`` (m) to the body is solved again with a null-space task that pushes the
+            arm out to the margin (paths that keep clear are solved without it, unchanged).
+        settings: how it iterates (:class:`IKSettings`; default its defaults).
+    """
+
     def __init__(self, kinematics: ChainKinematics, posture: np.ndarray, joint_weights: np.ndarray,
-                 damping: float = 0.01, limit_margin: float = 0.01, nullspace_gain: float = 0.1,
-                 limit_zone: float = 0.15, limit_gain: float = 0.5, tolerance: float = 1e-4,
-                 rot_tolerance: float = 1e-3, clearance: BodyClearance | None = None,
-                 clearance_margin: float = 0.01, clearance_gain: float = 1.0):
+                 clearance: BodyClearance | None = None, settings: IKSettings | None = None):
+        settings = IKSettings() if settings is None else settings
         n = kinematics.n
         posture = np.asarray(posture, dtype=np.float64)
         joint_weights = np.asarray(joint_weights, dtype=np.float64)
@@ -159,23 +180,21 @@ class PathIK:
             raise ValueError(f"posture: expected shape ({n},), got {posture.shape}")
         if joint_weights.shape != (n,) or np.any(joint_weights <= 0):
             raise ValueError(f"joint_weights: expected {n} positive numbers")
-        if damping <= 0:
-            raise ValueError("damping: expected a positive number")
         self.kin = kinematics
-        self.lower = kinematics.lower + limit_margin
-        self.upper = kinematics.upper - limit_margin
+        self.lower = kinematics.lower + settings.limit_margin
+        self.upper = kinematics.upper - settings.limit_margin
         self.posture = np.clip(posture, self.lower, self.upper)
         self.inv_weight = joint_weights
-        self.damping2 = damping**2
-        self.nullspace_gain = nullspace_gain
-        self.tolerance = tolerance
-        self.rot_tolerance = rot_tolerance
-        self.zone_lower = kinematics.lower + limit_zone
-        self.zone_upper = kinematics.upper - limit_zone
-        self.limit_gain = limit_gain
+        self.damping2 = settings.damping**2
+        self.nullspace_gain = settings.nullspace_gain
+        self.tolerance = settings.tolerance
+        self.rot_tolerance = settings.rot_tolerance
+        self.zone_lower = kinematics.lower + settings.limit_zone
+        self.zone_upper = kinematics.upper - settings.limit_zone
+        self.limit_gain = settings.limit_gain
         self.clearance = clearance
-        self.clearance_margin = clearance_margin
-        self.clearance_gain = clearance_gain
+        self.clearance_margin = settings.clearance_margin
+        self.clearance_gain = settings.clearance_gain
 
     def _linearise(self, q: np.ndarray, targets: np.ndarray, normal: np.ndarray, basis: np.ndarray,
                    rot_weight: np.ndarray, blocked: np.ndarray | None, state: ChainState | None = None,
