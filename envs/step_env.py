@@ -46,23 +46,12 @@ from rdmp_gym import DMPStepper
 from .context import SIZE as CONTEXT_SIZE
 from .controller import ForceAdaptation
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
+from .step_twin import axis_shift, coupling_action, sponge_position
 from .wipe_env import ArmarWipeEnv, outcome
 from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
 __all__ = ["ArmarWipeStepEnv"]
 
-
-def _axis_shift(max_shift: Any) -> np.ndarray:
-    """``max_shift`` (a number or three) as ``[3]`` float64; ValueError unless finite and >= 0."""
-    if isinstance(max_shift, bool):
-        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}")
-    try:
-        shift = np.broadcast_to(np.asarray(max_shift, dtype=np.float64), (3,)).copy()
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}") from error
-    if not (np.all(np.isfinite(shift)) and np.all(shift >= 0.0)):
-        raise ValueError(f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}")
-    return shift
 
 _MAX_FORCE = 2000.0       # N: a larger wrist or contact force is a diverged simulation (as in simulate_wipe)
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
@@ -87,7 +76,7 @@ class ArmarWipeStepEnv(gym.Env):
     def __init__(self, max_shift: float | tuple[float, float, float] = 0.02, ik_iterations: int = 30,
                  **kwargs: Any) -> None:
         super().__init__()
-        shift = _axis_shift(max_shift)
+        shift = axis_shift(max_shift)
         if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")
         self.task = ArmarWipeEnv(**kwargs)
@@ -148,7 +137,7 @@ class ArmarWipeStepEnv(gym.Env):
         self._k = 0
         self._terms = dict.fromkeys(TERMS, 0.0)
         self._done = False
-        position = self._sponge_position()
+        position = sponge_position(self.task.scene)
         self._previous = position
         return self._observation(position, np.zeros(3)), info
 
@@ -159,7 +148,7 @@ class ArmarWipeStepEnv(gym.Env):
             raise RuntimeError("call reset() before step()")
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        a = self._check_action(action)
+        a = coupling_action(action)
         task, scene, k = self.task, self.task.scene, self._k
         count = task.n_steps
         if k + 1 < count:                                  # the action sets the next target y_{k+1}
@@ -178,7 +167,7 @@ class ArmarWipeStepEnv(gym.Env):
         self._k = k + 1
         penetrated = self._penetration > task.penetration_limit
         terms, info = self._reward(k, unstable, penetrated)
-        position = self._sponge_position()
+        position = sponge_position(self.task.scene)
         observation = self._observation(position, (position - self._previous) / task.dt)
         self._previous = position
         terminated = unstable or penetrated
@@ -194,17 +183,6 @@ class ArmarWipeStepEnv(gym.Env):
         self.task.close()
 
     # ------------------------------------------------------------------ internals
-    def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action: expected a numeric array of shape (3,), got {type(action).__name__}") from error
-        if a.shape != (3,):
-            raise ValueError(f"action: expected shape (3,), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError("action: contains NaN or infinite values")
-        return np.clip(a, -1.0, 1.0)
-
     def _clip(self, target: np.ndarray) -> np.ndarray:
         return np.clip(target, *self.task.robot.workspace)
 
@@ -316,11 +294,6 @@ class ArmarWipeStepEnv(gym.Env):
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
                          "is_success": success, "failure_causes": causes})
         return terms, info
-
-    def _sponge_position(self) -> np.ndarray:
-        scene = self.task.scene
-        origin, rot = scene.table_frame(actual=False)
-        return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
 
     def _observation(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
         scene = self.task.scene

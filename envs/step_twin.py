@@ -36,10 +36,11 @@ from scipy.linalg import expm
 
 from .context import SIZE as CONTEXT_SIZE
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
+from .scene import WipeScene
 from .wipe_env import ArmarWipeEnv, outcome
 from .wiping import DirtField, WipeSimulation, WipeTrace
 
-__all__ = ["WipeStepEnv", "coupling_filter"]
+__all__ = ["WipeStepEnv", "axis_shift", "coupling_action", "coupling_filter", "sponge_position"]
 
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 #: Settings of the episodic env that the step twin cannot honour (it does not know the path ahead).
@@ -77,7 +78,7 @@ class WipeStepEnv(gym.Env):
         for key, why in UNSUPPORTED.items():
             if kwargs.get(key) not in (None, False):
                 raise ValueError(f"{key}: the step twin cannot honour it ({why})")
-        self.max_shift = _axis_shift(max_shift)
+        self.max_shift = axis_shift(max_shift)
         self.task = ArmarWipeEnv(**kwargs)
         self.render_mode = self.task.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.task.control_rate))}
@@ -112,7 +113,7 @@ class WipeStepEnv(gym.Env):
         self._k = 0
         self._terms = dict.fromkeys(TERMS, 0.0)
         self._done = False
-        position = self._sponge_position()
+        position = sponge_position(self.task.scene)
         self._previous = position
         return self._observation(position, np.zeros(3)), info
 
@@ -123,7 +124,7 @@ class WipeStepEnv(gym.Env):
             raise RuntimeError("call reset() before step()")
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        a = self._check_action(action)
+        a = coupling_action(action)
         task, k, count = self.task, self._k, self.task.n_steps
         if k + 1 < count:
             self._advance(k + 1, self.coupling_scale * a)
@@ -135,7 +136,7 @@ class WipeStepEnv(gym.Env):
         penetrated = self._simulation.table_penetration > task.penetration_limit or self._self_penetration(k)
         last = diverged or penetrated or self._k >= count
         terms, info = self._reward(k, last, penetrated)
-        position = self._sponge_position()
+        position = sponge_position(self.task.scene)
         observation = self._observation(position, (position - self._previous) / task.dt)
         self._previous = position
         terminated = diverged or penetrated
@@ -260,22 +261,6 @@ class WipeStepEnv(gym.Env):
         return Smoothness(np.pad(partial.jerk_sq, (0, pad)), partial.jerk_ratio, np.pad(partial.joint_accel, (0, pad)))
 
     # ------------------------------------------------------------------ observation
-    def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action: expected a numeric array of shape (3,), got {type(action).__name__}") from error
-        if a.shape != (3,):
-            raise ValueError(f"action: expected shape (3,), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError("action: contains NaN or infinite values")
-        return np.clip(a, -1.0, 1.0)
-
-    def _sponge_position(self) -> np.ndarray:
-        scene = self.task.scene
-        origin, rot = scene.table_frame(actual=False)
-        return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
-
     def _observation(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
         task, scene = self.task, self.task.scene
         k = min(self._k, task.n_steps - 1)
@@ -286,7 +271,26 @@ class WipeStepEnv(gym.Env):
         return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)
 
 
-def _axis_shift(max_shift: Any) -> np.ndarray:
+def coupling_action(action: Any) -> np.ndarray:
+    """A step twin's action as ``[3]`` float64 clipped to [-1, 1]; ValueError for a wrong shape, NaN or inf."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"action: expected a numeric array of shape (3,), got {type(action).__name__}") from error
+    if a.shape != (3,):
+        raise ValueError(f"action: expected shape (3,), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("action: contains NaN or infinite values")
+    return np.clip(a, -1.0, 1.0)
+
+
+def sponge_position(scene: WipeScene) -> np.ndarray:
+    """The sponge's face centre ``[3]`` in the nominal table frame (m)."""
+    origin, rot = scene.table_frame(actual=False)
+    return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
+
+
+def axis_shift(max_shift: Any) -> np.ndarray:
     """``max_shift`` (a number or three) as ``[3]`` float64; ValueError unless finite and >= 0."""
     message = f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}"
     if isinstance(max_shift, bool):
