@@ -71,12 +71,6 @@ class ForceAdaptation:
         self.offset = 0.0
         self.force = 0.0
 
-    def engagement(self, path_height: np.ndarray) -> np.ndarray:
-        """How much the law acts at each commanded height ``[T]`` (m): ``[T]`` in [0, 1], the factor
-        :meth:`update` applies to the depth rate (vectorised for loops that inline the law)."""
-        return np.minimum(1.0, np.maximum(0.0, 1.0 - np.asarray(path_height, dtype=np.float64)
-                                          / self.settings.engage_height))
-
     def update(self, force: float, path_height: float) -> float:
         """Feed one force measurement (N, + = pressing) and return the depth to command (m)."""
         s = self.settings

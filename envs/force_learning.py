@@ -123,11 +123,10 @@ class ForceProfileLearning(ForceAdaptation):
 
     def learn(self, filtered_force: float, engage: float) -> float:
         """One control step of the profile: learn from the filtered force (N) at engagement ``engage`` in
-        [0, 1] and return the learned depth (m) to add to the admittance's (called by :meth:`update`, and by
-        episode loops that inline the admittance law)."""
+        [0, 1] and return the learned depth (m) to add to the admittance's (called by :meth:`update`)."""
         s = self.settings
         error = s.target_force - filtered_force
-        if s.enabled:          # the admittance's offset, as ForceAdaptation.update and the inlined loops compute it
+        if s.enabled:          # the admittance's offset, as ForceAdaptation.update computes it
             rate = min(s.max_rate, max(-s.max_rate, s.gain * error * engage))
             self.feedback = min(s.max_offset, max(s.min_offset, self.feedback + rate * self.dt))
         size = self.period_steps

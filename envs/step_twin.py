@@ -129,8 +129,7 @@ class WipeStepEnv(gym.Env):
         if k + 1 < count:
             self._advance(k + 1, self.coupling_scale * a)
         row = self._q[k] + self._lead * self._velocity(k)
-        engage = float(self._adaptation.engagement(self._path[k:k + 1, 2])[0])
-        diverged = self._simulation.step(k, row, self._ndq[k], engage)
+        diverged = self._simulation.step(k, row, self._ndq[k], float(self._path[k, 2]))
         self._wear_step(k, diverged)
         self._k = k + 1
         penetrated = self._simulation.table_penetration > task.penetration_limit or self._self_penetration(k)

@@ -232,11 +232,10 @@ class WipeSimulation:
     """The simulation core of the wiping task: one control step at a time, and the episode's trace.
 
     Both envs run it: the episodic env steps it along a whole planned path (:func:`simulate_wipe`), the step twin
-    one control step per ``step``. Per control step it does only what must happen online: the wrist-force
-    admittance law on the pressing depth (the law of :class:`~rdmp_gym.envs.controller.ForceAdaptation`, inlined:
-    the same operations in the same order), the servo targets, the physics (one physics step at a time for
-    :data:`IMPACT_WINDOW` after the first sponge contact, to catch the impact) and a copy of the measurements;
-    :meth:`trace` evaluates the rest vectorised.
+    one control step per ``step``. Per control step it does only what must happen online: the force controller's
+    pressing depth (:class:`~rdmp_gym.envs.controller.ForceAdaptation`, the one home of the admittance law), the
+    servo targets, the physics (one physics step at a time for :data:`IMPACT_WINDOW` after the first sponge
+    contact, to catch the impact) and a copy of the measurements; :meth:`trace` evaluates the rest vectorised.
 
     Args:
         scene: the scene, already reset to rest at the first joint targets with the table and obstacle in place.
@@ -284,7 +283,6 @@ class WipeSimulation:
         self.obstacle_start = d.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3].copy()
         ctrl = d.ctrl[self._ctrl_index]      # a view when the arm actuators are consecutive
         self._ctrl = ctrl if np.shares_memory(ctrl, d.ctrl) else None
-        self._learn = getattr(adaptation, "learn", None)    # a learned depth profile on top (force_learning)
         self.measured = 0.0
         self.steps = count
         self.table_penetration = 0.0
@@ -293,27 +291,11 @@ class WipeSimulation:
         # signals divergence, as do NaN and excessive wrist forces.
         self._last_time = d.time
 
-    def step(self, k: int, q_row: np.ndarray, ndq_row: np.ndarray, engage: float) -> bool:
-        """Control step ``k``: the depth from the admittance law, servo targets ``q_row - depth * ndq_row`` ([n]
-        each), the physics, the record. ``engage`` in [0, 1]: how much the law acts (its engagement at the
-        commanded height). Returns True when the simulation diverged (the episode ends at this step)."""
-        adaptation, law = self.adaptation, self.adaptation.settings
-        filtered, offset = adaptation.force, adaptation.offset
-        filtered += adaptation.alpha * (self.measured - filtered)
-        if law.enabled:
-            rate = law.gain * (law.target_force - filtered) * engage
-            # min(max_rate, max(-max_rate, rate)) and the same for the offset, as conditional expressions that
-            # return what the builtins return (the first argument unless the second is strictly beyond it)
-            max_rate = law.max_rate
-            rate = rate if rate > -max_rate else -max_rate
-            rate = rate if rate < max_rate else max_rate
-            offset = offset + rate * adaptation.dt
-            offset = offset if offset > law.min_offset else law.min_offset
-            offset = offset if offset < law.max_offset else law.max_offset
-        adaptation.force, adaptation.offset = filtered, offset
-        depth = adaptation.preload + offset
-        if self._learn is not None:
-            depth += self._learn(filtered, engage)
+    def step(self, k: int, q_row: np.ndarray, ndq_row: np.ndarray, height: float) -> bool:
+        """Control step ``k``: the pressing depth from the force controller (its admittance law fed the last wrist
+        force and the commanded ``height`` above the surface, m), servo targets ``q_row - depth * ndq_row`` ([n]
+        each), the physics, the record. Returns True when the simulation diverged (the episode ends here)."""
+        depth = self.adaptation.update(self.measured, height)
         if self._ctrl is None:
             self.scene.data.ctrl[self._ctrl_index] = q_row - depth * ndq_row
         else:
@@ -453,11 +435,11 @@ def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarr
     if path_height.shape != (count,):
         raise ValueError(f"path_height: expected shape ({count},), got {path_height.shape}")
     simulation = WipeSimulation(scene, count, adaptation, dirt, frame_skip, plan.normal, settings)
-    engage = adaptation.engagement(path_height).tolist()
+    heights = path_height.tolist()
     q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
     step = simulation.step
     for k in range(count):
-        if step(k, q_rows[k], ndq_rows[k], engage[k]):
+        if step(k, q_rows[k], ndq_rows[k], heights[k]):
             break
         if callback is not None:
             callback(k, lambda k=k: simulation.dirt_left(k))
