@@ -1,12 +1,13 @@
-"""Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP on a simulated ARMAR-III.
+"""Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP, on ARMAR-III or a Franka Panda.
 
-Importing ``rdmp_gym`` (or this package) registers ``rdmp_gym/ArmarWipe-v2`` (and v1), an episodic env: one
-``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``; no ``max_episode_steps``)::
+Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points): the current
+``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and ``-v1``.
+An episodic env's ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``)::
 
     import gymnasium as gym
-    import rdmp_gym  # registers the env
+    import rdmp_gym.envs  # registers the envs
 
-    env = gym.make("rdmp_gym/ArmarWipe-v2")      # obstacle=True by default
+    env = gym.make("rdmp_gym/ArmarWipe-v3")
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample() * 0)  # the imitation
 
