@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
-from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID
+from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, ENV_ID_V3, LATEST_ENV_ID, PANDA_ID_V3
 
 from .imitation import load_demonstration
 
@@ -21,6 +21,8 @@ __all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "MAIN_AGENT", "M
 WIPE_ID = ENV_ID
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
 WIPE_V2_ID = ENV_ID_V2
+#: The tasks with v2's action space: v2 and the v3 tasks of every robot (the task defaults below apply to all).
+_TRAVELLING = (ENV_ID_V2, ENV_ID_V3, PANDA_ID_V3)
 
 #: The main job (``rdmp-gym main``, and ``rdmp-gym train`` without ``--agent``/``--env``): the learner that reached
 #: the validation target soonest in the benchmark, ``bbrl`` exploring the approach 3x wider, on the current task
@@ -39,16 +41,17 @@ MAIN_OPTIONS: dict[str, Any] = {"sigma_factors": {"approach": 3.0}}
 CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
     WIPE_ID: {"gain_groups": ["amplitude", "approach"], "features": ["patch_size", "obstacle"],
               "sigma_factors": {"approach": 3.0}},
-    WIPE_V2_ID: {"gain_groups": ["amplitude", "approach", "sweep_x", "sweep_y"], "features": ["patch_size", "obstacle"],
-                 "sigma_factors": {"approach": 3.0}},
+    **{env_id: {"gain_groups": ["amplitude", "approach", "sweep_x", "sweep_y"], "features": ["patch_size", "obstacle"],
+                "sigma_factors": {"approach": 3.0}} for env_id in _TRAVELLING},
 }
 _TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
 #: smooth exploration for the one-θ learners and SB3's on the tasks published with it (ArmarWipe-v1's runs keep theirs)
-SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {WIPE_V2_ID: {"length": 5.0}}
+SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {env_id: {"length": 5.0} for env_id in _TRAVELLING}
 _SMOOTH_AGENTS = ("pi2", "pibb", "cmaes", "ppo", "sac")
 #: one learner's own settings on a task: PPO's step size with smooth actions on ArmarWipe-v2 (at v1's 3e-2 the
 #: policy mean ran far outside the action box, so nearly every weight was executed at a face; see the docs)
-AGENT_TASK_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {WIPE_V2_ID: {"ppo": {"learning_rate": 3e-3}}}
+AGENT_TASK_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {env_id: {"ppo": {"learning_rate": 3e-3}}
+                                                             for env_id in _TRAVELLING}
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 

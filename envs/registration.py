@@ -37,13 +37,13 @@ ENV_ID_V3 = "rdmp_gym/ArmarWipe-v3"
 STEP_ID_V3 = "rdmp_gym/ArmarWipeStep-v3"
 PANDA_ID_V3 = "rdmp_gym/PandaWipe-v3"
 PANDA_STEP_ID_V3 = "rdmp_gym/PandaWipeStep-v3"
+#: The current wiping task and its step twin: what commands use when no ``--env`` is given.
+LATEST_ENV_ID = ENV_ID_V3
+LATEST_STEP_ID = STEP_ID_V3
 #: Deprecated: v0's reward could be gamed; it makes the v1 env without the obstacle, with a DeprecationWarning.
 DEPRECATED_ENV_ID = "rdmp_gym/ArmarWipe-v0"
 #: Tracking a target rhythm with the DMP (no MuJoCo).
 TRACKING_ID = "rdmp_gym/DMPTracking-v0"
-#: The current wiping task and its step twin: what commands use when no ``--env`` is given.
-LATEST_ENV_ID = ENV_ID_V2
-LATEST_STEP_ID = STEP_ID_V2
 
 _WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
 _STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
