@@ -41,13 +41,12 @@ from .registration import (
     register_envs,
 )
 from .reward import TERMS, RewardWeights
-from .scene import ARM_JOINTS, TablePose, WipeScene
+from .scene import TablePose, WipeScene
 from .tracking import TrackingEnv
 from .video import RecordEpisodeVideo
 from .wipe_env import ArmarWipeEnv
 
 __all__ = [
-    "ARM_JOINTS",
     "CONTEXT_FIELDS",
     "DEPRECATED_ENV_ID",
     "ENV_ID",

@@ -18,9 +18,6 @@ from .arena import compose_scene, self_contact_sensors
 from .robots import ARMAR3, RobotDescription, get_robot
 
 __all__ = [
-    "ARM_JOINTS",
-    "DEFAULT_MOBILITY",
-    "DEFAULT_POSTURE",
     "DEFAULT_XML",
     "TablePose",
     "WipeScene",
@@ -32,12 +29,6 @@ logger = logging.getLogger(__name__)
 
 #: The packaged ARMAR-III scene that ``ArmarWipe-v1`` and ``-v2`` were published with.
 DEFAULT_XML = Path(ARMAR3.legacy_scene)
-#: ARMAR-III's controlled joints in chain order: torso (3) then the right arm (7).
-ARM_JOINTS = ARMAR3.joints
-#: ARMAR-III's preferred arm configuration (null-space posture of the IK).
-DEFAULT_POSTURE = ARMAR3.posture
-#: ARMAR-III's relative mobility of the joints in the IK.
-DEFAULT_MOBILITY = ARMAR3.mobility
 #: Prefixes of the robot's and the sponge tool's names in a composed scene (a hand-merged scene has none).
 ROBOT_PREFIX, TOOL_PREFIX = "robot/", "tool/"
 

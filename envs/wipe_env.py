@@ -55,7 +55,7 @@ from .info import void_statistics
 from .kinematics import ChainKinematics
 from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
-from .robots import ARMAR3, RobotDescription, get_robot
+from .robots import RobotDescription, get_robot
 from .scene import TablePose, WipeScene, dirt_grid
 from .settings import EnvConfig, ForceConfig, RenderConfig, RewardConfig, TaskConfig
 from .versions import TASK_VERSIONS, TaskVersion
@@ -66,9 +66,6 @@ __all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes",
 
 logger = logging.getLogger(__name__)
 
-#: ARMAR-III's path bounds in the nominal table frame (m): beyond a robot's ``workspace`` a path is invalid
-#: without simulation.
-WORKSPACE_LOW, WORKSPACE_HIGH = ARMAR3.workspace
 #: ``info["is_success"]`` thresholds: coverage, force-in-band fraction, obstacle displacement (m).
 SUCCESS_COVERAGE = 0.95
 SUCCESS_FORCE_IN_BAND = 0.9
@@ -143,17 +140,6 @@ def _workspace_excess(path: np.ndarray, workspace: tuple[np.ndarray, np.ndarray]
     return float(np.max(np.maximum(low - path, 0.0) + np.maximum(path - high, 0.0)))
 
 
-def _cup_clearance(value: float | CupClearance | None) -> CupClearance | None:
-    """The env's clearance term from its ``cup_clearance`` argument (a margin in metres, a term, or None)."""
-    if value is None or isinstance(value, CupClearance):
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise ValueError(f"cup_clearance: expected None, a margin in metres or a CupClearance, got {value!r}")
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"cup_clearance: expected a margin > 0 (m), got {value!r}")
-    return CupClearance(margin=float(value))
-
-
 def _check_reach(spec: ContextSpec, robot: RobotDescription) -> None:
     """ValueError naming ``context_ranges`` unless every drawable patch (with the pad around its edge) and sponge
     start lies inside the robot's workspace (the nominal table frame)."""
@@ -171,11 +157,9 @@ def _check_reach(spec: ContextSpec, robot: RobotDescription) -> None:
                          f"{low}..{high} (table frame, m)")
 
 
-def _saved_dmp(dmp: str | Path | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
+def _saved_dmp(dmp: str | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
     """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against ``workspace``."""
     if not isinstance(dmp, RhythmicDMP):
-        if not isinstance(dmp, (str, Path)):
-            raise TypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(dmp).__name__}")
         if not Path(dmp).is_file():
             raise FileNotFoundError(f"dmp: no such file {dmp}")
         dmp = load_dmp(dmp)
@@ -277,7 +261,8 @@ class ArmarWipeEnv(gym.Env):
         _check_reach(self.context_spec, self.robot)
         self.ik = self._path_ik()
         #: the clearance term that keeps the hand away from the cup (None: off)
-        self.cup_clearance = _cup_clearance(config.task.cup_clearance)
+        clearance = config.task.cup_clearance            # validated by TaskConfig: a margin (m), a term or None
+        self.cup_clearance = CupClearance(margin=clearance) if isinstance(clearance, float) else clearance
         self._hand_points = self._hand() if self.cup_clearance is not None else None
         self._lead = self.scene.servo_lead()
         self._engage = self.adaptation_settings.engage_height

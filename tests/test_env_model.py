@@ -5,14 +5,10 @@ import numpy as np
 import pytest
 from rdmp_gym.envs.ik import PathIK
 from rdmp_gym.envs.kinematics import ChainKinematics
-from rdmp_gym.envs.scene import (
-    ARM_JOINTS,
-    DEFAULT_MOBILITY,
-    DEFAULT_POSTURE,
-    TablePose,
-    WipeScene,
-    dirt_grid,
-)
+from rdmp_gym.envs.robots import ARMAR3
+from rdmp_gym.envs.scene import TablePose, WipeScene, dirt_grid
+
+ARM_JOINTS = ARMAR3.joints
 
 # armar3.md §3: joint ranges (the elbow's lower limit clamped to -pi/2) and link masses
 LIMITS = {
@@ -122,7 +118,7 @@ def test_batched_kinematics_matches_mujoco(scene):
 
 def test_path_ik_reaches_a_circle_flat_and_within_limits(scene):
     kin = ChainKinematics(scene.model, "sponge_tcp", ARM_JOINTS)
-    ik = PathIK(kin, DEFAULT_POSTURE, DEFAULT_MOBILITY)
+    ik = PathIK(kin, ARMAR3.posture, ARMAR3.mobility)
     t = np.linspace(0, 2 * np.pi, 300)
     path = np.c_[0.05 * np.cos(t), 0.05 * np.sin(t), np.zeros_like(t)]
     sol = ik.solve(scene.to_world(path, actual=True), scene.nominal_normal)
