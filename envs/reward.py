@@ -135,6 +135,12 @@ class Smoothness:
     jerk_ratio: float
     joint_accel: np.ndarray
 
+    def padded(self, count: int) -> Smoothness:
+        """This smoothness of an episode's first steps, its per-step arrays padded with zeros to ``count`` steps
+        (what the step twins charge for the episode so far)."""
+        pad = count - len(self.jerk_sq)
+        return Smoothness(np.pad(self.jerk_sq, (0, pad)), self.jerk_ratio, np.pad(self.joint_accel, (0, pad)))
+
     @staticmethod
     def jerk_squared(path: np.ndarray, dt: float) -> np.ndarray:
         """Squared jerk norm ``[T]`` of a path ``[T, d]`` sampled every ``dt`` (third differences, padded)."""

@@ -239,12 +239,8 @@ class ArmarWipeStepEnv(gym.Env):
         unstable = (d.time <= before or self._measured != self._measured or abs(self._measured) > _MAX_FORCE
                     or force > _MAX_FORCE)
         if not unstable:                                   # Preston wear of this step (DirtField, as the episode)
-            step = box_pos - self._box_pos[max(0, k - 1)]
-            slide = float(np.linalg.norm(step - (step @ self._table_normal) * self._table_normal))
-            done = np.minimum(self._wear, 1.0).sum()
-            self._wear += self._dirt.wear(np.array([force]), np.array([slide]), box_pos[None], box_rot[None],
-                                          scene.sponge_half)[0]
-            rec["removed"][k] = (np.minimum(self._wear, 1.0).sum() - done) / max(1, self._wear.size)
+            rec["removed"][k] = self._dirt.add_step(self._wear, force, box_pos, box_rot,
+                                                    self._box_pos[max(0, k - 1)], scene.sponge_half)
         else:
             rec["contact_force"][k] = 0.0 if not np.isfinite(force) else min(force, _MAX_FORCE)
         task.dirt_left = 1.0 - np.minimum(self._wear, 1.0)     # what render() shows
@@ -263,11 +259,7 @@ class ArmarWipeStepEnv(gym.Env):
                           1.0 - np.minimum(self._wear, 1.0), rec["arm_contact"], rec["self_contact"],
                           rec["obstacle_contact"], rec["obstacle_shift"], rec["at_limit"], self._sponge_pos,
                           self._penetration, impact_force, impact_step, None, steps, unstable)
-        partial = task.smoothness(self._path[:steps], self._q[:steps])
-        pad = task.n_steps - steps
-        smooth = Smoothness(np.pad(partial.jerk_sq, (0, pad)), partial.jerk_ratio,
-                            np.pad(partial.joint_accel, (0, pad)))
-        return trace, smooth
+        return trace, task.smoothness(self._path[:steps], self._q[:steps]).padded(task.n_steps)
 
     def _reward(self, k: int, unstable: bool, penetrated: bool) -> tuple[dict[str, float], dict[str, Any]]:
         """This step's growth of the episodic reward terms, and the info dict."""

@@ -145,7 +145,8 @@ class WipeStepEnv(gym.Env):
 
     def render(self) -> np.ndarray | None:
         """The current state as the episodic env renders it (with the dirt left so far)."""
-        self.task.dirt_left = 1.0 - np.minimum(self._wear, 1.0) if self._simulation is not None else self.task.dirt_left
+        if self._simulation is not None:
+            self.task.dirt_left = 1.0 - np.minimum(self._wear, 1.0)
         return self.task.render()
 
     def close(self) -> None:
@@ -160,9 +161,9 @@ class WipeStepEnv(gym.Env):
         solution = task.solve_path(self._path)
         self._imitation_q = solution.q
         self._q, self._ndq = solution.q.copy(), solution.normal_dq
-        normal = task.scene.control_frame()[1][:, 2]
-        self._normal = normal / np.linalg.norm(normal)           # as the episodic plan (JointTargetPlan) has it
         self._rotation = task.scene.control_frame()[1]
+        normal = self._rotation[:, 2]
+        self._normal = normal / np.linalg.norm(normal)           # as the episodic plan (JointTargetPlan) has it
         self._lead = task.scene.servo_lead()
         dmp, start = task.dmp, task.dmp.transients[0]
         self._phase, self._radius = dmp.canonical.state(task.times, start.phi0, start.r0)
@@ -202,19 +203,14 @@ class WipeStepEnv(gym.Env):
     # ------------------------------------------------------------------ bookkeeping
     def _wear_step(self, k: int, diverged: bool) -> None:
         """The dirt worn in step ``k`` (the running coverage of the intermediate rewards)."""
-        simulation, scene = self._simulation, self.task.scene
         if diverged:
             return
-        box_pos = simulation.box_pose(k)
-        previous = simulation.box_pose(max(0, k - 1))[0]
-        normal = simulation.dirt.normal
-        slide_step = box_pos[0] - previous
-        slide = float(np.linalg.norm(slide_step - (slide_step @ normal) * normal))
-        force = abs(float(np.nan_to_num(simulation.contact(k)) @ normal))
-        before = np.minimum(self._wear, 1.0).sum()
-        self._wear += simulation.dirt.wear(np.array([force]), np.array([slide]), box_pos[0][None], box_pos[1][None],
-                                           scene.sponge_half)[0]
-        self._removed[k] = (np.minimum(self._wear, 1.0).sum() - before) / max(1, self._wear.size)
+        simulation = self._simulation
+        force = abs(float(np.nan_to_num(simulation.contact(k)) @ simulation.dirt.normal))
+        box_pos, box_rot = simulation.box_pose(k)
+        self._removed[k] = simulation.dirt.add_step(self._wear, force, box_pos, box_rot,
+                                                    simulation.box_pose(max(0, k - 1))[0],
+                                                    self.task.scene.sponge_half)
 
     def _self_penetration(self, k: int) -> bool:
         return self._simulation.self_penetration(k) > self.task.penetration_limit
@@ -255,9 +251,7 @@ class WipeStepEnv(gym.Env):
         task = self.task
         if steps == task.n_steps:
             return task.smoothness(self._path, self._q)
-        partial = task.smoothness(self._path[:steps], self._q[:steps])
-        pad = task.n_steps - steps
-        return Smoothness(np.pad(partial.jerk_sq, (0, pad)), partial.jerk_ratio, np.pad(partial.joint_accel, (0, pad)))
+        return task.smoothness(self._path[:steps], self._q[:steps]).padded(task.n_steps)
 
     # ------------------------------------------------------------------ observation
     def _observation(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:

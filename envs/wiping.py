@@ -73,6 +73,17 @@ class DirtField:
         rows, cumulative = self.wear_steps(force, slide, box_pos, box_rot, half)
         return _carry_forward(rows, cumulative, len(force))
 
+    def add_step(self, wear: np.ndarray, force: float, box_pos: np.ndarray, box_rot: np.ndarray,
+                 previous_pos: np.ndarray, half: np.ndarray) -> float:
+        """Add one control step's wear to the cumulative ``wear [N]`` (in place) and return the fraction of all
+        the dirt it removed; the sponge box moved from ``previous_pos [3]`` to ``box_pos [3]`` (orientation
+        ``box_rot [9]``) pressing with normal force ``force`` (N). For loops that run one step at a time."""
+        step = box_pos - previous_pos
+        slide = float(np.linalg.norm(step - (step @ self.normal) * self.normal))
+        done = np.minimum(wear, 1.0).sum()
+        wear += self.wear(np.array([force]), np.array([slide]), box_pos[None], box_rot[None], half)[0]
+        return (np.minimum(wear, 1.0).sum() - done) / max(1, wear.size)
+
     def wear_steps(self, force: np.ndarray, slide: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray,
                    half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The steps ``[R]`` that remove dirt and the cumulative wear ``[R, N]`` after each of them (between
