@@ -1,10 +1,11 @@
 """Episodic learners behind one ask/tell interface.
 
-Shared-θ learners: PI², PI^BB and CMA-ES. ``bbrl`` (:mod:`.bbrl`): a neural network from the raw context to
-a Gaussian over the action, updated within a KL trust region. Contextual learners (:mod:`.contextual`, a linear-Gaussian
-policy θ = θ̄ + K·φ(s) with smooth exploration): ``creps`` (contextual REPS), ``cpibb`` (contextual
-PI^BB), ``cpi2`` (contextual PI²); and the two baselines every table shows beside them: ``amplitude``
-(one θ over the 3 amplitude factors only) and ``random`` (contextual REPS fed random returns).
+Shared-θ learners: PI², PI^BB and CMA-ES. ``bbrl`` (:mod:`.bbrl`): a neural network from the raw context to a
+Gaussian over the action, updated within a KL trust region; ``bbrl_segments`` (:mod:`.segment_bbrl`): the same
+policy, each action dimension credited with the cost of the parts of the movement it acts in. Contextual learners
+(:mod:`.contextual`, a linear-Gaussian policy θ = θ̄ + K·φ(s) with smooth exploration): ``creps`` (contextual
+REPS), ``cpibb`` (contextual PI^BB), ``cpi2`` (contextual PI²); and the two baselines every table shows beside
+them: ``amplitude`` (one θ over the 3 amplitude factors only) and ``random`` (contextual REPS fed random returns).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from .contextual import ContextualConfig, ContextualSearch, ContextualSettings, 
 from .contextual import policy_from_state as contextual_policy_from_state
 from .pi2 import PI2, PI2Config
 from .pibb import PIBB, PIBBConfig
+from .segment_bbrl_config import SegmentBBRLConfig
 
 __all__ = [
     "CMAES",
@@ -42,6 +44,7 @@ __all__ = [
     "PI2Config",
     "PIBBConfig",
     "SearchSpace",
+    "SegmentBBRLConfig",
     "cost_weights",
     "make_learner",
     "policy_from_state",
@@ -78,7 +81,7 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
 
 def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.ndarray:
     """``[E, n]`` the policy actions of a contextual learner's state (``state_dict()``) for observations ``[E, o]``."""
-    if state.get("name") == "bbrl":
+    if state.get("name") in ("bbrl", "bbrl_segments"):
         from .bbrl import bbrl_policy_actions  # torch, only for a bbrl state
 
         return bbrl_policy_actions(state, observations)

@@ -231,8 +231,7 @@ class BBRL(Learner):
                               self._initial_sigma(space), self.config.rank, self.config.context_scale)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         #: the cost-to-go baseline network (``baseline="network"``), else None
-        self.value = (_Value(self.center.size, self.config.hidden,
-                             1 if self.time_weights is None else self.time_weights.shape[0])
+        self.value = (_Value(self.center.size, self.config.hidden, self._value_outputs())
                       if self.config.baseline == "network" else None)
         self._asked: tuple[np.ndarray, np.ndarray] | None = None      # (contexts [K, o], u [K, n])
         #: the samples of the last ``reuse`` (and ``history``) batches: contexts [N, o], samples [N, n], costs [N],
@@ -367,9 +366,7 @@ class BBRL(Learner):
         if self.value is not None:
             with torch.no_grad():
                 predicted = self.value(torch.as_tensor(data["contexts"])).numpy()
-        per_dimension, episode = sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights,
-                                                self.config.h, self.config.value_ridge, predicted,
-                                                paired=self.config.antithetic)
+        per_dimension, episode = self._sample_weights(data, predicted)
         if self.config.replay > 0:
             hat = ridge_hat(np.c_[np.ones(len(data["costs"])), data["contexts"]], self.config.value_ridge)
             offset = np.zeros(len(data["costs"])) if predicted is None else predicted[:, 0]
@@ -389,6 +386,20 @@ class BBRL(Learner):
         if self.value is not None:
             self._fit_value()
 
+    def _value_outputs(self) -> int:
+        """Outputs of the baseline network: the cost-to-go of every step (per-step credit), else the cost."""
+        return 1 if self.time_weights is None else self.time_weights.shape[0]
+
+    def _sample_weights(self, data: dict[str, np.ndarray],
+                        predicted: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """``([n or 1, N], [N])`` the per-dimension and episode weights of the reused samples ``data`` (step 1)."""
+        return sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights, self.config.h,
+                              self.config.value_ridge, predicted, paired=self.config.antithetic)
+
+    def _value_targets(self, batch: dict[str, np.ndarray]) -> np.ndarray:
+        """``[K, T or 1]`` what the baseline network predicts of one stored batch (its cost-to-go, or its cost)."""
+        return value_targets(batch["costs"], batch["traces"], self.time_weights is not None)
+
     def _fit_value(self) -> None:
         """Fit the baseline network, for the next update, to the cost-to-go of ``history`` batches older than the
         next update's samples (a network fitted to a sample would explain its own cost away)."""
@@ -396,8 +407,7 @@ class BBRL(Learner):
         if not older:
             return
         contexts = torch.as_tensor(np.concatenate([b["contexts"] for b in older]))
-        targets = np.concatenate([value_targets(b["costs"], b["traces"], self.time_weights is not None)
-                                  for b in older])
+        targets = np.concatenate([self._value_targets(b) for b in older])
         self.value.fit(contexts, torch.as_tensor(targets), self.config.value_epochs, self.config.learning_rate)
 
     def _maximise_likelihood(self, contexts: torch.Tensor, samples: torch.Tensor, per_dimension: torch.Tensor,
