@@ -15,9 +15,11 @@ import numpy as np
 import tyro
 
 from rdmp_gym import Demonstration, save_dmp
+from rdmp_gym.pose_io import read_pose_csv
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import despike
 
+from .fit_pose import fit_pose_command
 from .imitation import fit_dmp, load_demonstration
 
 __all__ = ["FitCommand", "command_fit", "parse_fit"]
@@ -30,7 +32,8 @@ class FitCommand:
     style: int = 1
     """built-in demonstration style 1-4"""
     demo: str = ""
-    """a CSV/NPZ demonstration instead of --style (default: none)"""
+    """a CSV/NPZ demonstration instead of --style (default: none); a CSV with columns qw, qx, qy, qz beside the
+    position is fitted as a pose (position and orientation)"""
     time_column: str = "t"
     """name of the CSV's time column (seconds)"""
     rate: float | None = None
@@ -96,12 +99,19 @@ def _plots() -> ModuleType:
 
 
 def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) -> None:
-    """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP."""
+    """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP; a CSV with the
+    orientation columns ``qw, qx, qy, qz`` is fitted as a pose (:mod:`.fit_pose`)."""
+    hints = dict(period=args.period, start=args.start, end=args.end, ending=args.ending, n_periodic=args.n_periodic,
+                 method=args.method, **({} if args.n_transient is None else {"n_transient": args.n_transient}))
+    path = Path(args.demo)
+    pose = read_pose_csv(path, args.time_column, args.rate or 100.0) if path.suffix.lower() == ".csv" \
+        and path.is_file() else None
+    if pose is not None:
+        fit_pose_command(pose, hints, out, plots)
+        return
     loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
     demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
-    result = fit_recording(demo, period=args.period, start=args.start, end=args.end, ending=args.ending,
-                           n_periodic=args.n_periodic, method=args.method,
-                           **({} if args.n_transient is None else {"n_transient": args.n_transient}))
+    result = fit_recording(demo, **hints)
     out.mkdir(parents=True, exist_ok=True)
     save_dmp(result.dmp, out / "dmp.json")
     seg, report = result.segmentation, recording_report(demo, result)

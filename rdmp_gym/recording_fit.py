@@ -100,7 +100,7 @@ def _fit_sweep(demo: Demonstration, seg: RhythmSegmentation, anchor: np.ndarray,
 def fit_recording(demo: Demonstration, *, period: float | None = None, start: float | None = None,
                   end: float | None = None, ending: bool | None = None, via_spacing: float | None = None,
                   n_periodic: int = 40, n_transient: int = 20, n_stop: int = 15, normalise: bool = True,
-                  smoothness: float = _SMOOTHNESS, **fit_kwargs) -> RecordingFit:
+                  smoothness: float = _SMOOTHNESS, timing_dims: int | None = None, **fit_kwargs) -> RecordingFit:
     """Fit a DMP to a whole recording: rest, approach, rhythm with a drifting working point, departure, rest.
 
     Args:
@@ -112,6 +112,9 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
         n_periodic, n_transient, n_stop: basis functions of the rhythm, of its entry and of the stop.
         normalise: fit the recording with its cycles stretched to their mean period (:func:`normalise_tempo`).
         smoothness: penalty on second differences of neighbouring weights (see :meth:`RhythmicDMP.fit`).
+        timing_dims: the first ``timing_dims`` columns set the timing (segmentation, tempo); the others ride along
+            with their own slow part and weights (an orientation's tangent coordinates, :mod:`rdmp_gym.pose_fit`).
+            ``None``: all columns.
         fit_kwargs: passed on to :meth:`RhythmicDMP.fit` (``method``, ``alpha_z``, ...), over the settings of
             :data:`~rdmp_gym.fitting.FADE_BEFORE_T` that the rhythm's entry is fitted with here.
     """
@@ -119,12 +122,12 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
         raise TypeError(f"demo: expected a Demonstration, got {type(demo).__name__}")
     if "segmentations" in fit_kwargs:
         raise ValueError("segmentations: fit_recording segments the recording itself (give period/start/end)")
-    seg = segment_rhythm(demo, period=period, start=start, end=end)
+    seg = _segment(demo, timing_dims, period=period, start=start, end=end)
     if normalise:
-        demo, original = normalise_tempo(demo, seg)
+        demo, original = normalise_tempo(demo, seg, timing_dims)
         start, end = (None if hint is None else float(np.interp(hint, original, demo.t - demo.t[0]))
                       for hint in (start, end))
-        seg = segment_rhythm(demo, period=seg.period, start=start, end=end)
+        seg = _segment(demo, timing_dims, period=seg.period, start=start, end=end)
     spacing = min(seg.period, _VIA_SPACING) if via_spacing is None else check_positive(via_spacing, "via_spacing")
     t = demo.t - demo.t[0]
     first_rest = t <= max(seg.onset, demo.dt)
@@ -161,6 +164,18 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     logger.info("fitted a recording: period %.4g s, entry %.3g s of %.3g s to the rhythm, %d via points, stop %s",
                 seg.period, entry_length, seg.rhythm_start, sweep.n_points, stop_at)
     return RecordingFit(dmp=dmp, segmentation=seg, stop_at=stop_at)
+
+
+def _segment(demo: Demonstration, timing_dims: int | None, **hints: float | None) -> RhythmSegmentation:
+    """:func:`segment_rhythm` of the first ``timing_dims`` columns of ``demo`` (all for ``None``), with the slow
+    part ``[L, d]`` of every column (the others' from :func:`local_fit` with the same period)."""
+    if timing_dims is None or timing_dims == demo.n_dims:
+        return segment_rhythm(demo, **hints)
+    if not 0 < timing_dims < demo.n_dims:
+        raise ValueError(f"timing_dims: expected a number of columns in [1, {demo.n_dims}], got {timing_dims!r}")
+    seg = segment_rhythm(Demonstration(demo.t, demo.Y[:, :timing_dims], name=demo.name), **hints)
+    riders = local_fit(Demonstration(demo.t, demo.Y[:, timing_dims:], name=demo.name), seg.period)[0]
+    return replace(seg, slow=np.concatenate([seg.slow, riders], axis=1))
 
 
 def _delayed(short: RhythmicDMP, full: Demonstration, rhythm_start: float, entry_length: float,
@@ -223,9 +238,11 @@ def _cycles(t: np.ndarray, rhythmic: np.ndarray, period: float, start: float, en
             for a, b in itertools.pairwise(cuts)]
 
 
-def normalise_tempo(demo: Demonstration, seg: RhythmSegmentation) -> tuple[Demonstration, np.ndarray]:
+def normalise_tempo(demo: Demonstration, seg: RhythmSegmentation, timing_dims: int | None = None
+                    ) -> tuple[Demonstration, np.ndarray]:
     """``demo`` with the cycles of its rhythm stretched in time to their mean period, and the original time
-    ``[L]`` (s from ``demo.t[0]``) of each of its samples.
+    ``[L]`` (s from ``demo.t[0]``) of each of its samples; the cycles are cut on the first ``timing_dims`` columns
+    (``None``: all).
 
     A person's period wanders from cycle to cycle; a least-squares fit of one constant-period pattern to the
     wandering cycles averages them out of phase and shrinks the pattern. Time is mapped by a smooth monotone
@@ -233,7 +250,7 @@ def normalise_tempo(demo: Demonstration, seg: RhythmSegmentation) -> tuple[Demon
     and through the identity outside the rhythm), so the approach and the ending keep their timing.
     """
     t = demo.t - demo.t[0]
-    cuts = t[_cycle_cuts(t, demo.Y - seg.slow, seg.period, seg.rhythm_start, seg.rhythm_end)]
+    cuts = t[_cycle_cuts(t, (demo.Y - seg.slow)[:, :timing_dims], seg.period, seg.rhythm_start, seg.rhythm_end)]
     if cuts.size < 3:
         return demo, t
     even = np.linspace(cuts[0], cuts[-1], cuts.size)

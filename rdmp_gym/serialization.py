@@ -15,6 +15,8 @@ Format ``rdmp-gym/rhythmic-dmp``, version 1. Top-level keys:
   goal [d], centres [S, 2], widths [S], weights [d, S], fading {nu1, nu2, k, delta}}``
 * ``sweep`` (optional, absent for a DMP whose anchor stays in place): ``{times [K + 1], points [K, d]}``
   (:class:`~rdmp_gym.sweep.Sweep`)
+* ``orientation`` (optional, a :class:`~rdmp_gym.pose.PoseDMP`): ``{reference [4]}``, the unit quaternion
+  (w, x, y, z) about which the last three dimensions are the orientation's tangent coordinates
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from .basis import NORMALISATION_EPSILON, BasisSet, Fading
 from .canonical import CanonicalSystem
 from .dmp import RhythmicDMP, TransientStart
 from .ending import Ending, StopFading
+from .pose import ORIENTATION_DIMS, PoseDMP
+from .quaternion import check_unit
 from .sweep import Sweep
 
 __all__ = ["FORMAT", "VERSION", "dmp_from_dict", "dmp_to_dict", "load_dmp", "save_dmp"]
@@ -38,8 +42,10 @@ FORMAT = "rdmp-gym/rhythmic-dmp"
 VERSION = 1
 
 
-def dmp_to_dict(dmp: RhythmicDMP) -> dict:
+def dmp_to_dict(dmp: RhythmicDMP | PoseDMP) -> dict:
     """A JSON-ready dictionary of every number that defines ``dmp``."""
+    if isinstance(dmp, PoseDMP):
+        return {**dmp_to_dict(dmp.dmp), "orientation": {"reference": dmp.reference.tolist()}}
     basis = dmp.basis
     data = {
         "format": FORMAT,
@@ -128,8 +134,9 @@ class _Reader:
         return array
 
 
-def dmp_from_dict(data: dict) -> RhythmicDMP:
-    """Rebuild a DMP from :func:`dmp_to_dict`'s output.
+def dmp_from_dict(data: dict) -> RhythmicDMP | PoseDMP:
+    """Rebuild a DMP from :func:`dmp_to_dict`'s output (a :class:`~rdmp_gym.pose.PoseDMP` where it has an
+    ``orientation``).
 
     Every field is checked (type, finiteness, sign, shapes and sizes consistent with each other);
     a problem is a ``ValueError`` that names the field, e.g. ``dmp.transients[0].start``.
@@ -141,7 +148,7 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
         raise ValueError(f"dmp.version: unsupported format version {data.get('version')!r}; this library reads "
                          f"{VERSION}")
     top.only(("format", "version", "canonical", "transformation", "anchor", "amplitude", "basis", "weights",
-              "transients", "stop", "sweep"))
+              "transients", "stop", "sweep", "orientation"))
     canonical = _Reader(top.field("canonical"), "dmp.canonical")
     canonical.only(tuple(f.name for f in fields(CanonicalSystem)))
     defaults = {f.name: f.default for f in fields(CanonicalSystem) if f.name != "period"}
@@ -200,7 +207,18 @@ def dmp_from_dict(data: dict) -> RhythmicDMP:
                                          entry.array("start", (d,)), entry.array("start_velocity", (d,))))
     ending = _read_stop(top.field("stop"), d) if "stop" in data else None
     sweep = _read_sweep(top.field("sweep"), d) if "sweep" in data else None
-    return RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude, ending, sweep)
+    dmp = RhythmicDMP(system, basis_set, weights, transients, anchor, alpha_z, amplitude, ending, sweep)
+    return PoseDMP(dmp, _read_reference(top.field("orientation"), d)) if "orientation" in data else dmp
+
+
+def _read_reference(value: object, d: int) -> np.ndarray:
+    """The reference orientation ``[4]`` of a pose DMP of ``d`` dimensions; errors name ``dmp.orientation...``."""
+    entry = _Reader(value, "dmp.orientation")
+    entry.only(("reference",))
+    if d <= ORIENTATION_DIMS:
+        raise ValueError(f"dmp.orientation: a pose DMP needs position dimensions and {ORIENTATION_DIMS} tangent "
+                         f"dimensions, the file has {d}")
+    return check_unit(entry.array("reference", (4,)), "dmp.orientation.reference")
 
 
 def _read_sweep(value: object, d: int) -> Sweep:
@@ -242,13 +260,14 @@ def _read_stop(value: object, d: int) -> Ending:
                   StopFading(nu1, nu2, fading.integer("k", low=1), delta))
 
 
-def save_dmp(dmp: RhythmicDMP, path: str | Path) -> None:
+def save_dmp(dmp: RhythmicDMP | PoseDMP, path: str | Path) -> None:
     """Write ``dmp`` to ``path`` as JSON."""
     Path(path).write_text(json.dumps(dmp_to_dict(dmp), indent=1))
 
 
-def load_dmp(path: str | Path) -> RhythmicDMP:
-    """Read a DMP written by :func:`save_dmp`; a broken file is a ``ValueError`` naming it and the field."""
+def load_dmp(path: str | Path) -> RhythmicDMP | PoseDMP:
+    """Read a DMP written by :func:`save_dmp` (a :class:`~rdmp_gym.pose.PoseDMP` for a pose); a broken file is a
+    ``ValueError`` naming it and the field."""
     path = Path(path)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
