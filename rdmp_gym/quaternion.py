@@ -41,8 +41,9 @@ def check_unit(q: object, name: str = "q", tolerance: float = _UNIT_TOLERANCE) -
     bad = np.abs(norms - 1.0) > tolerance
     if np.any(bad):
         row = np.unravel_index(int(np.argmax(bad)), bad.shape)
-        raise ValueError(f"{name}: row {row[0] if len(row) == 1 else row} has norm {norms[row]:.4g}; expected unit "
-                         f"quaternions (w, x, y, z) with norms within {tolerance:g} of 1")
+        where = "" if not row else f" row {row[0] if len(row) == 1 else row}"
+        raise ValueError(f"{name}:{where} has norm {norms[row]:.4g}; expected unit quaternions (w, x, y, z) with "
+                         f"norms within {tolerance:g} of 1")
     return array / norms[..., None]
 
 
