@@ -20,6 +20,7 @@ from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import despike
 
 from .fit_pose import fit_pose_command
+from .fit_sessions import fit_sessions_command, several_sessions
 from .imitation import fit_dmp, load_demonstration
 
 __all__ = ["FitCommand", "command_fit", "parse_fit"]
@@ -52,6 +53,9 @@ class FitCommand:
     """time (s) at which the rhythm ends (default: detected)"""
     ending: bool | None = None
     """fit the departure and the final rest as the DMP's stop (default: where the recording ends at rest)"""
+    sessions: bool = True
+    """find several sessions (rhythms separated by departures or rests) and fit one DMP each (dmp-1.json, ...);
+    False, or a --period/--start/--end hint: one DMP for the whole recording"""
     plot: bool = False
     """write fit.png (recording vs reproduction: position and acceleration; needs the plots extra)"""
     out: str = "runs/fit"
@@ -111,6 +115,11 @@ def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) 
         return
     loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
     demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
+    one_rhythm = (args.period, args.start, args.end) != (None, None, None)       # hints for one rhythm
+    sessions = several_sessions(demo) if args.sessions and not one_rhythm else None
+    if sessions is not None:
+        fit_sessions_command(demo, sessions, hints, out, plots)
+        return
     result = fit_recording(demo, **hints)
     out.mkdir(parents=True, exist_ok=True)
     save_dmp(result.dmp, out / "dmp.json")

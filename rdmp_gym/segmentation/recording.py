@@ -14,7 +14,10 @@ on top of it for part of the time. Method:
 3. Change points. The rhythm runs at full size from where the envelope first reaches ``full`` of its typical
    level until it last does, or until the working point departs (the slow part's speed exceeds a quarter of the
    rhythm's); it starts to grow where the envelope first exceeds ``begin`` of that level.
-4. Rest. Speed below ``rest_fraction`` of the rhythm's typical speed (:mod:`rdmp_gym.segmentation.rest`): the
+4. Where a person would mark it. The rhythm's onset and stop: where the hand enters the region the full-size rhythm
+   sweeps and leaves it again (:mod:`rdmp_gym.segmentation.onset`), earlier and later than the full-size rhythm by
+   the growing and fading strokes. Reported beside it; the fit uses the full-size rhythm.
+5. Rest. Speed below ``rest_fraction`` of the rhythm's typical speed (:mod:`rdmp_gym.segmentation.rest`): the
    hand leaves its first rest at the first faster sample and is at rest after the rhythm from the first sample
    after which it stays slower. Relative to the motion's own scale, so a slow drift and sensor noise at rest pass.
 """
@@ -30,6 +33,7 @@ from rdmp_gym.demonstrations import Demonstration
 from rdmp_gym.validation import as_finite_array, check_positive
 
 from .fourier import local_fit
+from .onset import rhythm_bounds
 from .period import estimate_period, refine_period
 from .rest import high_level, motion_speed, rest_onset, rest_threshold
 
@@ -50,6 +54,8 @@ class RhythmSegmentation:
         entry: the rhythm starts to grow.
         rhythm_start: the rhythm runs at full size from here.
         rhythm_end: ... until here.
+        rhythm_onset: the hand enters the rhythm (the growing first stroke, a contact; :mod:`.onset`).
+        rhythm_stop: ... and leaves it.
         rest_time: at rest from here to the end; ``None`` if the recording does not end at rest.
         slow: ``[L, d]`` the slow part of the motion (the working point) at every sample.
         amplitude: ``[L]`` the rhythm's local amplitude (m, root of the summed squared harmonics).
@@ -61,6 +67,8 @@ class RhythmSegmentation:
     entry: float
     rhythm_start: float
     rhythm_end: float
+    rhythm_onset: float
+    rhythm_stop: float
     rest_time: float | None
     slow: np.ndarray
     amplitude: np.ndarray
@@ -126,12 +134,15 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     threshold = rest_threshold(speed, demo.dt, float(np.median(speed[first:last + 1])), rest_fraction)
     moving = np.flatnonzero(speed[:entry + 1] >= threshold)
     onset = int(moving[0]) if moving.size else entry
+    rhythm_onset, rhythm_stop = rhythm_bounds(demo.Y, first, last)
     rest = rest_onset(speed, threshold, demo.dt)
     rest_time = None if rest is None or rest <= last else float(t[rest])
     logger.debug("segment_rhythm %r: period %.4f s, onset %.2f, entry %.2f, rhythm %.2f-%.2f s, rest %s",
                  demo.name, estimate, t[onset], t[entry], t[first], t[last], rest_time)
     return RhythmSegmentation(period=float(estimate), onset=float(t[onset]), entry=float(t[entry]),
-                              rhythm_start=float(t[first]), rhythm_end=float(t[last]), rest_time=rest_time,
+                              rhythm_start=float(t[first]), rhythm_end=float(t[last]),
+                              rhythm_onset=float(t[rhythm_onset]), rhythm_stop=float(t[rhythm_stop]),
+                              rest_time=rest_time,
                               slow=slow, amplitude=amplitude, rest_speed=threshold)
 
 

@@ -1,0 +1,62 @@
+"""``rdmp-gym fit --demo`` on a recording with several sessions (rhythms separated by departures or rests): one
+DMP per session (``dmp-1.json``, ``dmp-2.json``, ...), a summary table and ``report.json``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import ModuleType
+
+from rdmp_gym import Demonstration, save_dmp
+from rdmp_gym.recording_fit import recording_report
+from rdmp_gym.segmentation.sessions import Session, find_sessions
+from rdmp_gym.session_fit import fit_sessions
+
+__all__ = ["fit_sessions_command", "several_sessions"]
+
+
+def several_sessions(demo: Demonstration) -> list[Session] | None:
+    """The sessions of ``demo`` when it holds more than one, else ``None`` (one or none: the plain fit)."""
+    try:
+        sessions = find_sessions(demo)
+    except ValueError:
+        return None
+    return sessions if len(sessions) > 1 else None
+
+
+def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: dict, out: Path,
+                         plots: ModuleType | None) -> None:
+    """Fit each of the ``sessions`` of ``demo`` with the fit's ``hints`` (keywords of
+    :func:`~rdmp_gym.recording_fit.fit_recording`, without the hints of one rhythm); write ``dmp-K.json``,
+    ``report.json`` (and ``fit-K.png``) into ``out``; print what was found. Raises ``ValueError`` when no
+    session could be fitted."""
+    fits = fit_sessions(demo, sessions, **hints)
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"{demo.name}: {len(fits)} sessions (rhythms separated by departures or rests), one DMP each")
+    print(f"{'session':>7} {'part (s)':>13} {'rhythm (s)':>13} {'period (s)':>10} {'error ratio':>11} "
+          f"{'accel ratio':>11}  DMP")
+    rows = []
+    for k, item in enumerate(fits, start=1):
+        session = item.session
+        row = {"session": k, "start": session.start, "stop": session.stop, "rhythm_onset": session.rhythm_onset,
+               "rhythm_stop": session.rhythm_stop}
+        span = f"{session.start:6.2f}-{session.stop:6.2f} {session.rhythm_onset:6.2f}-{session.rhythm_stop:6.2f}"
+        if item.fit is None:
+            rows.append({**row, "error": item.error})
+            print(f"{k:>7} {span} refused: {item.error}")
+            continue
+        path = out / f"dmp-{k}.json"
+        save_dmp(item.fit.dmp, path)
+        seg, report = item.fit.segmentation, recording_report(item.demo, item.fit)
+        rows.append({**row, "dmp": path.name, "period": seg.period, "rhythm_start": session.start + seg.rhythm_start,
+                     "rhythm_end": session.start + seg.rhythm_end, "stop_at": item.fit.stop_at, **report})
+        print(f"{k:>7} {span} {seg.period:10.3f} {report['error_ratio']:11.2f} {report['acceleration_ratio']:11.2f}"
+              f"  {path.name}")
+        if plots is not None:
+            plots.plot_recording_fit(item.demo.t - item.demo.t[0], item.demo.Y, item.fit.reproduce,
+                                     out / f"fit-{k}.png", title=f"{demo.name}, session {k}: recording vs DMP")
+    (out / "report.json").write_text(json.dumps({"sessions": rows}, indent=2) + "\n")
+    print(f"times in s from the recording's first sample; each DMP's own time starts at its part's start. "
+          f"wrote {len(rows) - sum('error' in row for row in rows)} DMPs and {out / 'report.json'}")
+    if all(item.fit is None for item in fits):
+        raise ValueError(f"demo: none of its {len(fits)} sessions could be fitted (see the table)")
