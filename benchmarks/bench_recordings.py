@@ -9,7 +9,12 @@ against hand labels where a file ``NAME.labels.json`` beside ``NAME.csv`` gives 
 ``runs/benchmarks/recordings_user.json`` (untracked), the generated ones to ``recordings.json``. Targets: error
 ratio <= 1.5, start and rest error <= 1 cm, acceleration ratio <= 1.5.
 
-    python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--save]
+With ``--orientation`` also the pose (position and orientation): realistic pose recordings
+(:func:`rdmp_gym.synthetic_pose.realistic_pose_recording`) and the user's files with ``qw, qx, qy, qz`` columns or
+12-column pose files, with the orientation's cycle error against its cycle-to-cycle variation (degrees) and its
+peak angular acceleration ratio (``recordings_pose.json``).
+
+    python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--orientation] [--save]
 """
 
 from __future__ import annotations
@@ -22,12 +27,14 @@ from pathlib import Path
 
 import numpy as np
 from output import add_save_argument, results_dir
+from pose_rows import pose_row, print_pose_row, read_orientation, summary
 from rdmp_gym.agents.cli import main as cli_main
 
 from rdmp_gym.demonstrations import to_demonstration
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import smooth_derivatives
 from rdmp_gym.synthetic import RECORDING_KINDS, realistic_recording
+from rdmp_gym.synthetic_pose import realistic_pose_recording
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:
@@ -85,6 +92,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds per kind of generated recording")
     parser.add_argument("--data", type=Path, default=None, help="a folder of the user's recordings (opt-in)")
     parser.add_argument("--data-rate", type=float, default=100.0, help="sampling rate of pose files without time")
+    parser.add_argument("--orientation", action="store_true",
+                        help="also fit position and orientation (realistic_pose_recording, and the --data files with "
+                             "an orientation); writes recordings_pose.json")
     add_save_argument(parser)
     args = parser.parse_args(argv)
     rows = []
@@ -111,6 +121,8 @@ def main(argv: list[str] | None = None) -> int:
                 user.append(_row(name, to_demonstration(t, Y, name=path.stem), labels, csv_path))
                 _print(user[-1])
             _summary("yours", user)
+    if args.orientation:
+        _pose_rows(args)
     out = results_dir(args.save) / "recordings.json"
     out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
     print(f"wrote {out}")
@@ -119,6 +131,38 @@ def main(argv: list[str] | None = None) -> int:
         out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
         print(f"wrote {out}")
     return 0
+
+
+def _pose_rows(args: argparse.Namespace) -> None:
+    """The pose rows: generated recordings (the positions of the rows above, with an orientation; a slow half
+    turn during the approach for every second seed) and the user's files with an orientation."""
+    rows, user = [], []
+    for kind in RECORDING_KINDS:
+        for seed in range(args.seeds):
+            turn = 180.0 if seed % 2 else 0.0
+            recording = realistic_pose_recording(kind, rng=np.random.default_rng(seed), turn=turn)
+            truth = recording.truth
+            rows.append(pose_row(f"{kind} {seed}" + (" turn" if turn else ""), recording.t, recording.Y,
+                                 recording.Q, {"period": truth.period, "start": truth.rhythm_start,
+                                               "end": truth.rhythm_end}, recording.clean_orientation))
+            print_pose_row(rows[-1])
+    summary("generated", rows)
+    for path in sorted(args.data.rglob("*")) if args.data is not None else ():
+        read = read_orientation(path, args.data_rate) if path.suffix.lower() in (".csv", ".txt") else None
+        if read is not None:
+            labels = path.with_suffix(".labels.json")
+            user.append(pose_row(str(path.relative_to(args.data)), *read, _labels(labels) if labels.exists()
+                                 else None))
+            print_pose_row(user[-1])
+    if user:
+        summary("yours", user)
+    out = results_dir(args.save) / "recordings_pose.json"
+    out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
+    print(f"wrote {out}")
+    if user:
+        out = results_dir(False) / "recordings_pose_user.json"
+        out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
+        print(f"wrote {out}")
 
 
 def _summary(title: str, rows: list[dict]) -> None:

@@ -41,6 +41,7 @@ import numpy as np
 from rdmp_gym import RhythmicDMP, load_dmp, wiping_demonstration
 from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FADE_BEFORE_T
+from rdmp_gym.pose import PoseDMP
 
 from .action import ActionMap
 from .approach import approach_direction, lift_profile
@@ -158,11 +159,13 @@ def _check_reach(spec: ContextSpec, robot: RobotDescription) -> None:
 
 
 def _saved_dmp(dmp: str | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
-    """A 3-D DMP from a ``dmp.json`` path (or as given), its imitation path checked against ``workspace``."""
+    """A 3-D DMP from a ``dmp.json`` path (or as given; of a pose DMP its position), its imitation path checked
+    against ``workspace``."""
     if not isinstance(dmp, RhythmicDMP):
         if not Path(dmp).is_file():
             raise FileNotFoundError(f"dmp: no such file {dmp}")
         dmp = load_dmp(dmp)
+        dmp = dmp.position if isinstance(dmp, PoseDMP) else dmp
     if dmp.n_dims != 3:
         raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
     t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)

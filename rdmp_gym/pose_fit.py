@@ -25,7 +25,7 @@ from .pose import Pose, PoseDemonstration, PoseDMP
 from .recording_fit import _SMOOTHING, RecordingFit, fit_recording, recording_report
 from .signals import smooth_derivatives
 
-__all__ = ["PoseFit", "fit_pose_recording", "pose_report"]
+__all__ = ["PoseFit", "fit_pose_recording", "pose_report", "smoothed_peak_angular_acceleration"]
 
 _STEP = 1e-3        # s: the grid on which the reproduction's angular acceleration is measured
 
@@ -82,7 +82,7 @@ def pose_report(pose: PoseDemonstration, result: PoseFit) -> dict[str, float | N
     angles = np.degrees(quaternion.angle_between(reproduced, pose.orientations))
     rhythm = (t >= seg.rhythm_start) & (t <= seg.rhythm_end)
     peak = _peak_angular_acceleration(result, t[-1])
-    recorded_peak = _recorded_peak_angular_acceleration(pose.tangent, pose.reference)
+    recorded_peak = smoothed_peak_angular_acceleration(pose.tangent, pose.reference)
     report.update(orientation_variation=float(np.degrees(tangent["cycle_variation"])),
                   orientation_error=float(np.degrees(tangent["cycle_error"])),
                   orientation_error_ratio=tangent["error_ratio"],
@@ -100,10 +100,11 @@ def _peak_angular_acceleration(result: PoseFit, duration: float) -> float:
     return float(np.degrees(np.max(np.linalg.norm(quaternion.angular_acceleration(orientation, _STEP), axis=1))))
 
 
-def _recorded_peak_angular_acceleration(tangent: Demonstration, reference: np.ndarray) -> float:
-    """The smoothed recording's peak angular acceleration (deg/s^2): at every sample, from the Savitzky-Golay
-    tangent coordinates, rates and accelerations ``v, v', v''`` (the orientation along ``v + v' s + v'' s^2 / 2``
-    at ``s = -h, 0, h``)."""
+def smoothed_peak_angular_acceleration(tangent: Demonstration, reference: np.ndarray) -> float:
+    """The peak angular acceleration (deg/s^2) of a recording's tangent coordinates ``[L, 3]`` about ``reference
+    [4]``, smoothed as the position's in :func:`~rdmp_gym.recording_fit.recording_report`: at every sample, from the
+    Savitzky-Golay tangent coordinates, rates and accelerations ``v, v', v''`` (the orientation along
+    ``v + v' s + v'' s^2 / 2`` at ``s = -h, 0, h``, h = 1 ms)."""
     v, rate, acceleration = smooth_derivatives(tangent.Y, tangent.dt, _SMOOTHING)
     path = np.stack([quaternion.from_tangent(v + rate * s + 0.5 * acceleration * s * s, reference)
                      for s in (-_STEP, 0.0, _STEP)])                                          # [3, L, 4]
