@@ -10,7 +10,8 @@ People record sessions back to back: wipe, lift the hand, reposition, wipe again
 2. Take it out of the search: from where the hand entered it to where it left it (its ``rhythm_onset`` and
    ``rhythm_stop``, :mod:`rdmp_gym.segmentation.onset`) the recording is replaced by a straight line, and the
    search starts again, until no rhythm of ``min_periods`` periods that repeats is left.
-3. Cut between neighbouring sessions where the hand is stillest: in the middle of the longest rest between them,
+3. Rhythms less than half a period apart are one session (a hesitation, not a departure). Cut between
+   neighbouring sessions where the hand is stillest: in the middle of the longest rest between them,
    or at the slowest sample where it never rests. Each session is the recording between its cuts (the first from
    the first sample, the last to the last), segmented again on its own, as a whole recording.
 """
@@ -45,7 +46,8 @@ class Session:
 
     Attributes:
         start, stop: the part of the recording that holds it (its cuts).
-        rhythm_onset, rhythm_stop: the hand enters its rhythm and leaves it.
+        rhythm_onset, rhythm_stop: the hand enters its rhythm and leaves it (those of ``segmentation``; the first
+            entry and last exit where the session holds rhythms less than half a period apart).
         segmentation: :func:`segment_rhythm` of that part (times from ``start``; its full-size rhythm is the
             session's longest).
     """
@@ -101,14 +103,16 @@ def find_sessions(demo: Demonstration, *, min_periods: float = 2.0) -> list[Sess
         raise ValueError("demo: no rhythm found that repeats (no session)")
     largest = max(rhythm[2] for rhythm in found)
     kept = _merged(sorted(rhythm for rhythm in found if rhythm[2] >= MIN_LEVEL * largest), demo.dt)
-    cuts = [0] + [_cut(demo, stop, onset) for (_, stop), (onset, _) in itertools.pairwise(kept)] + [demo.n_samples - 1]
+    cuts = [0] + [_cut(demo, previous[:2], following[0]) for previous, following in itertools.pairwise(kept)] \
+        + [demo.n_samples - 1]
     t = demo.t - demo.t[0]
     sessions = []
     for a, b in itertools.pairwise(cuts):
         part = Demonstration(demo.t[a:b + 1], demo.Y[a:b + 1], name=demo.name)
-        onset, stop = next((onset, stop) for onset, stop in kept if a <= onset <= b)
-        sessions.append(Session(float(t[a]), float(t[b]), float(t[onset]), float(t[stop]),
-                                segment_rhythm(part, min_periods=min_periods)))
+        seg = segment_rhythm(part, min_periods=min_periods)
+        onset, stop, joined = next(rhythm for rhythm in kept if a <= rhythm[0] <= b)
+        bounds = (t[onset], t[stop]) if joined else (t[a] + seg.rhythm_onset, t[a] + seg.rhythm_stop)
+        sessions.append(Session(float(t[a]), float(t[b]), float(bounds[0]), float(bounds[1]), seg))
     logger.info("find_sessions %r: %d session(s) at %s s", demo.name, len(sessions),
                 ", ".join(f"{s.rhythm_onset:.1f}-{s.rhythm_stop:.1f}" for s in sessions))
     return sessions
@@ -133,16 +137,16 @@ def _rhythm_in(demo: Demonstration, low: int, high: int, min_periods: float
     return low + int(onset), low + int(stop), float(np.median(seg.amplitude[first:last + 1])), seg.period
 
 
-def _merged(rhythms: list[tuple[int, int, float, float]], dt: float) -> list[tuple[int, int]]:
-    """``(onset, stop)`` of the rhythms in time order, those less than a period apart (a hesitation, not a
-    departure) merged into one."""
-    merged = [list(rhythms[0][:2])]
+def _merged(rhythms: list[tuple[int, int, float, float]], dt: float) -> list[tuple[int, int, bool]]:
+    """``(onset, stop, merged)`` of the rhythms in time order, those less than half a period apart (a hesitation,
+    not a departure) merged into one."""
+    merged = [[*rhythms[0][:2], False]]
     for (_, stop, _, period), (onset, next_stop, _, next_period) in itertools.pairwise(rhythms):
-        if (onset - stop) * dt < max(period, next_period):
-            merged[-1][1] = next_stop
+        if (onset - stop) * dt < 0.5 * min(period, next_period):
+            merged[-1][1:] = [next_stop, True]
         else:
-            merged.append([onset, next_stop])
-    return [(onset, stop) for onset, stop in merged]
+            merged.append([onset, next_stop, False])
+    return [(onset, stop, joined) for onset, stop, joined in merged]
 
 
 def _without(demo: Demonstration, onset: int, stop: int) -> Demonstration:
@@ -154,16 +158,17 @@ def _without(demo: Demonstration, onset: int, stop: int) -> Demonstration:
     return Demonstration(demo.t, Y, name=demo.name)
 
 
-def _cut(demo: Demonstration, after: int, before: int) -> int:
-    """Where to cut between a session that the hand leaves at sample ``after`` and the next it enters at
-    ``before``: the middle of the longest rest between them, else the slowest sample."""
+def _cut(demo: Demonstration, previous: tuple[int, int], before: int) -> int:
+    """Where to cut between a session whose rhythm the hand enters and leaves at the samples ``previous`` and the
+    next it enters at ``before``: the middle of the longest rest between (a rhythm holds none), else the slowest
+    sample after it left the previous rhythm."""
     speed = motion_speed(demo)
+    onset, after = previous
     if before <= after + 1:
         return (after + before) // 2
-    between = speed[after:before + 1]
-    resting = between < rest_threshold(speed, demo.dt, float(np.median(speed)), 0.05)
+    resting = speed[onset:before + 1] < rest_threshold(speed, demo.dt, float(np.median(speed)), 0.05)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], resting.astype(np.int8), [0]])))
     if edges.size:
         longest = int(np.argmax(edges[1::2] - edges[::2]))
-        return after + (int(edges[2 * longest]) + int(edges[2 * longest + 1]) - 1) // 2
-    return after + int(np.argmin(between))
+        return onset + (int(edges[2 * longest]) + int(edges[2 * longest + 1]) - 1) // 2
+    return after + int(np.argmin(speed[after:before + 1]))

@@ -1,0 +1,93 @@
+"""Synthetic recordings with several sessions: a person works, leaves, rests and comes back, in one file.
+
+Each session is a :func:`rdmp_gym.synthetic.realistic_recording` (rest, approach, a rhythm that grows and fades,
+departure, rest); the next session starts where the previous one came to rest (its samples moved so that its
+noise-free start meets the previous noise-free end) and its clock continues the previous one. The truth of each
+session comes beside it (:class:`SessionTruth`), times from the first sample of the whole recording.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .synthetic import _ENTRY_PERIODS, _EXIT_PERIODS, RECORDING_KINDS, Recording, realistic_recording
+from .validation import check_positive
+
+__all__ = ["MultiSessionRecording", "SessionTruth", "multi_session_recording"]
+
+
+@dataclass(frozen=True)
+class SessionTruth:
+    """What happened in one session (s from the recording's first sample).
+
+    Attributes:
+        onset: the pattern starts to grow (the first stroke).
+        rhythm_start, rhythm_end: the pattern runs at full size.
+        stop: the pattern has faded (the hand leaves the rhythm).
+        rest_time: the hand rests from here until the next session's approach.
+        period: the mean period of its rhythm.
+    """
+
+    onset: float
+    rhythm_start: float
+    rhythm_end: float
+    stop: float
+    rest_time: float
+    period: float
+
+
+@dataclass(frozen=True, eq=False)
+class MultiSessionRecording:
+    """A recording with several sessions: its samples (``recording.t [L]``, ``recording.Y [L, 3]``), the truth of
+    each session, and the samples without sensor noise ``clean [L, 3]``."""
+
+    recording: Recording
+    sessions: tuple[SessionTruth, ...]
+    clean: np.ndarray
+
+
+def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: np.random.Generator,
+                            periods: Sequence[float] | None = None, rate: float = 100.0,
+                            **session_kwargs) -> MultiSessionRecording:
+    """``n_sessions`` sessions of ``kind`` (:data:`~rdmp_gym.synthetic.RECORDING_KINDS`) back to back.
+
+    Args:
+        n_sessions: how many sessions (at least 2).
+        kind: the kind of every session.
+        rng: the only source of randomness, drawn session by session.
+        periods: each session's mean period (s; default: the kind's, times 0.85, 1.0, 1.15, ... in turn).
+        rate: the recorder's mean sampling rate (Hz).
+        session_kwargs: passed on to :func:`~rdmp_gym.synthetic.realistic_recording` (``n_periods``, ``noise``,
+            ...).
+    """
+    if isinstance(n_sessions, bool) or not isinstance(n_sessions, (int, np.integer)) or n_sessions < 2:
+        raise ValueError(f"n_sessions: expected an int of at least 2, got {n_sessions!r}")
+    if kind not in RECORDING_KINDS:
+        raise ValueError(f"kind: expected one of {sorted(RECORDING_KINDS)}, got {kind!r}")
+    if periods is None:
+        periods = [RECORDING_KINDS[kind].period * (0.85, 1.0, 1.15)[k % 3] for k in range(n_sessions)]
+    if len(periods) != n_sessions:
+        raise ValueError(f"periods: expected {n_sessions} values (one per session), got {len(periods)}")
+    rate = check_positive(rate, "rate")
+    times, samples, cleans, truths = [], [], [], []
+    clock, place = 0.0, None
+    for period in periods:
+        piece = realistic_recording(kind, rng=rng, rate=rate, period=check_positive(period, "periods"),
+                                    **session_kwargs)
+        truth = piece.truth
+        shift = np.zeros(3) if place is None else place - truth.clean[0]
+        times.append(clock + piece.t)
+        samples.append(piece.Y + shift)
+        cleans.append(truth.clean + shift)
+        truths.append(SessionTruth(onset=clock + truth.rhythm_start - _ENTRY_PERIODS * truth.period,
+                                   rhythm_start=clock + truth.rhythm_start, rhythm_end=clock + truth.rhythm_end,
+                                   stop=clock + truth.rhythm_end + _EXIT_PERIODS * truth.period,
+                                   rest_time=clock + truth.rest_time, period=truth.period))
+        clock += float(piece.t[-1]) + 1.0 / rate
+        place = cleans[-1][-1]
+    recording = Recording(t=np.concatenate(times), Y=np.concatenate(samples),
+                          name=f"{n_sessions} {kind} sessions")
+    return MultiSessionRecording(recording=recording, sessions=tuple(truths), clean=np.concatenate(cleans))

@@ -1,0 +1,100 @@
+"""Several sessions in one recording: the split, the onset and stop of each rhythm, one fit per session, the CLI."""
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+from rdmp_gym.agents.cli import main as cli_main
+
+from rdmp_gym.demonstrations import Demonstration, to_demonstration
+from rdmp_gym.recording_fit import recording_report
+from rdmp_gym.segmentation import segment_rhythm
+from rdmp_gym.segmentation.sessions import find_sessions
+from rdmp_gym.session_fit import fit_sessions
+from rdmp_gym.synthetic import realistic_recording
+from rdmp_gym.synthetic_sessions import multi_session_recording
+
+
+@pytest.fixture(scope="module")
+def three():
+    """A recording of three wiping sessions of periods 1.45, 1.7 and 1.95 s, and its demonstration."""
+    recording = multi_session_recording(3, "wiping", rng=np.random.default_rng(1))
+    return recording, to_demonstration(recording.recording.t, recording.recording.Y)
+
+
+@pytest.fixture(scope="module")
+def fits(three):
+    return fit_sessions(three[1])
+
+
+def test_generator_is_seeded_and_continuous(three) -> None:
+    again = multi_session_recording(3, "wiping", rng=np.random.default_rng(1))
+    np.testing.assert_array_equal(again.recording.Y, three[0].recording.Y)
+    assert np.all(np.diff(three[0].recording.t) > 0.0)
+    jumps = np.linalg.norm(np.diff(three[0].clean, axis=0), axis=1)
+    assert jumps.max() < 0.01                       # each session starts where the previous one rested
+    truths = three[0].sessions
+    assert all(a.rest_time < b.onset for a, b in itertools.pairwise(truths))
+
+
+def test_each_session_is_found_with_its_onset_and_stop(fits, three) -> None:
+    truths = three[0].sessions
+    assert len(fits) == len(truths)
+    for item, truth in zip(fits, truths, strict=True):
+        session = item.session
+        assert session.start <= truth.onset and truth.stop <= session.stop      # the cuts hold the whole session
+        assert abs(session.rhythm_onset - truth.onset) < 1.0
+        assert abs(session.rhythm_stop - truth.stop) < 1.0
+        assert item.fit.segmentation.period == pytest.approx(truth.period, rel=0.05)
+    cuts = [(item.session.start, item.session.stop) for item in fits]
+    assert cuts[0][0] == 0.0 and cuts[-1][1] == pytest.approx(three[1].t[-1] - three[1].t[0])
+    assert all(a[1] == b[0] for a, b in itertools.pairwise(cuts))       # back to back
+
+
+def test_each_session_is_fitted_within_the_targets(fits) -> None:
+    for item in fits:
+        report = recording_report(item.demo, item.fit)
+        assert report["error_ratio"] < 1.5
+        assert report["acceleration_ratio"] < 1.5
+        assert report["rest_error"] is not None and report["rest_error"] < 0.01
+
+
+def test_one_session_is_the_whole_recording() -> None:
+    recording = realistic_recording("wiping", rng=np.random.default_rng(2))
+    demo = to_demonstration(recording.t, recording.Y)
+    sessions = find_sessions(demo)
+    assert len(sessions) == 1
+    assert sessions[0].start == 0.0 and sessions[0].stop == pytest.approx(demo.t[-1] - demo.t[0])
+
+
+@pytest.mark.parametrize("kind", ["wiping", "kitchen", "long"])
+def test_onset_and_stop_surround_the_full_size_rhythm(kind: str) -> None:
+    recording = realistic_recording(kind, rng=np.random.default_rng(1))
+    seg = segment_rhythm(to_demonstration(recording.t, recording.Y))
+    truth = recording.truth
+    assert seg.rhythm_onset <= seg.rhythm_start < seg.rhythm_end <= seg.rhythm_stop
+    assert seg.rhythm_onset < truth.rhythm_start                # earlier than the full-size rhythm
+    assert abs(seg.rhythm_stop - truth.rhythm_end) < 1.0
+
+
+def test_bad_input_names_the_argument(three) -> None:
+    with pytest.raises(ValueError, match="period"):
+        fit_sessions(three[1], period=1.7)
+    with pytest.raises(ValueError, match="n_sessions"):
+        multi_session_recording(1, rng=np.random.default_rng(0))
+    with pytest.raises(ValueError, match="periods"):
+        multi_session_recording(2, rng=np.random.default_rng(0), periods=[1.5])
+    noise = np.random.default_rng(0).normal(0.0, 1e-3, (1500, 3))
+    with pytest.raises(ValueError, match="no rhythm"):
+        find_sessions(Demonstration(np.arange(1500) * 0.01, noise))
+
+
+def test_cli_writes_one_dmp_per_session(three, tmp_path) -> None:
+    path = tmp_path / "three.csv"
+    three[0].recording.to_csv(path)
+    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
+    report = json.loads((tmp_path / "fit" / "report.json").read_text())
+    assert [row["dmp"] for row in report["sessions"]] == ["dmp-1.json", "dmp-2.json", "dmp-3.json"]
+    assert all((tmp_path / "fit" / f"dmp-{k}.json").exists() for k in (1, 2, 3))
+    assert not (tmp_path / "fit" / "dmp.json").exists()
