@@ -55,7 +55,7 @@ class FitCommand:
     """fit the departure and the final rest as the DMP's stop (default: where the recording ends at rest)"""
     sessions: bool = True
     """find several sessions (rhythms separated by departures or rests) and fit one DMP each (dmp-1.json, ...);
-    False, or a --period/--start/--end hint: one DMP for the whole recording"""
+    --no-sessions, or a --period/--start/--end hint: one DMP for the whole recording"""
     plot: bool = False
     """write fit.png (recording vs reproduction: position and acceleration; needs the plots extra)"""
     out: str = "runs/fit"

@@ -41,13 +41,17 @@ def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: di
         row = {"session": k, "start": session.start, "stop": session.stop, "rhythm_onset": session.rhythm_onset,
                "rhythm_stop": session.rhythm_stop}
         span = f"{session.start:6.2f}-{session.stop:6.2f} {session.rhythm_onset:6.2f}-{session.rhythm_stop:6.2f}"
-        if item.fit is None:
-            rows.append({**row, "error": item.error})
-            print(f"{k:>7} {span} refused: {item.error}")
+        try:
+            if item.fit is None:
+                raise ValueError(item.error)
+            report = recording_report(item.demo, item.fit)
+        except ValueError as error:         # refused, or too few whole cycles to measure
+            rows.append({**row, "error": str(error)})
+            print(f"{k:>7} {span} refused: {error}")
             continue
         path = out / f"dmp-{k}.json"
         save_dmp(item.fit.dmp, path)
-        seg, report = item.fit.segmentation, recording_report(item.demo, item.fit)
+        seg = item.fit.segmentation
         rows.append({**row, "dmp": path.name, "period": seg.period, "rhythm_start": session.start + seg.rhythm_start,
                      "rhythm_end": session.start + seg.rhythm_end, "stop_at": item.fit.stop_at, **report})
         print(f"{k:>7} {span} {seg.period:10.3f} {report['error_ratio']:11.2f} {report['acceleration_ratio']:11.2f}"
@@ -58,5 +62,5 @@ def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: di
     (out / "report.json").write_text(json.dumps({"sessions": rows}, indent=2) + "\n")
     print(f"times in s from the recording's first sample; each DMP's own time starts at its part's start. "
           f"wrote {len(rows) - sum('error' in row for row in rows)} DMPs and {out / 'report.json'}")
-    if all(item.fit is None for item in fits):
+    if all("error" in row for row in rows):
         raise ValueError(f"demo: none of its {len(fits)} sessions could be fitted (see the table)")

@@ -14,7 +14,14 @@ With ``--orientation`` also the pose (position and orientation): realistic pose 
 12-column pose files, with the orientation's cycle error against its cycle-to-cycle variation (degrees) and its
 peak angular acceleration ratio (``recordings_pose.json``).
 
-    python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--orientation] [--save]
+With ``--sessions`` also the recordings with several sessions: generated ones
+(:func:`rdmp_gym.synthetic_sessions.multi_session_recording`, 3 sessions of each kind) against their truth, and the
+user's files against labels ``{"sessions": [{"rhythm_start": s, "rhythm_end": s}, ...]}`` (or the single-rhythm
+form): sessions found, each one's onset and stop against the labels, period, error and acceleration ratios, and
+whether the CLI succeeds (``recordings_sessions.json``).
+
+    python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--orientation] [--sessions]
+                                          [--save]
 """
 
 from __future__ import annotations
@@ -29,12 +36,14 @@ import numpy as np
 from output import add_save_argument, results_dir
 from pose_rows import pose_row, print_pose_row, read_orientation, summary
 from rdmp_gym.agents.cli import main as cli_main
+from session_rows import print_session_row, session_row, session_summary
 
 from rdmp_gym.demonstrations import to_demonstration
 from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import smooth_derivatives
 from rdmp_gym.synthetic import RECORDING_KINDS, realistic_recording
 from rdmp_gym.synthetic_pose import realistic_pose_recording
+from rdmp_gym.synthetic_sessions import multi_session_recording
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:
@@ -81,10 +90,21 @@ def _user_recordings(folder: Path, rate: float):
         yield path, t, Y, (_labels(labels) if labels.exists() else None)
 
 
-def _labels(path: Path) -> dict:
-    """Hand labels ``{"start": s, "end": s}`` from a ``{"rhythm_start": s, "rhythm_end": s}`` file."""
+def _labels(path: Path) -> dict | None:
+    """Hand labels ``{"start": s, "end": s}`` from a ``{"rhythm_start": s, "rhythm_end": s}`` file (``None`` for
+    a file of several sessions)."""
     labels = json.loads(path.read_text())
+    if "sessions" in labels:
+        return None
     return {"start": float(labels["rhythm_start"]), "end": float(labels["rhythm_end"])}
+
+
+def _session_labels(path: Path) -> list[tuple[float, float]] | None:
+    """``[(start, end), ...]`` (s) of the labelled sessions in ``path`` (either form), ``None`` without a file."""
+    if not path.exists():
+        return None
+    labels = json.loads(path.read_text())
+    return [(float(s["rhythm_start"]), float(s["rhythm_end"])) for s in labels.get("sessions", [labels])]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -92,6 +112,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seeds per kind of generated recording")
     parser.add_argument("--data", type=Path, default=None, help="a folder of the user's recordings (opt-in)")
     parser.add_argument("--data-rate", type=float, default=100.0, help="sampling rate of pose files without time")
+    parser.add_argument("--sessions", action="store_true",
+                        help="also the recordings with several sessions (generated, and the --data files); writes "
+                             "recordings_sessions.json")
     parser.add_argument("--orientation", action="store_true",
                         help="also fit position and orientation (realistic_pose_recording, and the --data files with "
                              "an orientation); writes recordings_pose.json")
@@ -123,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
             _summary("yours", user)
     if args.orientation:
         _pose_rows(args)
+    if args.sessions:
+        _session_rows(args)
     out = results_dir(args.save) / "recordings.json"
     out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
     print(f"wrote {out}")
@@ -161,6 +186,37 @@ def _pose_rows(args: argparse.Namespace) -> None:
     print(f"wrote {out}")
     if user:
         out = results_dir(False) / "recordings_pose_user.json"
+        out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
+        print(f"wrote {out}")
+
+
+def _session_rows(args: argparse.Namespace) -> None:
+    """The session rows: 3 sessions of each kind (``--seeds`` seeds) against their truth, and the user's files."""
+    rows, user = [], []
+    with tempfile.TemporaryDirectory() as folder:
+        for kind in RECORDING_KINDS:
+            for seed in range(args.seeds):
+                made = multi_session_recording(3, kind, rng=np.random.default_rng(seed))
+                csv_path = Path(folder) / f"{kind}-sessions-{seed}.csv"
+                made.recording.to_csv(csv_path)
+                demo = to_demonstration(made.recording.t, made.recording.Y, name=f"{kind} sessions {seed}")
+                truth = [(s.onset, s.stop) for s in made.sessions]
+                rows.append(session_row(f"{kind} x3 {seed}", demo, truth, csv_path))
+                print_session_row(rows[-1])
+        session_summary("generated", rows)
+        for path, t, Y, _ in _user_recordings(args.data, args.data_rate) if args.data is not None else ():
+            csv_path = Path(folder) / f"{path.stem}.csv"
+            np.savetxt(csv_path, np.column_stack([t, Y]), delimiter=",", header="t,x,y,z", comments="")
+            user.append(session_row(str(path.relative_to(args.data)), to_demonstration(t, Y, name=path.stem),
+                                    _session_labels(path.with_suffix(".labels.json")), csv_path))
+            print_session_row(user[-1])
+        if user:
+            session_summary("yours", user)
+    out = results_dir(args.save) / "recordings_sessions.json"
+    out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
+    print(f"wrote {out}")
+    if user:
+        out = results_dir(False) / "recordings_sessions_user.json"
         out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
         print(f"wrote {out}")
 
