@@ -106,16 +106,33 @@ def find_sessions(demo: Demonstration, *, min_periods: float = 2.0) -> list[Sess
     cuts = [0] + [_cut(demo, previous[:2], following[0]) for previous, following in itertools.pairwise(kept)] \
         + [demo.n_samples - 1]
     t = demo.t - demo.t[0]
+    while True:         # a part that cannot be segmented as a whole recording joins its neighbour
+        segs = [_segmented(demo, a, b, min_periods) for a, b in itertools.pairwise(cuts)]
+        failed = [k for k, seg in enumerate(segs) if seg is None]
+        if not failed:
+            break
+        if len(cuts) == 2:
+            raise ValueError("demo: no session that can be segmented as a whole recording")
+        del cuts[min(failed[0] + 1, len(cuts) - 2)]
     sessions = []
-    for a, b in itertools.pairwise(cuts):
-        part = Demonstration(demo.t[a:b + 1], demo.Y[a:b + 1], name=demo.name)
-        seg = segment_rhythm(part, min_periods=min_periods)
-        onset, stop, joined = next(rhythm for rhythm in kept if a <= rhythm[0] <= b)
-        bounds = (t[onset], t[stop]) if joined else (t[a] + seg.rhythm_onset, t[a] + seg.rhythm_stop)
+    for (a, b), seg in zip(itertools.pairwise(cuts), segs, strict=True):
+        inside = [rhythm for rhythm in kept if a <= rhythm[0] <= b]
+        joined = len(inside) > 1 or inside[0][2]
+        bounds = (t[inside[0][0]], t[inside[-1][1]]) if joined else (t[a] + seg.rhythm_onset,
+                                                                      t[a] + seg.rhythm_stop)
         sessions.append(Session(float(t[a]), float(t[b]), float(bounds[0]), float(bounds[1]), seg))
     logger.info("find_sessions %r: %d session(s) at %s s", demo.name, len(sessions),
                 ", ".join(f"{s.rhythm_onset:.1f}-{s.rhythm_stop:.1f}" for s in sessions))
     return sessions
+
+
+def _segmented(demo: Demonstration, a: int, b: int, min_periods: float) -> RhythmSegmentation | None:
+    """:func:`segment_rhythm` of the samples ``[a, b]`` of ``demo``, or ``None`` where it refuses them."""
+    try:
+        return segment_rhythm(Demonstration(demo.t[a:b + 1], demo.Y[a:b + 1], name=demo.name),
+                              min_periods=min_periods)
+    except ValueError:
+        return None
 
 
 def _rhythm_in(demo: Demonstration, low: int, high: int, min_periods: float
