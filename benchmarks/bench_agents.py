@@ -151,12 +151,12 @@ def _seed_counts(args: argparse.Namespace, labels: dict[str, str]) -> dict[str, 
     return counts
 
 
-def _run_job(config: TrainConfig, scratch: Path, tester: Evaluator, seeds: np.ndarray, observations: np.ndarray,
+def _run_job(config: TrainConfig, run_dir: Path, tester: Evaluator, seeds: np.ndarray, observations: np.ndarray,
              reference_jerk: np.ndarray) -> dict:
-    """One training run and the test evaluation of its final policy. Every episode goes through an
-    ``Evaluator`` (``train`` builds its own): this is the one place where a run is dispatched."""
+    """One training run (into ``run_dir``) and the test evaluation of its final policy. Every episode goes through
+    an ``Evaluator`` (``train`` builds its own): this is the one place where a run is dispatched."""
     began = time.perf_counter()
-    run = train(config, scratch / f"{config.agent}-{config.seed}")
+    run = train(config, run_dir)
     records = run.read_log()
     actions = trained_actions(run, config, "last", observations, tester.n_actions)
     scores = evaluate_actions(tester, actions, seeds, reference_jerk)
@@ -238,14 +238,14 @@ def reusable_runs(documents: list[dict], configs: list[TrainConfig], names: list
     return found
 
 
-def _run_remote(config: TrainConfig, scratch: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
+def _run_remote(config: TrainConfig, run_dir: Path, spec: TaskSpec, seeds: np.ndarray, observations: np.ndarray,
                 reference_jerk: np.ndarray) -> dict:
     """:func:`_run_job` inside a Ray task: its own one-worker test evaluator."""
     with Evaluator(spec, 1) as tester:
-        return _run_job(config, scratch, tester, seeds, observations, reference_jerk)
+        return _run_job(config, run_dir, tester, seeds, observations, reference_jerk)
 
 
-def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
+def _run_on_ray(configs: list[TrainConfig], names: list[str], args: argparse.Namespace, scratch: Path, spec: TaskSpec,
                 seeds: np.ndarray, observations: np.ndarray, reference_jerk: np.ndarray) -> list[dict]:
     """Every run as a Ray task (one CPU, one worker inside); results in the order of ``configs``."""
     from rdmp_gym.agents.ray_backend import import_ray, init_ray
@@ -254,7 +254,8 @@ def _run_on_ray(configs: list[TrainConfig], args: argparse.Namespace, scratch: P
     owns = init_ray(args.workers, args.ray_address)
     remote = ray.remote(num_cpus=1)(_run_remote)
     try:
-        pending = [remote.remote(config, scratch, spec, seeds, observations, reference_jerk) for config in configs]
+        pending = [remote.remote(config, scratch / f"{name}-{config.seed}", spec, seeds, observations, reference_jerk)
+                   for name, config in zip(names, configs, strict=True)]
         with tqdm(total=len(pending), desc="runs (ray)", unit="run") as bar:
             for ref in pending:
                 ray.wait([ref], num_returns=1)
@@ -278,7 +279,8 @@ def _run_locally(configs: list[TrainConfig], names: list[str], args: argparse.Na
             path = cache / f"{name}-{config.seed}.json"
             run = (None if args.fresh else _cached_run(config, path, seeds)) or earlier.get((name, config.seed))
             if run is None:
-                run = _run_job(config, scratch, tester, seeds, observations, reference_jerk)
+                run = _run_job(config, scratch / f"{name}-{config.seed}", tester, seeds, observations,
+                               reference_jerk)
                 _store_run(config, path, seeds, run)
             runs.append(run)
     return runs
@@ -460,7 +462,7 @@ def main() -> None:
             chosen = [i for i, config in enumerate(configs) if first <= config.seed < stop]
             configs, names = [configs[i] for i in chosen], [names[i] for i in chosen]
         if args.backend == "ray":
-            runs = _run_on_ray(configs, args, scratch, spec, seeds, observations, reference)
+            runs = _run_on_ray(configs, names, args, scratch, spec, seeds, observations, reference)
         else:
             runs = _run_locally(configs, names, args, scratch, spec, seeds, observations, reference)
         runs = [{**run, "agent": name} for name, run in zip(names, runs, strict=True)]

@@ -103,7 +103,7 @@ def test_a_dimension_is_judged_only_by_the_segments_it_acts_in():
     parts[:, 0] = [9.0, 0.0, 0.0, 0.0, 0.0, 0.0]                          # sample 0 is the dearest episode
     activation = segment_activation(ACTIVATION, segment_starts(STEPS, SEGMENTS))
     per_dimension, episode = segment_weights(parts, np.zeros((6, 2)), activation, h=10.0,
-                                             ridge=1.0, episode_share=0.0)
+                                             ridge=1.0, episode_share=0.0, common_scale=True)
     np.testing.assert_allclose(per_dimension.sum(axis=1), 1.0)
     assert per_dimension[10].argmax() == 0 and per_dimension[11].argmax() == 0
     elsewhere = [i for i in range(N) if i // 2 in (2, 3)]                 # two segments from both costs

@@ -14,10 +14,10 @@ the last segment), and:
    env's ``action_time_weights``: a periodic weight acts in every cycle, a transient weight in one or two
    segments, an anchor everywhere) and ``b`` the ``episode_share`` (costs judged once at the end, such as a
    coverage, reach early dimensions through it);
-3. ``bbrl``'s weighted maximum likelihood with per-dimension weights ``exp(-h A_ki / R)`` (normalised over the
-   samples; ``R`` the range of the episode advantages ``sum_j A_kj``, one scale for all dimensions, so that a
-   dimension whose segments hardly differ between samples is left nearly where it is) and its KL trust region
-   (:mod:`.bbrl`).
+3. ``bbrl``'s weighted maximum likelihood with per-dimension weights ``exp(-h A_ki / R_i)`` (normalised over the
+   samples; ``R_i`` the range of dimension ``i``'s advantages as in PI², or with ``scale="common"`` the range of
+   the episode advantages ``sum_j A_kj`` for every dimension, so that a dimension whose segments hardly differ
+   between samples is left nearly where it is) and its KL trust region (:mod:`.bbrl`).
 
 Nothing is task-specific: no groups, no per-group exploration factors, no features beyond the raw context. The
 segments and the activation come from the primitive and the control steps alone.
@@ -58,8 +58,8 @@ def segment_activation(time_weights: np.ndarray, starts: np.ndarray) -> np.ndarr
 
 
 def segment_weights(parts: np.ndarray, contexts: np.ndarray, activation: np.ndarray, h: float, ridge: float,
-                    episode_share: float, predicted: np.ndarray | None = None,
-                    paired: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                    episode_share: float, predicted: np.ndarray | None = None, paired: bool = False,
+                    common_scale: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per-dimension and episode weights of ``N`` samples from their segment costs (steps 1-2 of the module
     docstring).
 
@@ -69,6 +69,7 @@ def segment_weights(parts: np.ndarray, contexts: np.ndarray, activation: np.ndar
         h: eliteness; ridge: the ridge of the context regression; episode_share: ``b`` of the module docstring.
         predicted: ``[N, M]`` the critic's segment costs, subtracted first (None: 0).
         paired: antithetic pairs (rows 2i, 2i + 1): each pair's mean replaces the ridge.
+        common_scale: one scale for every dimension (:func:`common_scale_weights`), else min-max per dimension.
     Returns:
         ``([n, N], [N])``, each row summing to 1 over the samples.
     """
@@ -78,7 +79,9 @@ def segment_weights(parts: np.ndarray, contexts: np.ndarray, activation: np.ndar
     advantage = residual - hat @ residual                                             # [N, M]
     episode = advantage.sum(axis=1)                                                   # [N]
     per_dimension = (1.0 - episode_share) * (advantage @ activation) + episode_share * episode[:, None]
-    return common_scale_weights(per_dimension.T, np.ptp(episode), h), cost_weights(episode, h)
+    weights = common_scale_weights(per_dimension.T, np.ptp(episode), h) if common_scale \
+        else cost_weights(per_dimension.T, h)
+    return weights, cost_weights(episode, h)
 
 
 def common_scale_weights(advantages: np.ndarray, scale: float, h: float) -> np.ndarray:
@@ -137,4 +140,5 @@ class SegmentBBRL(BBRL):
             return super()._sample_weights(data, predicted)
         parts = segment_costs(data["costs"], data["traces"], self.starts)
         return segment_weights(parts, data["contexts"], self.activation, self.config.h, self.config.value_ridge,
-                               self.config.episode_share, predicted, paired=self.config.antithetic)
+                               self.config.episode_share, predicted, paired=self.config.antithetic,
+                               common_scale=self.config.scale == "common")

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..config import check_range
+from ..config import check_choice, check_range
 from ..registry import register
 from .bbrl_config import BBRLConfig
 
-__all__ = ["SegmentBBRLConfig"]
+__all__ = ["SCALES", "SegmentBBRLConfig"]
+
+SCALES = ("dimension", "common")
 
 
 @dataclass(frozen=True)
@@ -22,6 +24,9 @@ class SegmentBBRLConfig(BBRLConfig):
             from the segments in which the dimension acts (0: only the segments; 1: the episode, as bbrl without
             per-step credit). Costs the task books at the end (a coverage judged once) reach the dimensions that
             act early through it.
+        scale: how advantages become weights: ``"dimension"`` (PI²'s min-max per dimension: every dimension's best
+            sample gets the full eliteness ``h``) or ``"common"`` (one scale, the range of the episode advantages,
+            for every dimension: a dimension whose segments hardly differ between samples stays nearly where it is).
         baseline: ``"network"`` (default): the critic ``V(s)`` of every segment's cost, fitted to the ``history``
             batches before the ones it judges (off-policy: those samples came from earlier policies); ``"ridge"``:
             a ridge regression on the context alone.
@@ -32,6 +37,7 @@ class SegmentBBRLConfig(BBRLConfig):
 
     segments: int = 16
     episode_share: float = 0.25
+    scale: str = "dimension"
     baseline: str = "network"
     history: int = 50
     value_epochs: int = 100
@@ -40,6 +46,7 @@ class SegmentBBRLConfig(BBRLConfig):
         super().__post_init__()
         check_range(self.segments, "segments", 1, None)
         check_range(self.episode_share, "episode_share", 0.0, 1.0)
+        check_choice(self.scale, "scale", SCALES)
         if self.replay > 0:
             raise ValueError("replay: bbrl_segments judges samples per segment and ranks no contexts; use replay = 0")
 
