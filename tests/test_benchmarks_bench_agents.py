@@ -104,3 +104,34 @@ def test_markdown_table_has_a_row_per_policy_with_its_episodes_to_each_level():
     assert lines[3] == ("| `bbrl` (3 seeds) | 0.50 [0.25, 0.75] | 0.500 [0.250, 0.750] | 0.50 [0.25, 0.75] | "
                         "0.500 [0.250, 0.750] | 400 (3/3) / 900 (1/3) / - (0/3) |")
     assert lines[2].endswith("|  |")
+
+
+def test_two_labels_of_one_learner_train_in_their_own_folders(monkeypatch, tmp_path):
+    """``--agents a=bbrl b=bbrl``: the same learner and seed under two labels must not share a run folder."""
+    import bench_agents
+
+    folders = []
+
+    class _NoEvaluator:
+        def __init__(self, *args):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    def fake_job(config, run_dir, *rest):
+        folders.append(run_dir)
+        return {"agent": config.agent, "seed": config.seed}
+
+    monkeypatch.setattr(bench_agents, "Evaluator", _NoEvaluator)
+    monkeypatch.setattr(bench_agents, "_run_job", fake_job)
+    monkeypatch.setattr(bench_agents, "SCRATCH", tmp_path / "cache")
+    configs = [TrainConfig(agent="bbrl", seed=0), TrainConfig(agent="bbrl", seed=0)]
+    args = argparse.Namespace(name="labels", reuse=[], fresh=True, workers=1)
+    runs = bench_agents._run_locally(configs, ["wide", "narrow"], args, tmp_path / "scratch", None, np.arange(2),
+                                     np.zeros((2, 3)), np.ones(2))
+    assert len(runs) == 2 and len(set(folders)) == 2
+    assert {folder.name for folder in folders} == {"wide-0", "narrow-0"}
