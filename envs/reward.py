@@ -48,8 +48,11 @@ import numpy as np
 
 from .wiping import WipeTrace
 
-__all__ = ["TERMS", "RewardSettings", "RewardWeights", "Smoothness", "invalid_reward", "wipe_reward"]
+__all__ = ["COVERAGE_TIMINGS", "TERMS", "RewardSettings", "RewardWeights", "Smoothness", "invalid_reward",
+           "wipe_reward"]
 
+#: where the cost trace books the coverage (:attr:`RewardSettings.coverage_timing`)
+COVERAGE_TIMINGS = ("end", "wiped")
 TERMS = ("coverage", "force", "excess_force", "contact_loss", "impact", "smoothness", "joint_accel",
          "arm_collision", "self_collision", "obstacle", "joint_limit", "invalid", "unstable")
 
@@ -104,6 +107,8 @@ class RewardSettings:
         max_joint_accel: commanded joint acceleration a_max above which the peak is charged (rad/s²).
         touch_steps: steps of touching the obstacle that cost the full obstacle-touch charge.
         obstacle_shift: obstacle displacement that costs the full obstacle-displacement charge (m).
+        coverage_timing: where the cost trace books the coverage: ``"end"`` (at the last step) or ``"wiped"``
+            (each step the dirt it removed); the sum is the same.
         event_charge: a fixed share of the weight that an arm collision, a self-collision, a joint at its limit
             or a joint acceleration above ``max_joint_accel`` costs as soon as it happens once (at its first
             step), on top of its graded cost (``ArmarWipe-v2``: 0.2, so that a brief graze, which ``is_success``
@@ -119,6 +124,7 @@ class RewardSettings:
     touch_steps: int = 100
     obstacle_shift: float = 0.2
     event_charge: float = 0.0
+    coverage_timing: str = "end"
 
 
 @dataclass(frozen=True)
@@ -206,7 +212,10 @@ def wipe_reward(trace: WipeTrace, periodic: np.ndarray, smooth: Smoothness, sett
     per = periodic & live
     n_per = max(1, int(np.count_nonzero(periodic)))
     parts = {name: np.zeros(count) for name in TERMS}
-    parts["coverage"][last] = -weights.coverage * float(np.sum(trace.removed))
+    if settings.coverage_timing == "wiped":
+        parts["coverage"] = -weights.coverage * np.where(live, trace.removed, 0.0)
+    else:
+        parts["coverage"][last] = -weights.coverage * float(np.sum(trace.removed))
     score = np.exp(-0.5 * ((force - settings.target_force) / settings.force_sigma) ** 2)
     parts["force"] = -weights.force * np.where(per, score, 0.0) / n_per
     excess = np.minimum(1.0, np.maximum(0.0, force - settings.max_force) / settings.max_force)

@@ -51,7 +51,7 @@ from rdmp_gym.fitting import FIT_METHODS
 from .clearance import CupClearance
 from .context import ContextSpec
 from .force_learning import ForceProfileSettings
-from .reward import RewardWeights
+from .reward import COVERAGE_TIMINGS, RewardWeights
 from .robots import RobotDescription
 from .versions import TASK_VERSIONS
 
@@ -382,16 +382,24 @@ class ForceConfig:
 
 @dataclass(frozen=True)
 class RewardConfig:
-    """The reward's term weights.
+    """The reward's term weights, and when the per-step cost trace books the coverage.
 
     Attributes:
         weights: ``{term: weight}`` overrides of :class:`~rdmp_gym.envs.reward.RewardWeights` (finite numbers
             >= 0), or None (the defaults).
+        coverage_timing: where ``info["cost_trace"]`` books the coverage term: ``"end"`` (its whole value at the
+            last step) or ``"wiped"`` (each step the dirt it removed, as the step twin rewards it). The return is
+            the same either way (up to rounding); learners that credit time (PI², ``cpi2``, ``bbrl``,
+            ``bbrl_segments``) see when the coverage was earned only with ``"wiped"``.
     """
 
     weights: dict[str, float] | None = None
+    coverage_timing: str = "end"
 
     def __post_init__(self) -> None:
+        if self.coverage_timing not in COVERAGE_TIMINGS:
+            raise ValueError(f"coverage_timing: expected one of {list(COVERAGE_TIMINGS)}, "
+                             f"got {self.coverage_timing!r}")
         if self.weights is None:
             return
         if isinstance(self.weights, RewardWeights):
@@ -511,6 +519,7 @@ _KWARGS: dict[str, tuple[str | None, str]] = {
     "force_band": ("force", "force_band"),
     "force_sigma": ("force", "force_sigma"),
     "reward_weights": ("reward", "weights"),
+    "coverage_timing": ("reward", "coverage_timing"),
     "adaptation": ("force", "adaptation"),
     "admittance_gain": ("force", "admittance_gain"),
     "force_learning": ("force", "force_learning"),

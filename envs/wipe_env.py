@@ -346,7 +346,8 @@ class ArmarWipeEnv(gym.Env):
         self.reward_settings = RewardSettings(target_force=force.target_force,
                                               max_joint_accel=self.robot.max_joint_accel,
                                               force_sigma=force.force_sigma, max_force=force.force_band[1],
-                                              event_charge=self.task_version.event_charge)
+                                              event_charge=self.task_version.event_charge,
+                                              coverage_timing=reward.coverage_timing)
         self.reward_weights = RewardWeights.from_mapping(reward.weights)
 
     def _set_limits(self, task: TaskConfig) -> None:

@@ -29,6 +29,7 @@ TODAY = {
     "style": 1, "demonstration": None, "dmp": None, "n_periodic": 40, "n_transient": 40, "fit_method": "trajectory",
     "groups": None, "scales": None, "n_periods": None, "duration": None, "control_rate": 100.0, "frame_skip": None,
     "timestep": None, "target_force": 18.0, "force_band": (5.0, 60.0), "force_sigma": 6.0, "reward_weights": None,
+    "coverage_timing": "end",
     "adaptation": True, "admittance_gain": 0.02, "force_learning": False, "context_ranges": None, "obstacle": True,
     "obstacle_probability": 0.75, "cell_size": 0.01, "wear_rate": 2.0e-3, "penetration_limit": 0.005,
     "limit_margin": 0.02, "ik_tolerance": (0.005, float(np.deg2rad(5.0))), "max_joint_speed": None, "xml_file": None,
