@@ -98,3 +98,32 @@ def test_cli_writes_one_dmp_per_session(three, tmp_path) -> None:
     assert [row["dmp"] for row in report["sessions"]] == ["dmp-1.json", "dmp-2.json", "dmp-3.json"]
     assert all((tmp_path / "fit" / f"dmp-{k}.json").exists() for k in (1, 2, 3))
     assert not (tmp_path / "fit" / "dmp.json").exists()
+
+
+
+def _paused(lift: float, hold: float) -> tuple[Demonstration, float]:
+    """A kitchen recording (period 0.9 s) whose hand stops mid-stroke in the middle of its rhythm for ``hold`` s,
+    lifting by ``lift`` m (a smooth bump in z), and where the pause starts (s)."""
+    recording = realistic_recording("kitchen", rng=np.random.default_rng(0))
+    truth = recording.truth
+    k = int(np.searchsorted(recording.t, 0.5 * (truth.rhythm_start + truth.rhythm_end)))
+    dt = float(np.median(np.diff(recording.t)))
+    n = round(hold / dt)
+    bump = np.sin(np.linspace(0.0, np.pi, n)) ** 2
+    still = recording.Y[k] + np.outer(bump, [0.0, 0.0, lift]) + np.random.default_rng(1).normal(0.0, 2e-4, (n, 3))
+    t = np.concatenate([recording.t[:k], recording.t[k] + dt * np.arange(n), recording.t[k:] + n * dt])
+    return to_demonstration(t, np.concatenate([recording.Y[:k], still, recording.Y[k:]])), recording.t[k]
+
+
+def test_a_pause_at_the_working_place_is_one_session() -> None:
+    demo, pause = _paused(0.03, hold=1.5)   # 1.7 periods' pause, 3 cm off the surface (0.65 of the rhythm's size)
+    sessions = find_sessions(demo)
+    assert len(sessions) == 1
+    assert sessions[0].rhythm_onset < pause - 5.0 and sessions[0].rhythm_stop > pause + 5.0
+
+
+def test_a_departure_separates_sessions() -> None:
+    demo, pause = _paused(0.2, hold=2.0)        # the hand leaves: 20 cm up and back
+    sessions = find_sessions(demo)
+    assert len(sessions) == 2
+    assert sessions[0].rhythm_stop <= pause + 0.5 and sessions[1].rhythm_onset >= pause + 1.5

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["ENTER_SHARE", "rhythm_bounds"]
+__all__ = ["ENTER_SHARE", "rhythm_bounds", "sweep_size"]
 
 ENTER_SHARE = 0.3
 """The hand is in the rhythm within this share of the rhythm's size of one of its samples."""
@@ -26,10 +26,15 @@ def rhythm_bounds(Y: np.ndarray, first: int, last: int, share: float = ENTER_SHA
     after ``last``) the region swept by the full-size rhythm ``Y[first:last + 1]`` (``Y [L, d]``); ``0`` and
     ``L - 1`` when it is in the region from the first or to the last sample."""
     rhythm = Y[first:last + 1]
-    size = float(np.sqrt(np.mean(np.sum((rhythm - rhythm.mean(axis=0)) ** 2, axis=1))))
+    size = sweep_size(rhythm)
     tree = cKDTree(rhythm)
     outside_before = np.flatnonzero(tree.query(Y[:first])[0] > share * size)
     outside_after = np.flatnonzero(tree.query(Y[last + 1:])[0] > share * size)
     onset = int(outside_before[-1]) + 1 if outside_before.size else 0
     stop = last + int(outside_after[0]) if outside_after.size else Y.shape[0] - 1
     return onset, stop
+
+
+def sweep_size(points: np.ndarray) -> float:
+    """The size of the motion ``points [N, d]``: the RMS distance of its samples from their mean."""
+    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=1))))
