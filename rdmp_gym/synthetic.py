@@ -30,8 +30,8 @@ from scipy.interpolate import CubicSpline, PchipInterpolator
 from .demonstrations import Demonstration, SyntheticTruth
 from .validation import as_finite_array, check_positive
 
-__all__ = ["RECORDING_KINDS", "Recording", "RecordingTruth", "ending_demonstration", "multi_transient_demonstrations",
-           "realistic_recording", "wiping_demonstration"]
+__all__ = ["ENTRY_PERIODS", "EXIT_PERIODS", "RECORDING_KINDS", "Recording", "RecordingTruth", "ending_demonstration",
+           "multi_transient_demonstrations", "realistic_recording", "wiping_demonstration"]
 
 # ---------------------------------------------------------------------------------- wiping demonstrations
 _DEFAULT_START = (-0.15, 0.20, 0.12)
@@ -272,8 +272,11 @@ RECORDING_KINDS = {
                   departure=2.5, rest=2.5),
 }
 _INITIAL_REST = 0.8         # s at rest before the hand moves
-_ENTRY_PERIODS = 0.75       # the pattern grows from nothing to its size over this share of a period
-_EXIT_PERIODS = 0.5         # ... and fades over this share of a period as the hand leaves
+ENTRY_PERIODS = 0.75
+"""In a :func:`realistic_recording` the pattern grows from nothing to its size over this share of a period, ending
+at ``truth.rhythm_start``."""
+EXIT_PERIODS = 0.5
+"""... and fades over this share of a period from ``truth.rhythm_end`` as the hand leaves."""
 _OUTLIER_RATE = 0.002       # share of samples that are outliers
 
 
@@ -401,14 +404,14 @@ def realistic_recording(kind: str = "wiping", *, rng: np.random.Generator, rate:
     working = np.array([rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), 0.0])
     goal = working + np.array([rng.uniform(0.1, 0.2), rng.uniform(-0.2, -0.1), rng.uniform(0.1, 0.16)])
     arrival = onset + sum(settings.approach) + settings.pause * (len(settings.approach) - 1)
-    entry_length = _ENTRY_PERIODS * period
+    entry_length = ENTRY_PERIODS * period
     rhythm_start = arrival                        # the pattern grows during the last part of the approach
     entry_begin = rhythm_start - entry_length
     # the phase drives the cycles; the rhythm ends after n_periods cycles counted from the start of its growth
     t_fine = np.arange(0.0, arrival + (n_periods + 6) * period * 1.6 + settings.departure + settings.rest, 0.002)
     phase = _phase(t_fine, entry_begin, period, spread, rng)
     rhythm_end = float(np.interp(2.0 * np.pi * n_periods, phase, t_fine))
-    exit_length = _EXIT_PERIODS * period
+    exit_length = EXIT_PERIODS * period
     depart_end = rhythm_end + settings.departure
     rest_time = depart_end
     duration = rest_time + settings.rest * rng.uniform(0.9, 1.2)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .synthetic import _ENTRY_PERIODS, _EXIT_PERIODS, RECORDING_KINDS, Recording, realistic_recording
+from .synthetic import ENTRY_PERIODS, EXIT_PERIODS, RECORDING_KINDS, Recording, realistic_recording
 from .validation import check_positive
 
 __all__ = ["MultiSessionRecording", "SessionTruth", "multi_session_recording"]
@@ -82,9 +82,9 @@ def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: n
         times.append(clock + piece.t)
         samples.append(piece.Y + shift)
         cleans.append(truth.clean + shift)
-        truths.append(SessionTruth(onset=clock + truth.rhythm_start - _ENTRY_PERIODS * truth.period,
+        truths.append(SessionTruth(onset=clock + truth.rhythm_start - ENTRY_PERIODS * truth.period,
                                    rhythm_start=clock + truth.rhythm_start, rhythm_end=clock + truth.rhythm_end,
-                                   stop=clock + truth.rhythm_end + _EXIT_PERIODS * truth.period,
+                                   stop=clock + truth.rhythm_end + EXIT_PERIODS * truth.period,
                                    rest_time=clock + truth.rest_time, period=truth.period))
         clock += float(piece.t[-1]) + 1.0 / rate
         place = cleans[-1][-1]
