@@ -22,7 +22,7 @@ from . import quaternion
 from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
 from .pose import Pose, PoseDemonstration, PoseDMP
-from .recording_fit import _SMOOTHING, RecordingFit, fit_recording, recording_report
+from .recording_fit import ACCELERATION_SMOOTHING, RecordingFit, fit_recording, recording_report
 from .signals import smooth_derivatives
 
 __all__ = ["PoseFit", "fit_pose_recording", "pose_report", "smoothed_peak_angular_acceleration"]
@@ -105,7 +105,7 @@ def smoothed_peak_angular_acceleration(tangent: Demonstration, reference: np.nda
     [4]``, smoothed as the position's in :func:`~rdmp_gym.recording_fit.recording_report`: at every sample, from the
     Savitzky-Golay tangent coordinates, rates and accelerations ``v, v', v''`` (the orientation along
     ``v + v' s + v'' s^2 / 2`` at ``s = -h, 0, h``, h = 1 ms)."""
-    v, rate, acceleration = smooth_derivatives(tangent.Y, tangent.dt, _SMOOTHING)
+    v, rate, acceleration = smooth_derivatives(tangent.Y, tangent.dt, ACCELERATION_SMOOTHING)
     path = np.stack([quaternion.from_tangent(v + rate * s + 0.5 * acceleration * s * s, reference)
                      for s in (-_STEP, 0.0, _STEP)])                                          # [3, L, 4]
     return float(np.degrees(np.max(np.linalg.norm(quaternion.angular_acceleration(path, _STEP), axis=-1))))

@@ -46,17 +46,20 @@ from .stopping import fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
-__all__ = ["RecordingFit", "fit_recording", "normalise_tempo", "recording_report"]
+__all__ = ["ACCELERATION_SMOOTHING", "RecordingFit", "fit_recording", "normalise_tempo", "recording_report"]
 
 logger = logging.getLogger(__name__)
 
-_ENTRY_PERIODS = 2.0        # the entry into the rhythm that the paper's transient encodes (periods before its start;
-                            # 1.5 left its basis functions so close that a quick entry rang: 1.56x the clean peak)
+ENTRY_PERIODS = 2.0
+"""The entry into the rhythm that the paper's transient encodes, in periods before the full-size rhythm (1.5 left
+its basis functions so close that a quick entry rang: 1.56x the clean peak)."""
 _VIA_SPACING = 0.5          # s: the longest time between the anchor's via points
 _PHASE_POINTS = 64          # samples per cycle when cycles are compared
-_SMOOTHING = 0.15           # s: Savitzky-Golay window of the recording's acceleration
-_SMOOTHNESS = 1.0           # weight smoothness of the fits: a person's entry into the rhythm has corners that 0.3
-                            # (RhythmicDMP.fit's default) follows with up to 1.7x the recording's peak acceleration
+#: s: the Savitzky-Golay window of the recording's acceleration (and of a pose recording's angular acceleration)
+ACCELERATION_SMOOTHING = 0.15
+SMOOTHNESS = 1.0
+"""Weight smoothness of the fits: a person's entry into the rhythm has corners that 0.3 (RhythmicDMP.fit's default)
+follows with up to 1.7x the recording's peak acceleration."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +88,7 @@ def _fit_sweep(demo: Demonstration, seg: RhythmSegmentation, anchor: np.ndarray,
     least squares (minus ``anchor``) to the smoothed recording before ``entry`` (s; the whole motion is the anchor's
     there) and to its slow part from there to the rhythm's end."""
     t = demo.t - demo.t[0]
-    smooth = smooth_derivatives(demo.Y, demo.dt, _SMOOTHING)[0]
+    smooth = smooth_derivatives(demo.Y, demo.dt, ACCELERATION_SMOOTHING)[0]
     target = np.where((t < entry)[:, None], smooth, seg.slow)
     n_points = max(int(np.ceil((seg.rhythm_end - seg.onset) / spacing)), 1)
     sweep = Sweep.uniform(seg.onset, seg.rhythm_end, n_points, demo.n_dims)
@@ -100,7 +103,7 @@ def _fit_sweep(demo: Demonstration, seg: RhythmSegmentation, anchor: np.ndarray,
 def fit_recording(demo: Demonstration, *, period: float | None = None, start: float | None = None,
                   end: float | None = None, ending: bool | None = None, via_spacing: float | None = None,
                   n_periodic: int = 40, n_transient: int = 20, n_stop: int = 15, normalise: bool = True,
-                  smoothness: float = _SMOOTHNESS, timing_dims: int | None = None, **fit_kwargs) -> RecordingFit:
+                  smoothness: float = SMOOTHNESS, timing_dims: int | None = None, **fit_kwargs) -> RecordingFit:
     """Fit a DMP to a whole recording: rest, approach, rhythm with a drifting working point, departure, rest.
 
     Args:
@@ -132,7 +135,7 @@ def fit_recording(demo: Demonstration, *, period: float | None = None, start: fl
     t = demo.t - demo.t[0]
     first_rest = t <= max(seg.onset, demo.dt)
     anchor = demo.Y[first_rest].mean(axis=0)
-    entry = max(seg.rhythm_start - _ENTRY_PERIODS * seg.period, 0.0)
+    entry = max(seg.rhythm_start - ENTRY_PERIODS * seg.period, 0.0)
     # the anchor follows the whole motion only until the rhythm starts to grow: a rhythm that grows slowly (for
     # seconds before the encoded entry) would otherwise leave a step in its target and a jerk in the entry
     sweep = _fit_sweep(demo, seg, anchor, spacing, min(entry, seg.entry))
@@ -275,7 +278,7 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     way), ``error_ratio`` (their ratio: 1 when the reproduction's cycle is the recording's mean cycle),
     ``rhythm_rmse`` (plain RMS position error over the rhythm, including the drift of the person's timing),
     ``start_error`` (at the first sample), ``rest_error`` (mean over the final rest; ``None`` without one),
-    ``peak_acceleration``, ``recording_peak_acceleration`` (Savitzky-Golay over ``_SMOOTHING`` s) and
+    ``peak_acceleration``, ``recording_peak_acceleration`` (Savitzky-Golay over ``ACCELERATION_SMOOTHING`` s) and
     ``acceleration_ratio``.
     """
     seg = result.segmentation
@@ -284,18 +287,9 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     reproduction = result.reproduce(demo.t)
     fine = np.arange(0.0, t[-1], 1e-3)
     acceleration = np.diff(result.reproduce(fine), 2, axis=0) / 1e-6
-    recorded = smooth_derivatives(demo.Y, demo.dt, _SMOOTHING)[2]
-    recorded_cycles = _cycles(t, demo.Y - slow, seg.period, seg.rhythm_start, seg.rhythm_end)
-    reproduced_cycles = _cycles(t, reproduction - slow, seg.period, seg.rhythm_start, seg.rhythm_end)
-    mean_recorded = np.mean(recorded_cycles, axis=0)
-    mean_reproduced = _aligned_mean(reproduced_cycles, mean_recorded)
-    n_cycles = len(recorded_cycles)
-    if n_cycles < 2 or not reproduced_cycles:
-        raise ValueError(f"demo: {n_cycles} whole cycle(s) of the recording between {seg.rhythm_start:.3g} s and "
-                         f"{seg.rhythm_end:.3g} s, need 2 to measure its cycle-to-cycle variation")
-    spread = np.mean([np.sum((c - mean_recorded) ** 2, axis=1) for c in recorded_cycles])
-    variation = float(np.sqrt(spread * n_cycles / (n_cycles - 1)))      # unbiased: the mean is of the same cycles
-    error = float(np.sqrt(np.mean([np.sum((c - mean_reproduced) ** 2, axis=1) for c in recorded_cycles])))
+    recorded = smooth_derivatives(demo.Y, demo.dt, ACCELERATION_SMOOTHING)[2]
+    variation, error = cycle_figures(t, demo.Y - slow, reproduction - slow, seg.period, seg.rhythm_start,
+                                     seg.rhythm_end)
     rhythm = (t >= seg.rhythm_start) & (t <= seg.rhythm_end)
     peak, recorded_peak = (float(np.max(np.linalg.norm(a, axis=1))) for a in (acceleration, recorded))
     rest = t >= seg.rest_time if seg.rest_time is not None else np.zeros(t.size, bool)
@@ -306,6 +300,29 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
             else None,
             "peak_acceleration": peak, "recording_peak_acceleration": recorded_peak,
             "acceleration_ratio": peak / max(recorded_peak, 1e-12)}
+
+
+def cycle_figures(t: np.ndarray, recorded: np.ndarray, reproduced: np.ndarray, period: float, start: float,
+                  end: float) -> tuple[float, float]:
+    """``(variation, error)`` (m) of the rhythm ``recorded [L, d]`` (minus its slow part) between ``start`` and
+    ``end`` (s, on ``t [L]``) and of ``reproduced [L, d]``: RMS deviation of the recorded cycles from their mean cycle,
+    unbiased (times ``sqrt(n / (n - 1))`` for n cycles), and from the reproduction's mean cycle, cut the same way.
+
+    Raises:
+        ValueError: fewer than 2 whole cycles.
+    """
+    recorded_cycles = _cycles(t, recorded, period, start, end)
+    reproduced_cycles = _cycles(t, reproduced, period, start, end)
+    n_cycles = len(recorded_cycles)
+    if n_cycles < 2 or not reproduced_cycles:
+        raise ValueError(f"demo: {n_cycles} whole cycle(s) of the recording between {start:.3g} s and "
+                         f"{end:.3g} s, need 2 to measure its cycle-to-cycle variation")
+    mean_recorded = np.mean(recorded_cycles, axis=0)
+    mean_reproduced = _aligned_mean(reproduced_cycles, mean_recorded)
+    spread = np.mean([np.sum((c - mean_recorded) ** 2, axis=1) for c in recorded_cycles])
+    variation = float(np.sqrt(spread * n_cycles / (n_cycles - 1)))      # unbiased: the mean is of the same cycles
+    error = float(np.sqrt(np.mean([np.sum((c - mean_reproduced) ** 2, axis=1) for c in recorded_cycles])))
+    return variation, error
 
 
 def _aligned_mean(cycles: list[np.ndarray], reference: np.ndarray) -> np.ndarray:
