@@ -98,6 +98,10 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--env-option", action="append", default=[], metavar="KEY=VALUE",
                         help="a gym.make keyword (default: the env's defaults)")
     parser.add_argument("--name", default="agents", help="output name (results/<name>.json, .png)")
+    parser.add_argument("--run-dir", default=None, metavar="DIR",
+                        help="keep every run's directory under DIR (default: a temporary folder, removed at the end); "
+                             "a finished run found there is resumed (nothing left to train) and tested again, so "
+                             "that another --test-contexts or a longer --budget does not train it from the start")
     parser.add_argument("--fresh", action="store_true",
                         help="ignore the runs cached by an earlier, interrupted call (default: reuse them)")
     parser.add_argument("--reuse", action="append", default=[], metavar="RESULTS.json",
@@ -153,10 +157,11 @@ def _seed_counts(args: argparse.Namespace, labels: dict[str, str]) -> dict[str, 
 
 def _run_job(config: TrainConfig, run_dir: Path, tester: Evaluator, seeds: np.ndarray, observations: np.ndarray,
              reference_jerk: np.ndarray) -> dict:
-    """One training run (into ``run_dir``) and the test evaluation of its final policy. Every episode goes through
-    an ``Evaluator`` (``train`` builds its own): this is the one place where a run is dispatched."""
+    """One training run (into ``run_dir``; one found there is resumed, e.g. to a longer budget) and the test
+    evaluation of its final policy. Every episode goes through an ``Evaluator`` (``train`` builds its own): this is
+    the one place where a run is dispatched."""
     began = time.perf_counter()
-    run = train(config, run_dir)
+    run = train(config, run_dir, resume=(run_dir / "config.json").is_file())
     records = run.read_log()
     actions = trained_actions(run, config, "last", observations, tester.n_actions)
     scores = evaluate_actions(tester, actions, seeds, reference_jerk)
@@ -444,7 +449,7 @@ def main() -> None:
     options = _options(args)
     spec = TaskSpec(args.env_id, env_kwargs)
     seeds = final_test_seeds(args.test_contexts)
-    scratch = Path(tempfile.mkdtemp(prefix="bench_agents_"))
+    scratch = Path(args.run_dir) if args.run_dir else Path(tempfile.mkdtemp(prefix="bench_agents_"))
     runs = []
     try:
         baselines, observations, reference = _baselines(spec, seeds, 1 if args.backend == "ray" else args.workers)
@@ -467,7 +472,8 @@ def main() -> None:
             runs = _run_locally(configs, names, args, scratch, spec, seeds, observations, reference)
         runs = [{**run, "agent": name} for name, run in zip(names, runs, strict=True)]
     finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+        if not args.run_dir:
+            shutil.rmtree(scratch, ignore_errors=True)
     if args.only_seeds is not None:
         print(f"cached {len(runs)} run(s) of seeds {args.only_seeds[0]}..{args.only_seeds[1] - 1}")
         return
