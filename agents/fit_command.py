@@ -20,7 +20,7 @@ from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import despike
 
 from .fit_pose import fit_pose_command
-from .fit_sessions import fit_sessions_command, several_sessions
+from .fit_sessions import fit_joint_command, fit_sessions_command, several_sessions
 from .imitation import fit_dmp, load_demonstration
 
 __all__ = ["FitCommand", "command_fit", "parse_fit"]
@@ -53,9 +53,10 @@ class FitCommand:
     """time (s) at which the rhythm ends (default: detected)"""
     ending: bool | None = None
     """fit the departure and the final rest as the DMP's stop (default: where the recording ends at rest)"""
-    sessions: bool = True
-    """find several sessions (rhythms separated by departures or rests) and fit one DMP each (dmp-1.json, ...);
-    --no-sessions, or a --period/--start/--end hint: one DMP for the whole recording"""
+    sessions: Literal["split", "joint", "off"] = "split"
+    """a recording with several sessions (rhythms separated by departures or rests): split (one DMP each: dmp-1.json,
+    dmp-2.json, ...), joint (one DMP for all, their mean rhythm, with each session's anchor in report.json), off
+    (one DMP for the whole recording, as for one session; also with a --period/--start/--end hint)"""
     plot: bool = False
     """write fit.png (recording vs reproduction: position and acceleration; needs the plots extra)"""
     out: str = "runs/fit"
@@ -116,9 +117,13 @@ def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) 
     loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
     demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
     one_rhythm = (args.period, args.start, args.end) != (None, None, None)       # hints for one rhythm
-    sessions = several_sessions(demo) if args.sessions and not one_rhythm else None
+    if one_rhythm and args.sessions == "joint":
+        raise ValueError("--sessions joint: fits several sessions; --period, --start and --end are hints for one "
+                         "rhythm (use --sessions off with them)")
+    sessions = several_sessions(demo) if args.sessions != "off" and not one_rhythm else None
     if sessions is not None:
-        fit_sessions_command(demo, sessions, hints, out, plots)
+        command = fit_joint_command if args.sessions == "joint" else fit_sessions_command
+        command(demo, sessions, hints, out, plots)
         return
     result = fit_recording(demo, **hints)
     out.mkdir(parents=True, exist_ok=True)

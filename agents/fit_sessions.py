@@ -1,5 +1,6 @@
 """``rdmp-gym fit --demo`` on a recording with several sessions (rhythms separated by departures or rests): one
-DMP per session (``dmp-1.json``, ``dmp-2.json``, ...), a summary table and ``report.json``."""
+DMP per session (``dmp-1.json``, ``dmp-2.json``, ...) or, with ``--sessions joint``, one DMP for all of them
+(``dmp.json``, each session's anchor in ``report.json``); a summary table and ``report.json``."""
 
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ from types import ModuleType
 from rdmp_gym import Demonstration, save_dmp
 from rdmp_gym.recording_fit import recording_report
 from rdmp_gym.segmentation.sessions import Session, find_sessions
-from rdmp_gym.session_fit import fit_sessions
+from rdmp_gym.session_fit import fit_joint, fit_sessions, joint_report
 
-__all__ = ["fit_sessions_command", "several_sessions"]
+__all__ = ["fit_joint_command", "fit_sessions_command", "several_sessions"]
 
 
 def several_sessions(demo: Demonstration) -> list[Session] | None:
@@ -64,3 +65,42 @@ def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: di
           f"wrote {len(rows) - sum('error' in row for row in rows)} DMPs and {out / 'report.json'}")
     if all("error" in row for row in rows):
         raise ValueError(f"demo: none of its {len(fits)} sessions could be fitted (see the table)")
+
+
+def fit_joint_command(demo: Demonstration, sessions: list[Session], hints: dict, out: Path,
+                      plots: ModuleType | None) -> None:
+    """Fit one DMP to all the ``sessions`` of ``demo`` (:func:`~rdmp_gym.session_fit.fit_joint`, with the fit's
+    ``hints`` but those of one rhythm and ``ending``); write ``dmp.json`` (at the first session's anchor),
+    ``report.json`` (each session's anchor, start, tempo and transient, and how well it is reproduced) and
+    ``fit-K.png``; print what was found."""
+    keywords = {key: value for key, value in hints.items() if key not in ("period", "start", "end", "ending")}
+    joint = fit_joint(demo, sessions, **keywords)
+    report = joint_report(demo, joint)
+    out.mkdir(parents=True, exist_ok=True)
+    save_dmp(joint.dmp, out / "dmp.json")
+    print(f"{demo.name}: {len(sessions)} sessions (rhythms separated by departures or rests) fitted as one rhythm, "
+          f"period {joint.relative.period:.3f} s; one DMP with each session's anchor")
+    print(f"{'session':>7} {'part (s)':>13} {'rhythm (s)':>13} {'period (s)':>10} {'tempo':>6} {'error ratio':>11}"
+          f"  anchor (m)")
+    rows = []
+    for k, (session, figures) in enumerate(zip(joint.sessions, report, strict=True)):
+        row = {"session": k + 1, "transient": k, "start": session.start, "stop": session.stop,
+               "rhythm_onset": session.rhythm_onset, "rhythm_stop": session.rhythm_stop,
+               "entry": session.start + float(joint.entries[k]), "anchor": joint.anchors[k].tolist(),
+               "y0": joint.at_session(k).starts[k].tolist(), **figures}
+        rows.append(row)
+        print(f"{k + 1:>7} {session.start:6.2f}-{session.stop:6.2f} {session.rhythm_onset:6.2f}-"
+              f"{session.rhythm_stop:6.2f} {figures['period']:10.3f} {figures['tempo']:6.3f} "
+              f"{figures['error_ratio']:11.2f}  {_vector(joint.anchors[k])}")
+        if plots is not None:
+            part = session.part(demo)
+            plots.plot_recording_fit(part.t - part.t[0], part.Y, lambda t, k=k: joint.reproduce(k, t),
+                                     out / f"fit-{k + 1}.png", title=f"{demo.name}, session {k + 1}: joint DMP")
+    (out / "report.json").write_text(json.dumps({"period": joint.relative.period, "dmp": "dmp.json",
+                                                 "sessions": rows}, indent=2) + "\n")
+    print("session K from its entry: load_dmp('dmp.json').rollout(t, transient=K - 1, anchor=anchor, y0=y0, "
+          f"tempo=tempo) with the session's anchor, y0 and tempo from {out / 'report.json'}; wrote {out / 'dmp.json'}")
+
+
+def _vector(values) -> str:
+    return "(" + ", ".join(f"{value:.3f}" for value in values) + ")"

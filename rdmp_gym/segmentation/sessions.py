@@ -141,9 +141,10 @@ def _search(demo: Demonstration, min_periods: float) -> list[_Rhythm]:
     searched, pending = demo, [(0, 0, demo.n_samples, demo.n_samples)]
     while pending:       # (padded start, start, end, padded end): the part to search and the found sessions around it
         pad_low, low, high, pad_high = pending.pop()
-        rhythm = _rhythm_in(searched, pad_low, pad_high, min_periods)
-        if rhythm is None or not low <= rhythm.onset < high:      # the part without its neighbours' lines
-            rhythm = _rhythm_in(searched, low, high, min_periods) if (low, high) != (pad_low, pad_high) else None
+        rhythm = _rhythm_in(searched, low, high, min_periods)
+        if rhythm is None or not low <= rhythm.onset < high:      # the part with its neighbours' lines
+            rhythm = _rhythm_in(searched, pad_low, pad_high, min_periods) if (low, high) != (pad_low, pad_high) \
+                else None
         if rhythm is None or not low <= rhythm.onset < high:
             continue
         found.append(rhythm)
