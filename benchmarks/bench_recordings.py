@@ -17,8 +17,10 @@ peak angular acceleration ratio (``recordings_pose.json``).
 With ``--sessions`` also the recordings with several sessions: generated ones
 (:func:`rdmp_gym.synthetic_sessions.multi_session_recording`, 3 sessions of each kind) against their truth, and the
 user's files against labels ``{"sessions": [{"rhythm_start": s, "rhythm_end": s}, ...]}`` (or the single-rhythm
-form): sessions found, each one's onset and stop against the labels, period, error and acceleration ratios, and
-whether the CLI succeeds (``recordings_sessions.json``).
+form): sessions found, each one's onset and stop against the labels, period, error and acceleration ratios, the
+joint fit's error ratios (:func:`rdmp_gym.session_fit.fit_joint`; also on 3 sessions of one period of each kind),
+and whether the CLI succeeds (``recordings_sessions.json``, the ``--data`` rows beside the generated ones: the
+figures of your files, not the files).
 
     python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--orientation] [--sessions]
                                           [--save]
@@ -194,15 +196,18 @@ def _session_rows(args: argparse.Namespace) -> None:
     """The session rows: 3 sessions of each kind (``--seeds`` seeds) against their truth, and the user's files."""
     rows, user = [], []
     with tempfile.TemporaryDirectory() as folder:
-        for kind in RECORDING_KINDS:
-            for seed in range(args.seeds):
-                made = multi_session_recording(3, kind, rng=np.random.default_rng(seed))
-                csv_path = Path(folder) / f"{kind}-sessions-{seed}.csv"
-                made.recording.to_csv(csv_path)
-                demo = to_demonstration(made.recording.t, made.recording.Y, name=f"{kind} sessions {seed}")
-                truth = [(s.onset, s.stop) for s in made.sessions]
-                rows.append(session_row(f"{kind} x3 {seed}", demo, truth, csv_path))
-                print_session_row(rows[-1])
+        for kind, seed, same in [(kind, seed, False) for kind in RECORDING_KINDS for seed in range(args.seeds)] \
+                + [(kind, 0, True) for kind in RECORDING_KINDS]:        # one period: for the joint fit
+            period = RECORDING_KINDS[kind].period
+            made = multi_session_recording(3, kind, rng=np.random.default_rng(seed),
+                                           periods=[period] * 3 if same else None)
+            name = f"{kind} x3 {seed}" + (" one period" if same else "")
+            csv_path = Path(folder) / f"{name.replace(' ', '-')}.csv"
+            made.recording.to_csv(csv_path)
+            demo = to_demonstration(made.recording.t, made.recording.Y, name=name)
+            truth = [(s.onset, s.stop) for s in made.sessions]
+            rows.append(session_row(name, demo, truth, csv_path))
+            print_session_row(rows[-1])
         session_summary("generated", rows)
         for path, t, Y, _ in _user_recordings(args.data, args.data_rate) if args.data is not None else ():
             csv_path = Path(folder) / f"{path.stem}.csv"
@@ -212,13 +217,9 @@ def _session_rows(args: argparse.Namespace) -> None:
             print_session_row(user[-1])
         if user:
             session_summary("yours", user)
-    out = results_dir(args.save) / "recordings_sessions.json"
-    out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
+    out = results_dir(args.save) / "recordings_sessions.json"       # the --data rows too: the docs' table
+    out.write_text(json.dumps({"generated": rows, "data": user}, indent=2, default=float) + "\n")
     print(f"wrote {out}")
-    if user:
-        out = results_dir(False) / "recordings_sessions_user.json"
-        out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
-        print(f"wrote {out}")
 
 
 def _summary(title: str, rows: list[dict]) -> None:

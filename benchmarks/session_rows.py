@@ -1,6 +1,7 @@
 """The session rows of ``bench_recordings.py --sessions``: the sessions found in a recording, each one's onset and
 stop against the truth or the hand labels, its period, cycle error against its cycle-to-cycle variation, peak
-acceleration ratio, and whether ``rdmp-gym fit --demo`` succeeds on the whole file."""
+acceleration ratio, the joint fit's error ratio per session (or why it is refused), and whether ``rdmp-gym fit
+--demo`` succeeds on the whole file."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 from rdmp_gym.agents.cli import main as cli_main
 
 from rdmp_gym.recording_fit import recording_report
-from rdmp_gym.session_fit import fit_sessions
+from rdmp_gym.session_fit import fit_joint, fit_sessions, joint_report
 
 
 def session_row(name: str, demo, labels: list[tuple[float, float]] | None, csv_path: Path) -> dict:
@@ -23,8 +24,9 @@ def session_row(name: str, demo, labels: list[tuple[float, float]] | None, csv_p
     except ValueError as error:
         fits, row["error"] = [], str(error)
     row["sessions"] = [_session(item) for item in fits]
+    row["joint"] = _joint(demo, [item.session for item in fits]) if len(fits) > 1 else None
     if labels:
-        row["labels"] = [_against(start, end, row["sessions"]) for start, end in labels]
+        row["labels"] = _against(labels, row["sessions"])
     with tempfile.TemporaryDirectory() as folder:
         row["cli"] = cli_main(["fit", "--demo", str(csv_path), "--out", folder]) == 0
     return row
@@ -45,13 +47,27 @@ def _session(item) -> dict:
                                             "rest_error", "acceleration_ratio")}}
 
 
-def _against(start: float, end: float, sessions: list[dict]) -> dict:
-    """The labelled session ``[start, end]`` against the sessions found that overlap it."""
-    inside = [s for s in sessions if s["onset"] < end and s["rhythm_stop"] > start]
-    if not inside:
-        return {"label": [start, end], "found": 0}
-    return {"label": [start, end], "found": len(inside), "onset_offset": inside[0]["onset"] - start,
-            "stop_offset": inside[-1]["rhythm_stop"] - end}
+def _joint(demo, sessions) -> dict:
+    """The joint fit's error ratio per session, or why it is refused."""
+    try:
+        return {"error_ratio": [row["error_ratio"] for row in joint_report(demo, fit_joint(demo, sessions))]}
+    except ValueError as error:
+        return {"error": str(error)}
+
+
+def _against(labels: list[tuple[float, float]], sessions: list[dict]) -> list[dict]:
+    """Each session found against the labelled sessions it overlaps (the first one's start, the last one's end),
+    then the labelled sessions that no session found overlaps."""
+    rows, matched = [], set()
+    for s in sessions:
+        inside = [k for k, (start, end) in enumerate(labels) if s["onset"] < end and s["rhythm_stop"] > start]
+        if inside:
+            matched.update(inside)
+            rows.append({"label": [labels[inside[0]][0], labels[inside[-1]][1]], "labels": len(inside), "found": 1,
+                         "onset_offset": s["onset"] - labels[inside[0]][0],
+                         "stop_offset": s["rhythm_stop"] - labels[inside[-1]][1]})
+    return rows + [{"label": list(label), "labels": 1, "found": 0} for k, label in enumerate(labels)
+                   if k not in matched]
 
 
 def print_session_row(row: dict) -> None:
@@ -72,7 +88,11 @@ def print_session_row(row: dict) -> None:
     for label in row.get("labels", []):
         offsets = (f"onset {label['onset_offset']:+.2f} s, stop {label['stop_offset']:+.2f} s"
                    if label["found"] else "not found")
-        print(f"{'':>30}label {label['label'][0]:.2f}-{label['label'][1]:.2f}: {label['found']} found, {offsets}")
+        print(f"{'':>30}{label['labels']} label(s) {label['label'][0]:.2f}-{label['label'][1]:.2f}: {offsets}")
+    if row.get("joint"):
+        joint = row["joint"]
+        print(f"{'':>30}joint: " + (f"refused: {joint['error']}" if "error" in joint else
+                                     "error ratios " + ", ".join(f"{v:.2f}" for v in joint["error_ratio"])))
 
 
 def session_summary(title: str, rows: list[dict]) -> None:
@@ -83,7 +103,8 @@ def session_summary(title: str, rows: list[dict]) -> None:
           f"{len(fitted)} fitted; CLI ok on {sum(row['cli'] for row in rows)}")
     matched = [label for label in labels if label["found"]]
     if labels:
-        print(f"  labelled sessions found: {len(matched)} of {len(labels)}")
+        print(f"  labelled sessions found: {sum(label['labels'] for label in matched)} of "
+              f"{sum(label['labels'] for label in labels)} (in {len(matched)} sessions found)")
     for key in ("onset_offset", "stop_offset"):
         values = np.abs([label[key] for label in matched])
         if values.size:
