@@ -46,7 +46,8 @@ from .stopping import fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
-__all__ = ["ACCELERATION_SMOOTHING", "RecordingFit", "fit_recording", "normalise_tempo", "recording_report"]
+__all__ = ["ACCELERATION_SMOOTHING", "ENTRY_PERIODS", "SMOOTHNESS", "RecordingFit", "cycle_figures", "fit_recording",
+           "normalise_tempo", "recording_report"]
 
 logger = logging.getLogger(__name__)
 
