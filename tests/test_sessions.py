@@ -127,3 +127,29 @@ def test_a_departure_separates_sessions() -> None:
     sessions = find_sessions(demo)
     assert len(sessions) == 2
     assert sessions[0].rhythm_stop <= pause + 0.5 and sessions[1].rhythm_onset >= pause + 1.5
+
+
+def _wobbling_approach(share: float) -> tuple[Demonstration, float]:
+    """A hand that comes down onto the table (z = 0) in 5 s wobbling along x at period 1.8 s with ``share`` of the
+    rhythm's amplitude, strokes figures of eight of 0.1 m at period 0.93 s from 6 s for 20 periods and lifts off;
+    and where the strokes start (s)."""
+    dt, period, amplitude, down, onset = 0.01, 0.93, 0.1, 5.0, 6.0
+    end = onset + 20 * period
+    t = np.arange(0.0, end + 3.0, dt)
+    wobble = share * amplitude * np.sin(2 * np.pi * t / 1.8) * np.clip((down - t) / 0.5, 0.0, 1.0)
+    stroking = (t >= onset) & (t < end)
+    phase = 2 * np.pi * (t - onset) / period
+    lift = np.clip((t - end - 1.0) / 1.0, 0.0, 1.0)
+    x = np.where(stroking, amplitude * np.sin(phase), 0.0) + wobble
+    y = np.where(stroking, 0.3 * amplitude * np.sin(2 * phase), 0.0) + 0.1 * lift
+    z = 0.1 * (1.0 - np.clip(t / down, 0.0, 1.0)) + 0.2 * lift ** 2
+    Y = np.column_stack([x, y, z]) + 0.0005 * np.random.default_rng(0).standard_normal((t.size, 3))
+    return to_demonstration(t, Y), onset
+
+
+@pytest.mark.parametrize("share", [0.4, 0.5])
+def test_a_small_slow_wobble_of_the_approach_is_no_session(share: float) -> None:
+    demo, onset = _wobbling_approach(share)     # the wobble repeats, at about 0.35-0.45 of the rhythm's size
+    sessions = find_sessions(demo)
+    assert len(sessions) == 1
+    assert abs(sessions[0].rhythm_onset - onset) < 0.2

@@ -14,9 +14,9 @@ on top of it for part of the time. Method:
 3. Change points. The rhythm runs at full size from where the envelope first reaches ``full`` of its typical
    level until it last does, or until the working point departs (the slow part's speed exceeds a quarter of the
    rhythm's); it starts to grow where the envelope first exceeds ``begin`` of that level.
-4. Where a person would mark it. The rhythm's onset and stop: where the hand enters the region the full-size rhythm
-   sweeps and leaves it again (:mod:`rdmp_gym.segmentation.onset`), earlier and later than the full-size rhythm by
-   the growing and fading strokes. Reported beside it; the fit uses the full-size rhythm.
+4. Where a person would mark it. The rhythm's onset and stop: the first and last stroke on the working surface
+   (the plane of the full-size rhythm; :mod:`rdmp_gym.segmentation.onset`), earlier and later than the full-size
+   rhythm by the first and last strokes. Reported beside it; the fit uses the full-size rhythm.
 5. Rest. Speed below ``rest_fraction`` of the rhythm's typical speed (:mod:`rdmp_gym.segmentation.rest`): the
    hand leaves its first rest at the first faster sample and is at rest after the rhythm from the first sample
    after which it stays slower. Relative to the motion's own scale, so a slow drift and sensor noise at rest pass.
@@ -54,8 +54,8 @@ class RhythmSegmentation:
         entry: the rhythm starts to grow.
         rhythm_start: the rhythm runs at full size from here.
         rhythm_end: ... until here.
-        rhythm_onset: the hand enters the rhythm (the growing first stroke, a contact; :mod:`.onset`).
-        rhythm_stop: ... and leaves it.
+        rhythm_onset: the first stroke on the working surface (:mod:`.onset`).
+        rhythm_stop: ... and the last one.
         rest_time: at rest from here to the end; ``None`` if the recording does not end at rest.
         slow: ``[L, d]`` the slow part of the motion (the working point) at every sample.
         amplitude: ``[L]`` the rhythm's local amplitude (m, root of the summed squared harmonics).
@@ -134,7 +134,7 @@ def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: f
     threshold = rest_threshold(speed, demo.dt, float(np.median(speed[first:last + 1])), rest_fraction)
     moving = np.flatnonzero(speed[:entry + 1] >= threshold)
     onset = int(moving[0]) if moving.size else entry
-    rhythm_onset, rhythm_stop = rhythm_bounds(demo.Y, first, last)
+    rhythm_onset, rhythm_stop = rhythm_bounds(demo.Y, first, last, estimate, demo.dt)
     rest = rest_onset(speed, threshold, demo.dt)
     rest_time = None if rest is None or rest <= last else float(t[rest])
     logger.debug("segment_rhythm %r: period %.4f s, onset %.2f, entry %.2f, rhythm %.2f-%.2f s, rest %s",

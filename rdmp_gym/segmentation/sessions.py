@@ -7,8 +7,8 @@ People record sessions back to back: wipe, lift the hand, reposition, wipe again
    repeats (:func:`repetition`: each stretch of it resembles the stretch a period later, at least
    :data:`MIN_REPETITION`; a departure and a return can look rhythmic to the local fits but do not repeat) and is
    at least :data:`MIN_LEVEL` of the largest rhythm's size.
-2. Take it out of the search: from where the hand entered it to where it left it (its ``rhythm_onset`` and
-   ``rhythm_stop``, :mod:`rdmp_gym.segmentation.onset`) the recording is replaced by a straight line, and the
+2. Take it out of the search: from its first stroke on the working surface to its last (its ``rhythm_onset``
+   and ``rhythm_stop``, :mod:`rdmp_gym.segmentation.onset`) the recording is replaced by a straight line, and the
    search starts again before and after it (with the lines of the rhythms found around, or, where that finds
    none, without them), until no rhythm of ``min_periods`` periods that repeats is left.
 3. Group the rhythms into sessions. Neighbouring rhythms are one session when they are less than half a period
@@ -45,8 +45,9 @@ logger = logging.getLogger(__name__)
 MIN_REPETITION = 0.5
 """The least :func:`repetition` of a rhythm that counts as a session."""
 
-MIN_LEVEL = 0.3
-"""The least size of a session's rhythm, as a share of the largest session's."""
+MIN_LEVEL = 0.5
+"""The least size of a session's rhythm, as a share of the largest rhythm's: sessions repeat one skill at a
+similar size; a slow wobble of the approach that repeats is smaller."""
 
 SAME_PERIOD = 0.15
 """Rhythms whose periods differ by at most this share (of the shorter) can be one session: a person's period
@@ -66,8 +67,8 @@ class Session:
 
     Attributes:
         start, stop: the part of the recording that holds it (its cuts).
-        rhythm_onset, rhythm_stop: the hand enters its rhythm and leaves it (those of ``segmentation``; the first
-            entry and last exit where the session holds rhythms less than half a period apart).
+        rhythm_onset, rhythm_stop: the first and last stroke of its rhythm (those of ``segmentation``; the first
+            onset and last stop where the session holds rhythms less than half a period apart).
         segmentation: :func:`segment_rhythm` of that part (times from ``start``; its full-size rhythm is the
             session's longest).
     """
@@ -126,7 +127,7 @@ def find_sessions(demo: Demonstration, *, min_periods: float = 2.0) -> list[Sess
 
 @dataclass(frozen=True)
 class _Rhythm:
-    """A rhythm found in the search: the hand enters it and leaves it at the samples ``onset`` and ``stop`` (of
+    """A rhythm found in the search: its first and last stroke at the samples ``onset`` and ``stop`` (of
     the whole recording); ``size``: the median of its amplitude (m); ``period`` (s)."""
 
     onset: int
@@ -223,8 +224,8 @@ def _segmented(demo: Demonstration, a: int, b: int, min_periods: float) -> Rhyth
 
 def _session(demo: Demonstration, a: int, b: int, seg: RhythmSegmentation, groups: list[list[_Rhythm]]
              ) -> Session:
-    """The session of the samples ``[a, b]``: where the hand enters and leaves its rhythm are its segmentation's,
-    or the first entry and last exit of its rhythms where it holds several."""
+    """The session of the samples ``[a, b]``: its rhythm's first and last stroke are its segmentation's,
+    or the first onset and last stop of its rhythms where it holds several."""
     t = demo.t - demo.t[0]
     inside = [rhythm for group in groups if a <= group[0].onset <= b for rhythm in group]
     if len(inside) > 1:
