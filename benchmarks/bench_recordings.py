@@ -150,14 +150,20 @@ def main(argv: list[str] | None = None) -> int:
         _pose_rows(args)
     if args.sessions:
         _session_rows(args)
-    out = results_dir(args.save) / "recordings.json"
+    _write("recordings", rows, user, args.save)
+    return 0
+
+
+def _write(name: str, rows: list[dict], user: list[dict], save: bool) -> None:
+    """The generated rows to ``<name>.json`` (committed with ``--save``), the user's to ``<name>_user.json``
+    (never committed)."""
+    out = results_dir(save) / f"{name}.json"
     out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
     print(f"wrote {out}")
     if user:
-        out = results_dir(False) / "recordings_user.json"
+        out = results_dir(False) / f"{name}_user.json"
         out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
         print(f"wrote {out}")
-    return 0
 
 
 def _pose_rows(args: argparse.Namespace) -> None:
@@ -183,13 +189,7 @@ def _pose_rows(args: argparse.Namespace) -> None:
             print_pose_row(user[-1])
     if user:
         summary("yours", user)
-    out = results_dir(args.save) / "recordings_pose.json"
-    out.write_text(json.dumps({"generated": rows}, indent=2, default=float) + "\n")
-    print(f"wrote {out}")
-    if user:
-        out = results_dir(False) / "recordings_pose_user.json"
-        out.write_text(json.dumps({"user": user}, indent=2, default=float) + "\n")
-        print(f"wrote {out}")
+    _write("recordings_pose", rows, user, args.save)
 
 
 def _session_rows(args: argparse.Namespace) -> None:

@@ -30,8 +30,8 @@ from scipy.interpolate import CubicSpline, PchipInterpolator
 from .demonstrations import Demonstration, SyntheticTruth
 from .validation import as_finite_array, check_positive
 
-__all__ = ["ENTRY_PERIODS", "EXIT_PERIODS", "RECORDING_KINDS", "Recording", "RecordingTruth", "ending_demonstration",
-           "multi_transient_demonstrations", "realistic_recording", "wiping_demonstration"]
+__all__ = ["ENTRY_PERIODS", "EXIT_PERIODS", "RECORDING_KINDS", "Recording", "RecordingTruth", "coloured_noise",
+           "ending_demonstration", "multi_transient_demonstrations", "realistic_recording", "wiping_demonstration"]
 
 # ---------------------------------------------------------------------------------- wiping demonstrations
 _DEFAULT_START = (-0.15, 0.20, 0.12)
@@ -455,18 +455,23 @@ def _uneven_clock(duration: float, rate: float, jitter: float, rng: np.random.Ge
     return t[keep]
 
 
-def _sensor_noise(t: np.ndarray, noise: float, rng: np.random.Generator) -> np.ndarray:
-    """Noise ``[L, 3]``: AR(1) with a 50 ms correlation time (std ``noise``), white noise of ``noise / 5``, and
-    outliers of 1-3 cm on ``_OUTLIER_RATE`` of the samples."""
-    if noise == 0.0:
-        return np.zeros((t.size, 3))
+def coloured_noise(t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unit-variance AR(1) noise ``[L, 3]`` at the (possibly uneven) times ``t [L]``, correlation time 50 ms."""
     decay = np.exp(-np.diff(t, prepend=t[0]) / 0.05)
     shocks = rng.standard_normal((t.size, 3))
     coloured = np.empty((t.size, 3))
     coloured[0] = shocks[0]
     for i in range(1, t.size):
         coloured[i] = decay[i] * coloured[i - 1] + np.sqrt(1.0 - decay[i] ** 2) * shocks[i]
-    out = noise * coloured + 0.2 * noise * rng.standard_normal((t.size, 3))
+    return coloured
+
+
+def _sensor_noise(t: np.ndarray, noise: float, rng: np.random.Generator) -> np.ndarray:
+    """Noise ``[L, 3]``: AR(1) with a 50 ms correlation time (std ``noise``), white noise of ``noise / 5``, and
+    outliers of 1-3 cm on ``_OUTLIER_RATE`` of the samples."""
+    if noise == 0.0:
+        return np.zeros((t.size, 3))
+    out = noise * coloured_noise(t, rng) + 0.2 * noise * rng.standard_normal((t.size, 3))
     spikes = np.flatnonzero(rng.random(t.size) < _OUTLIER_RATE)
     directions = rng.standard_normal((spikes.size, 3))
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import quaternion
-from .synthetic import RECORDING_KINDS, RecordingTruth, realistic_recording
+from .synthetic import RECORDING_KINDS, RecordingTruth, coloured_noise, realistic_recording
 from .validation import as_finite_array
 
 __all__ = ["PoseRecording", "realistic_pose_recording"]
@@ -73,13 +73,7 @@ def realistic_pose_recording(kind: str = "wiping", *, rng: np.random.Generator, 
     body = start + approach * (work - start) + working * drift + leaving * (goal - work - drift) + rhythm
     yaw = quaternion.exp_map(np.outer(turn * approach[:, 0], [0.0, 0.0, 1.0]))
     clean = quaternion.multiply(yaw, quaternion.multiply(_TOOL_DOWN, quaternion.exp_map(body)))
-    decay = np.exp(-np.diff(t, prepend=t[0]) / 0.05)
-    shocks = rng.standard_normal((t.size, 3))
-    coloured = np.empty((t.size, 3))
-    coloured[0] = shocks[0]
-    for i in range(1, t.size):
-        coloured[i] = decay[i] * coloured[i - 1] + np.sqrt(1.0 - decay[i] ** 2) * shocks[i]
-    Q = quaternion.multiply(clean, quaternion.exp_map(noise * coloured))
+    Q = quaternion.multiply(clean, quaternion.exp_map(noise * coloured_noise(t, rng)))
     if sign_flips:
         Q = Q * np.where(rng.random(t.size) < 0.5, -1.0, 1.0)[:, None]
     return PoseRecording(t=t, Y=recording.Y, Q=Q, name=f"{kind} pose recording", truth=truth,
