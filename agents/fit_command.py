@@ -17,10 +17,11 @@ import tyro
 from rdmp_gym import Demonstration, save_dmp
 from rdmp_gym.pose_io import read_pose_csv
 from rdmp_gym.recording_fit import fit_recording, recording_report
+from rdmp_gym.segmentation.sessions import Session
 from rdmp_gym.signals import despike
 
 from .fit_pose import fit_pose_command
-from .fit_sessions import fit_joint_command, fit_sessions_command, several_sessions
+from .fit_sessions import fit_joint_command, fit_pose_sessions_command, fit_sessions_command, several_sessions
 from .imitation import fit_dmp, load_demonstration
 
 __all__ = ["FitCommand", "command_fit", "parse_fit"]
@@ -103,6 +104,21 @@ def _plots() -> ModuleType:
     return plots
 
 
+def _sessions(args: FitCommand, demo: Demonstration, pose: bool) -> list[Session] | None:
+    """The sessions of ``demo`` to fit one by one or together, or ``None`` for one fit of the whole recording
+    (one session found, ``--sessions off``, or a hint of one rhythm)."""
+    one_rhythm = (args.period, args.start, args.end) != (None, None, None)
+    if one_rhythm and args.sessions == "joint":
+        raise ValueError("--sessions joint: fits several sessions; --period, --start and --end are hints for one "
+                         "rhythm (use --sessions off with them)")
+    sessions = several_sessions(demo) if args.sessions != "off" and not one_rhythm else None
+    if sessions is not None and pose and args.sessions == "joint":
+        raise ValueError(f"--sessions joint: fits the position of several sessions as one rhythm; the pose "
+                         f"recording {demo.name!r} has {len(sessions)} sessions, fitted one pose DMP each with "
+                         "--sessions split")
+    return sessions
+
+
 def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) -> None:
     """``fit --demo``: the whole recording (rest, approach, rhythm, departure, rest) in one DMP; a CSV with the
     orientation columns ``qw, qx, qy, qz`` is fitted as a pose (:mod:`.fit_pose`)."""
@@ -111,19 +127,21 @@ def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) 
     path = Path(args.demo)
     pose = read_pose_csv(path, args.time_column, args.rate or 100.0) if path.suffix.lower() == ".csv" \
         and path.is_file() else None
+    if pose is None:
+        loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
+        demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
+    else:
+        demo = pose.position
+    sessions = _sessions(args, demo, pose is not None)
+    if sessions is not None:
+        if pose is not None:
+            fit_pose_sessions_command(pose, sessions, hints, out, plots)
+        else:
+            (fit_joint_command if args.sessions == "joint" else fit_sessions_command)(demo, sessions, hints, out,
+                                                                                      plots)
+        return
     if pose is not None:
         fit_pose_command(pose, hints, out, plots)
-        return
-    loaded = load_demonstration(args.demo, time_column=args.time_column, rate=args.rate or 100.0)
-    demo = Demonstration(loaded.t, despike(loaded.Y), name=loaded.name)
-    one_rhythm = (args.period, args.start, args.end) != (None, None, None)       # hints for one rhythm
-    if one_rhythm and args.sessions == "joint":
-        raise ValueError("--sessions joint: fits several sessions; --period, --start and --end are hints for one "
-                         "rhythm (use --sessions off with them)")
-    sessions = several_sessions(demo) if args.sessions != "off" and not one_rhythm else None
-    if sessions is not None:
-        command = fit_joint_command if args.sessions == "joint" else fit_sessions_command
-        command(demo, sessions, hints, out, plots)
         return
     result = fit_recording(demo, **hints)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,19 +1,25 @@
 """``rdmp-gym fit --demo`` on a recording with several sessions (rhythms separated by departures or rests): one
 DMP per session (``dmp-1.json``, ``dmp-2.json``, ...) or, with ``--sessions joint``, one DMP for all of them
-(``dmp.json``, each session's anchor in ``report.json``); a summary table and ``report.json``."""
+(``dmp.json``, each session's anchor in ``report.json``); a summary table and ``report.json``. A pose recording's
+sessions are fitted one pose DMP each."""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
-from rdmp_gym import Demonstration, save_dmp
-from rdmp_gym.recording_fit import recording_report
-from rdmp_gym.segmentation.sessions import Session, find_sessions
-from rdmp_gym.session_fit import fit_joint, fit_sessions, joint_report
+import numpy as np
 
-__all__ = ["fit_joint_command", "fit_sessions_command", "several_sessions"]
+from rdmp_gym import Demonstration, save_dmp
+from rdmp_gym.pose import ORIENTATION_DIMS, PoseDemonstration
+from rdmp_gym.pose_fit import PoseFit, pose_report
+from rdmp_gym.recording_fit import RecordingFit, recording_report
+from rdmp_gym.segmentation.sessions import Session, find_sessions
+from rdmp_gym.session_fit import SessionFit, fit_joint, fit_pose_sessions, fit_sessions, joint_report
+
+__all__ = ["fit_joint_command", "fit_pose_sessions_command", "fit_sessions_command", "several_sessions"]
 
 
 def several_sessions(demo: Demonstration) -> list[Session] | None:
@@ -31,11 +37,24 @@ def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: di
     :func:`~rdmp_gym.recording_fit.fit_recording`, without the hints of one rhythm); write ``dmp-K.json``,
     ``report.json`` (and ``fit-K.png``) into ``out``; print what was found. Raises ``ValueError`` when no
     session could be fitted."""
-    fits = fit_sessions(demo, sessions, **hints)
+    _write_session_fits(demo.name, fit_sessions(demo, sessions, **hints), out, plots)
+
+
+def fit_pose_sessions_command(pose: PoseDemonstration, sessions: list[Session], hints: dict, out: Path,
+                              plots: ModuleType | None) -> None:
+    """:func:`fit_sessions_command` for a pose recording: one pose DMP per session, the orientation's figures
+    (degrees) beside the position's."""
+    _write_session_fits(pose.demo.name, fit_pose_sessions(pose, sessions, **hints), out, plots)
+
+
+def _write_session_fits(name: str, fits: list[SessionFit], out: Path, plots: ModuleType | None) -> None:
+    """Write each fitted session's ``dmp-K.json`` (and ``fit-K.png``) and ``report.json`` into ``out``; print
+    the summary table. Raises ``ValueError`` when no session could be fitted."""
     out.mkdir(parents=True, exist_ok=True)
-    print(f"{demo.name}: {len(fits)} sessions (rhythms separated by departures or rests), one DMP each")
+    pose = any(isinstance(item.fit, PoseFit) for item in fits)
+    print(f"{name}: {len(fits)} sessions (rhythms separated by departures or rests), one DMP each")
     print(f"{'session':>7} {'part (s)':>13} {'rhythm (s)':>13} {'period (s)':>10} {'error ratio':>11} "
-          f"{'accel ratio':>11}  DMP")
+          f"{'accel ratio':>11}" + (f" {'orient. ratio':>13} {'ang. accel ratio':>16}" if pose else "") + "  DMP")
     rows = []
     for k, item in enumerate(fits, start=1):
         session = item.session
@@ -45,26 +64,48 @@ def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: di
         try:
             if item.fit is None:
                 raise ValueError(item.error)
-            report = recording_report(item.demo, item.fit)
+            report = _report(item)
         except ValueError as error:         # refused, or too few whole cycles to measure
             rows.append({**row, "error": str(error)})
             print(f"{k:>7} {span} refused: {error}")
             continue
         path = out / f"dmp-{k}.json"
         save_dmp(item.fit.dmp, path)
-        seg = item.fit.segmentation
+        fit = _position_fit(item.fit)
+        seg = fit.segmentation
         rows.append({**row, "dmp": path.name, "period": seg.period, "rhythm_start": session.start + seg.rhythm_start,
-                     "rhythm_end": session.start + seg.rhythm_end, "stop_at": item.fit.stop_at, **report})
+                     "rhythm_end": session.start + seg.rhythm_end, "stop_at": fit.stop_at, **report})
+        orientation = f" {report['orientation_error_ratio']:13.2f} {report['angular_acceleration_ratio']:16.2f}" \
+            if pose else ""
         print(f"{k:>7} {span} {seg.period:10.3f} {report['error_ratio']:11.2f} {report['acceleration_ratio']:11.2f}"
-              f"  {path.name}")
+              f"{orientation}  {path.name}")
         if plots is not None:
-            plots.plot_recording_fit(item.demo.t - item.demo.t[0], item.demo.Y, item.fit.reproduce,
-                                     out / f"fit-{k}.png", title=f"{demo.name}, session {k}: recording vs DMP")
+            positions = item.demo.Y[:, :item.demo.n_dims - ORIENTATION_DIMS] if pose else item.demo.Y
+            plots.plot_recording_fit(item.demo.t - item.demo.t[0], positions, _reproduce(item.fit),
+                                     out / f"fit-{k}.png", title=f"{name}, session {k}: recording vs DMP")
     (out / "report.json").write_text(json.dumps({"sessions": rows}, indent=2) + "\n")
     print(f"times in s from the recording's first sample; each DMP's own time starts at its part's start. "
           f"wrote {len(rows) - sum('error' in row for row in rows)} DMPs and {out / 'report.json'}")
     if all("error" in row for row in rows):
         raise ValueError(f"demo: none of its {len(fits)} sessions could be fitted (see the table)")
+
+
+def _report(item: SessionFit) -> dict:
+    """The fit's figures (:func:`~rdmp_gym.recording_fit.recording_report`, of a pose
+    :func:`~rdmp_gym.pose_fit.pose_report`)."""
+    if isinstance(item.fit, PoseFit):
+        return pose_report(PoseDemonstration(item.demo, item.fit.reference), item.fit)
+    return recording_report(item.demo, item.fit)
+
+
+def _position_fit(fit: RecordingFit | PoseFit) -> RecordingFit:
+    """The recording's fit (segmentation, ``stop_at``) behind a position or a pose fit."""
+    return fit.recording if isinstance(fit, PoseFit) else fit
+
+
+def _reproduce(fit: RecordingFit | PoseFit) -> Callable[[np.ndarray], np.ndarray]:
+    """The reproduced position ``[T, p]`` at times ``t [T]``."""
+    return (lambda t: fit.reproduce(t).position) if isinstance(fit, PoseFit) else fit.reproduce
 
 
 def fit_joint_command(demo: Demonstration, sessions: list[Session], hints: dict, out: Path,

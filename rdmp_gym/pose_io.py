@@ -9,7 +9,7 @@ import numpy as np
 
 from .pose import PoseDemonstration
 
-__all__ = ["QUATERNION_COLUMNS", "read_pose_csv"]
+__all__ = ["QUATERNION_COLUMNS", "read_pose_csv", "write_pose_csv"]
 
 QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
 """The names of a pose CSV's orientation columns: a unit quaternion, scalar first (either sign per row)."""
@@ -50,3 +50,10 @@ def read_pose_csv(path: str | Path, time_column: str = "t", rate: float = 100.0)
                                               data[:, [column[n] for n in QUATERNION_COLUMNS]], rate, name=path.stem)
     except ValueError as error:
         raise ValueError(f"path: {path}: {error}") from error
+
+
+def write_pose_csv(path: str | Path, t: np.ndarray, Y: np.ndarray, Q: np.ndarray, time_column: str = "t") -> None:
+    """Write stamps ``t [L]`` (s), positions ``Y [L, 3]`` (m) and quaternions ``Q [L, 4]`` as a pose CSV:
+    ``time_column, x, y, z, qw, qx, qy, qz`` (17 significant digits), the format :func:`read_pose_csv` reads."""
+    np.savetxt(path, np.column_stack([t, Y, Q]), fmt="%.17g", delimiter=",",
+               header=",".join([time_column, "x", "y", "z", *QUATERNION_COLUMNS]), comments="")

@@ -2,7 +2,8 @@
 
 :func:`rdmp_gym.segmentation.sessions.find_sessions` cuts the recording between its sessions. :func:`fit_sessions`
 fits each part as a whole recording of its own (rest or motion, approach, rhythm, departure, rest) with
-:func:`rdmp_gym.recording_fit.fit_recording`. :func:`fit_joint` fits one rhythm to all of them: each session's
+:func:`rdmp_gym.recording_fit.fit_recording` (:func:`fit_pose_sessions`: each part of a pose recording with
+:func:`rdmp_gym.pose_fit.fit_pose_recording`). :func:`fit_joint` fits one rhythm to all of them: each session's
 rhythm relative to its own working point (its anchor), with its cycles stretched to their mean period and the
 session stretched to the sessions' common period, is one demonstration of :meth:`RhythmicDMP.fit
 <rdmp_gym.dmp.RhythmicDMP.fit>`; they share the periodic pattern, and each keeps its entry (a transient) and its
@@ -18,11 +19,13 @@ import numpy as np
 from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
 from .fitting import FADE_BEFORE_T
+from .pose import PoseDemonstration
+from .pose_fit import PoseFit, fit_pose_recording
 from .recording_fit import ENTRY_PERIODS, SMOOTHNESS, RecordingFit, cycle_figures, fit_recording, normalise_tempo
 from .segmentation import Segmentation, local_fit, segment_rhythm
 from .segmentation.sessions import SAME_PERIOD, Session, find_sessions
 
-__all__ = ["JointFit", "SessionFit", "fit_joint", "fit_sessions", "joint_report"]
+__all__ = ["JointFit", "SessionFit", "fit_joint", "fit_pose_sessions", "fit_sessions", "joint_report"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,14 +34,16 @@ class SessionFit:
 
     Attributes:
         session: where it lies in the recording (:class:`~rdmp_gym.segmentation.sessions.Session`).
-        demo: its part of the recording (its own time stamps).
-        fit: the DMP fitted to that part (times from ``session.start``); ``None`` where the fit refused it.
+        demo: its part of the recording (its own time stamps; of a pose, the position and the orientation's
+            tangent coordinates ``[L, p + 3]``).
+        fit: the DMP fitted to that part (times from ``session.start``; a :class:`~rdmp_gym.pose_fit.PoseFit`
+            for a pose); ``None`` where the fit refused it.
         error: why the fit refused it; ``None`` when fitted.
     """
 
     session: Session
     demo: Demonstration
-    fit: RecordingFit | None
+    fit: RecordingFit | PoseFit | None
     error: str | None
 
 
@@ -59,6 +64,32 @@ def fit_sessions(demo: Demonstration, sessions: list[Session] | None = None, **f
         part = session.part(demo)
         try:
             fits.append(SessionFit(session, part, fit_recording(part, **fit_kwargs), None))
+        except ValueError as error:
+            fits.append(SessionFit(session, part, None, str(error)))
+    return fits
+
+
+def fit_pose_sessions(pose: PoseDemonstration, sessions: list[Session] | None = None,
+                      **fit_kwargs) -> list[SessionFit]:
+    """One :func:`~rdmp_gym.pose_fit.fit_pose_recording` per session of a pose recording (in time order): the
+    sessions are those of its position, each part keeps the recording's reference orientation.
+
+    Args:
+        pose: the pose recording (:class:`~rdmp_gym.pose.PoseDemonstration`).
+        sessions: its sessions (default: :func:`~rdmp_gym.segmentation.sessions.find_sessions` of its position).
+        fit_kwargs: as in :func:`fit_sessions`.
+    Raises:
+        ValueError: a hint of a single rhythm, or no session.
+    """
+    if not isinstance(pose, PoseDemonstration):
+        raise TypeError(f"pose: expected a PoseDemonstration, got {type(pose).__name__}")
+    _refuse_hints(fit_kwargs)
+    fits = []
+    for session in find_sessions(pose.position) if sessions is None else sessions:
+        part = session.part(pose.demo)
+        try:
+            fits.append(SessionFit(session, part, fit_pose_recording(PoseDemonstration(part, pose.reference),
+                                                                     **fit_kwargs), None))
         except ValueError as error:
             fits.append(SessionFit(session, part, None, str(error)))
     return fits

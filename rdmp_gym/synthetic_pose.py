@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import quaternion
+from .pose_io import write_pose_csv
 from .synthetic import RECORDING_KINDS, RecordingTruth, coloured_noise, realistic_recording
 from .validation import as_finite_array
 
@@ -37,8 +38,7 @@ class PoseRecording:
 
     def to_csv(self, path: str | Path, time_column: str = "t") -> None:
         """Write the samples as CSV: ``time_column, x, y, z, qw, qx, qy, qz`` (17 significant digits)."""
-        np.savetxt(path, np.column_stack([self.t, self.Y, self.Q]), fmt="%.17g", delimiter=",",
-                   header=",".join([time_column, "x", "y", "z", "qw", "qx", "qy", "qz"]), comments="")
+        write_pose_csv(path, self.t, self.Y, self.Q, time_column)
 
 
 def _smoothstep(u: np.ndarray) -> np.ndarray:

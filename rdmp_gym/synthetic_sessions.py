@@ -10,13 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from . import quaternion
+from .pose_io import write_pose_csv
 from .synthetic import ENTRY_PERIODS, EXIT_PERIODS, RECORDING_KINDS, Recording, realistic_recording
+from .synthetic_pose import PoseRecording, realistic_pose_recording
 from .validation import check_positive
 
-__all__ = ["MultiSessionRecording", "SessionTruth", "multi_session_recording"]
+__all__ = ["MultiSessionPoseRecording", "MultiSessionRecording", "SessionTruth", "multi_session_pose_recording",
+           "multi_session_recording"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +54,24 @@ class MultiSessionRecording:
     clean: np.ndarray
 
 
+@dataclass(frozen=True, eq=False)
+class MultiSessionPoseRecording:
+    """A pose recording with several sessions: stamps ``t [L]``, positions ``Y [L, 3]``, unit quaternions
+    ``Q [L, 4]`` (either sign), the truth of each session and the noise-free orientation
+    ``clean_orientation [L, 4]``."""
+
+    t: np.ndarray
+    Y: np.ndarray
+    Q: np.ndarray
+    name: str
+    sessions: tuple[SessionTruth, ...]
+    clean_orientation: np.ndarray
+
+    def to_csv(self, path: str | Path, time_column: str = "t") -> None:
+        """Write the samples as CSV: ``time_column, x, y, z, qw, qx, qy, qz`` (17 significant digits)."""
+        write_pose_csv(path, self.t, self.Y, self.Q, time_column)
+
+
 def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: np.random.Generator,
                             periods: Sequence[float] | None = None, rate: float = 100.0,
                             **session_kwargs) -> MultiSessionRecording:
@@ -63,6 +86,43 @@ def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: n
         session_kwargs: passed on to :func:`~rdmp_gym.synthetic.realistic_recording` (``n_periods``, ``noise``,
             ...).
     """
+    periods = _periods(n_sessions, kind, periods)
+    rate = check_positive(rate, "rate")
+    pieces = [realistic_recording(kind, rng=rng, rate=rate, period=check_positive(period, "periods"),
+                                  **session_kwargs) for period in periods]
+    t, Y, clean, truths = _chained(pieces, rate)
+    recording = Recording(t=t, Y=Y, name=f"{n_sessions} {kind} sessions")
+    return MultiSessionRecording(recording=recording, sessions=truths, clean=clean)
+
+
+def multi_session_pose_recording(n_sessions: int = 2, kind: str = "wiping", *, rng: np.random.Generator,
+                                 periods: Sequence[float] | None = None, rate: float = 100.0,
+                                 **session_kwargs) -> MultiSessionPoseRecording:
+    """``n_sessions`` pose sessions of ``kind`` back to back (:func:`multi_session_recording` with
+    :func:`~rdmp_gym.synthetic_pose.realistic_pose_recording`'s orientations); each session's orientations turned
+    (about the world's axes) so that its noise-free start meets the previous session's noise-free end.
+
+    Args:
+        n_sessions, kind, rng, periods, rate: as in :func:`multi_session_recording`.
+        session_kwargs: passed on to ``realistic_pose_recording`` (``tilt``, ``noise``, ``n_periods``, ...).
+    """
+    periods = _periods(n_sessions, kind, periods)
+    rate = check_positive(rate, "rate")
+    pieces = [realistic_pose_recording(kind, rng=rng, rate=rate, period=check_positive(period, "periods"),
+                                       **session_kwargs) for period in periods]
+    t, Y, _, truths = _chained(pieces, rate)
+    Q, clean = [], []
+    for piece in pieces:
+        turn = np.array([1.0, 0.0, 0.0, 0.0]) if not clean else \
+            quaternion.multiply(clean[-1][-1], quaternion.conjugate(piece.clean_orientation[0]))
+        Q.append(quaternion.multiply(turn, piece.Q))
+        clean.append(quaternion.multiply(turn, piece.clean_orientation))
+    return MultiSessionPoseRecording(t=t, Y=Y, Q=np.concatenate(Q), name=f"{n_sessions} {kind} pose sessions",
+                                     sessions=truths, clean_orientation=np.concatenate(clean))
+
+
+def _periods(n_sessions: int, kind: str, periods: Sequence[float] | None) -> Sequence[float]:
+    """Check ``n_sessions`` and ``kind``; each session's period (default: the kind's, times 0.85, 1.0, 1.15, ...)."""
     if isinstance(n_sessions, bool) or not isinstance(n_sessions, (int, np.integer)) or n_sessions < 2:
         raise ValueError(f"n_sessions: expected an int of at least 2, got {n_sessions!r}")
     if kind not in RECORDING_KINDS:
@@ -71,12 +131,16 @@ def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: n
         periods = [RECORDING_KINDS[kind].period * (0.85, 1.0, 1.15)[k % 3] for k in range(n_sessions)]
     if len(periods) != n_sessions:
         raise ValueError(f"periods: expected {n_sessions} values (one per session), got {len(periods)}")
-    rate = check_positive(rate, "rate")
+    return periods
+
+
+def _chained(pieces: Sequence[Recording | PoseRecording], rate: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[SessionTruth, ...]]:
+    """The sessions' stamps ``[L]``, positions and noise-free positions ``[L, 3]`` back to back (each moved to
+    start where the previous one came to rest, its clock continuing the previous one's) and their truths."""
     times, samples, cleans, truths = [], [], [], []
     clock, place = 0.0, None
-    for period in periods:
-        piece = realistic_recording(kind, rng=rng, rate=rate, period=check_positive(period, "periods"),
-                                    **session_kwargs)
+    for piece in pieces:
         truth = piece.truth
         shift = np.zeros(3) if place is None else place - truth.clean[0]
         times.append(clock + piece.t)
@@ -88,6 +152,4 @@ def multi_session_recording(n_sessions: int = 3, kind: str = "wiping", *, rng: n
                                    rest_time=clock + truth.rest_time, period=truth.period))
         clock += float(piece.t[-1]) + 1.0 / rate
         place = cleans[-1][-1]
-    recording = Recording(t=np.concatenate(times), Y=np.concatenate(samples),
-                          name=f"{n_sessions} {kind} sessions")
-    return MultiSessionRecording(recording=recording, sessions=tuple(truths), clean=np.concatenate(cleans))
+    return np.concatenate(times), np.concatenate(samples), np.concatenate(cleans), tuple(truths)

@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.cli import main as cli_main
 
+from rdmp_gym import load_dmp, quaternion
 from rdmp_gym.demonstrations import Demonstration, to_demonstration
 from rdmp_gym.recording_fit import recording_report
 from rdmp_gym.segmentation import segment_rhythm
 from rdmp_gym.segmentation.sessions import find_sessions
 from rdmp_gym.session_fit import fit_sessions
 from rdmp_gym.synthetic import realistic_recording
-from rdmp_gym.synthetic_sessions import multi_session_recording
+from rdmp_gym.synthetic_sessions import multi_session_pose_recording, multi_session_recording
 
 
 @pytest.fixture(scope="module")
@@ -153,3 +154,34 @@ def test_a_small_slow_wobble_of_the_approach_is_no_session(share: float) -> None
     sessions = find_sessions(demo)
     assert len(sessions) == 1
     assert abs(sessions[0].rhythm_onset - onset) < 0.2
+
+
+@pytest.fixture(scope="module")
+def pose_sessions():
+    """Two wiping sessions with the tool's orientation (periods 1.45 and 1.7 s)."""
+    return multi_session_pose_recording(2, "wiping", rng=np.random.default_rng(2))
+
+
+def test_pose_generator_joins_the_orientations_continuously(pose_sessions) -> None:
+    clean = pose_sessions.clean_orientation
+    steps = np.degrees(quaternion.angle_between(clean[:-1], clean[1:]))
+    assert np.allclose(np.linalg.norm(clean, axis=1), 1.0)
+    assert steps.max() < 2.0                    # deg per 10 ms sample: no jump where the sessions meet
+    assert np.allclose(np.abs(np.sum(pose_sessions.Q * clean, axis=1)), 1.0, atol=1e-4)     # q or -q, noisy
+
+
+def test_cli_fits_each_session_of_a_pose_recording(pose_sessions, tmp_path) -> None:
+    path = tmp_path / "pose_sessions.csv"
+    pose_sessions.to_csv(path)
+    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
+    rows = json.loads((tmp_path / "fit" / "report.json").read_text())["sessions"]
+    assert len(rows) == len(pose_sessions.sessions) == 2
+    for row, truth in zip(rows, pose_sessions.sessions, strict=True):
+        assert row["start"] <= truth.onset and truth.rest_time - 0.5 <= row["stop"]
+        assert abs(row["period"] - truth.period) < 0.05 * truth.period
+        assert row["error_ratio"] <= 1.5 and row["acceleration_ratio"] <= 1.5
+        assert row["orientation_error_ratio"] <= 1.5 and row["angular_acceleration_ratio"] <= 1.5
+        assert load_dmp(tmp_path / "fit" / row["dmp"]).rollout(np.arange(0.0, 2.0, 0.01)).orientation.shape \
+            == (200, 4)
+    joint = ["fit", "--demo", str(path), "--sessions", "joint", "--out", str(tmp_path / "joint")]
+    assert cli_main(joint) == 2 and not (tmp_path / "joint").exists()
