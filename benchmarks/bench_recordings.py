@@ -45,7 +45,7 @@ from rdmp_gym.recording_fit import fit_recording, recording_report
 from rdmp_gym.signals import smooth_derivatives
 from rdmp_gym.synthetic import RECORDING_KINDS, realistic_recording
 from rdmp_gym.synthetic_pose import realistic_pose_recording
-from rdmp_gym.synthetic_sessions import multi_session_recording
+from rdmp_gym.synthetic_sessions import multi_session_pose_recording, multi_session_recording
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:
@@ -168,7 +168,8 @@ def _write(name: str, rows: list[dict], user: list[dict], save: bool) -> None:
 
 def _pose_rows(args: argparse.Namespace) -> None:
     """The pose rows: generated recordings (the positions of the rows above, with an orientation; a slow half
-    turn during the approach for every second seed) and the user's files with an orientation."""
+    turn during the approach for every second seed; two sessions of each kind) and the user's files with an
+    orientation."""
     rows, user = [], []
     for kind in RECORDING_KINDS:
         for seed in range(args.seeds):
@@ -179,6 +180,10 @@ def _pose_rows(args: argparse.Namespace) -> None:
                                  recording.Q, {"period": truth.period, "start": truth.rhythm_start,
                                                "end": truth.rhythm_end}, recording.clean_orientation))
             print_pose_row(rows[-1])
+    for kind in RECORDING_KINDS:
+        made = multi_session_pose_recording(2, kind, rng=np.random.default_rng(0))
+        rows.append(pose_row(f"{kind} x2 0", made.t, made.Y, made.Q, None, made.clean_orientation))
+        print_pose_row(rows[-1])
     summary("generated", rows)
     for path in sorted(args.data.rglob("*")) if args.data is not None else ():
         read = read_orientation(path, args.data_rate) if path.suffix.lower() in (".csv", ".txt") else None

@@ -1,7 +1,7 @@
 """Rows of ``bench_recordings.py`` for pose recordings (position and orientation): the position's figures and the
 orientation's (cycle error against the recording's cycle-to-cycle variation in degrees, peak angular acceleration
 against the smoothed recording's and, where known, the noise-free one's), and whether ``rdmp-gym fit --demo``
-fits the pose CSV."""
+fits the pose CSV; in a recording with several sessions also each session's pose fit."""
 
 from __future__ import annotations
 
@@ -14,6 +14,9 @@ from rdmp_gym.agents.cli import main as cli_main
 from rdmp_gym import quaternion
 from rdmp_gym.pose import PoseDemonstration
 from rdmp_gym.pose_fit import fit_pose_recording, pose_report, smoothed_peak_angular_acceleration
+from rdmp_gym.pose_io import write_pose_csv
+from rdmp_gym.segmentation.sessions import find_sessions
+from rdmp_gym.session_fit import fit_pose_sessions
 
 __all__ = ["pose_row", "print_pose_row", "read_orientation", "summary"]
 
@@ -38,9 +41,10 @@ def read_orientation(path: Path, rate: float) -> tuple[np.ndarray, np.ndarray, n
 
 def pose_row(name: str, t: np.ndarray, Y: np.ndarray, Q: np.ndarray, truth: dict | None,
              clean: np.ndarray | None = None) -> dict:
-    """One row: the pose fit's figures (``truth``: known ``period``, ``start``, ``end`` in s), the noise-free
-    orientation's peak angular acceleration where ``clean [L, 4]`` is known, and the CLI on the pose CSV."""
-    row = {"recording": name}
+    """One row: the pose fit's figures (``truth``: known ``period``, ``start``, ``end`` in s; each session's too
+    where the recording holds several), the noise-free orientation's peak angular acceleration where
+    ``clean [L, 4]`` is known, and the CLI on the pose CSV."""
+    row, pose = {"recording": name}, None
     try:
         pose = PoseDemonstration.from_samples(t, Y, Q, name=name)
         result = fit_pose_recording(pose)
@@ -49,6 +53,8 @@ def pose_row(name: str, t: np.ndarray, Y: np.ndarray, Q: np.ndarray, truth: dict
                    orientation_range=float(np.degrees(np.max(np.linalg.norm(pose.tangent.Y, axis=1)))))
     except ValueError as error:
         row["error"] = str(error)
+    if pose is not None:                    # read, whether or not the whole recording was fitted
+        row.update(_session_figures(pose))
     for key, value in (truth or {}).items():
         row[f"true_{key}"] = value
     if clean is not None and "peak_angular_acceleration" in row:
@@ -58,10 +64,33 @@ def pose_row(name: str, t: np.ndarray, Y: np.ndarray, Q: np.ndarray, truth: dict
                    clean_angular_acceleration_ratio=row["peak_angular_acceleration"] / peak)
     with tempfile.TemporaryDirectory() as folder:
         csv_path = Path(folder) / "pose.csv"
-        np.savetxt(csv_path, np.column_stack([t, Y, Q]), delimiter=",", header="t,x,y,z,qw,qx,qy,qz", comments="",
-                   fmt="%.17g")
+        write_pose_csv(csv_path, t, Y, Q)
         row["cli"] = cli_main(["fit", "--demo", str(csv_path), "--out", str(Path(folder) / "out")]) == 0
     return row
+
+
+def _session_figures(pose: PoseDemonstration) -> dict:
+    """``{"sessions": [...]}``: each session's pose fit (its rhythm's onset and stop, period, the position's and
+    the orientation's ratios, or why it was refused) where the recording holds several; ``{}`` otherwise."""
+    try:
+        sessions = find_sessions(pose.position)
+    except ValueError:
+        return {}
+    if len(sessions) < 2:
+        return {}
+    rows = []
+    for item in fit_pose_sessions(pose, sessions):
+        row = {"rhythm_onset": item.session.rhythm_onset, "rhythm_stop": item.session.rhythm_stop}
+        try:
+            if item.fit is None:
+                raise ValueError(item.error)
+            report = pose_report(PoseDemonstration(item.demo, item.fit.reference), item.fit)
+            row.update(period=item.fit.recording.segmentation.period,
+                       **{key: report[key] for key, _ in _TARGETS})
+        except ValueError as error:
+            row["error"] = str(error)
+        rows.append(row)
+    return {"sessions": rows}
 
 
 def print_pose_row(row: dict) -> None:
@@ -77,13 +106,18 @@ def print_pose_row(row: dict) -> None:
           f"{row['orientation_variation']:.2f} deg = {row['orientation_error_ratio']:.2f}, "
           f"rms {row['orientation_rmse']:.2f} deg, angular accel {row['angular_acceleration_ratio']:.2f}{clean} | "
           f"CLI {'ok' if row['cli'] else 'failed'}")
+    for k, session in enumerate(row.get("sessions", []), start=1):
+        figures = session.get("error") or ", ".join(f"{key} {session[key]:.2f}" for key, _ in _TARGETS)
+        print(f"{'session ' + str(k):>24}: {session['rhythm_onset']:.2f}-{session['rhythm_stop']:.2f} s | {figures}")
 
 
 def summary(title: str, rows: list[dict]) -> None:
     """How many pose rows meet each target, and the worst figure."""
     fitted = [row for row in rows if "error" not in row]
-    print(f"{title} (pose): {len(fitted)} of {len(rows)} fitted, CLI ok on {sum(row['cli'] for row in rows)}")
+    sessions = [session for row in rows for session in row.get("sessions", []) if "error" not in session]
+    print(f"{title} (pose): {len(fitted)} of {len(rows)} fitted, CLI ok on {sum(row['cli'] for row in rows)}; "
+          f"{len(sessions)} sessions fitted one by one in the recordings with several")
     for key, limit in _TARGETS:
-        values = [row[key] for row in fitted]
+        values = [row[key] for row in fitted] + [session[key] for session in sessions]
         if values:
             print(f"  {key}: {sum(v <= limit for v in values)} of {len(values)} <= {limit:g} (worst {max(values):.4g})")
