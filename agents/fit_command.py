@@ -142,7 +142,12 @@ def _fit_whole_recording(args: FitCommand, out: Path, plots: ModuleType | None) 
         return
     if pose is not None:
         fit_pose_command(pose, hints, out, plots)
-        return
+    else:
+        _fit_one_rhythm(demo, hints, out, plots)
+
+
+def _fit_one_rhythm(demo: Demonstration, hints: dict, out: Path, plots: ModuleType | None) -> None:
+    """One DMP for the whole position recording ``demo``: write ``dmp.json``, ``report.json`` (and ``fit.png``)."""
     result = fit_recording(demo, **hints)
     out.mkdir(parents=True, exist_ok=True)
     save_dmp(result.dmp, out / "dmp.json")
