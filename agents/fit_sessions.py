@@ -14,8 +14,8 @@ import numpy as np
 
 from rdmp_gym import Demonstration, save_dmp
 from rdmp_gym.pose import ORIENTATION_DIMS, PoseDemonstration
-from rdmp_gym.pose_fit import PoseFit, pose_report
-from rdmp_gym.recording_fit import RecordingFit, recording_report
+from rdmp_gym.pose_fit import PoseFit
+from rdmp_gym.recording_fit import RecordingFit
 from rdmp_gym.segmentation.sessions import Session, find_sessions
 from rdmp_gym.session_fit import SessionFit, fit_joint, fit_pose_sessions, fit_sessions, joint_report
 
@@ -62,16 +62,14 @@ def _write_session_fits(name: str, fits: list[SessionFit], out: Path, plots: Mod
                "rhythm_stop": session.rhythm_stop}
         span = f"{session.start:6.2f}-{session.stop:6.2f} {session.rhythm_onset:6.2f}-{session.rhythm_stop:6.2f}"
         try:
-            if item.fit is None:
-                raise ValueError(item.error)
-            report = _report(item)
+            report = item.report()
         except ValueError as error:         # refused, or too few whole cycles to measure
             rows.append({**row, "error": str(error)})
             print(f"{k:>7} {span} refused: {error}")
             continue
         path = out / f"dmp-{k}.json"
         save_dmp(item.fit.dmp, path)
-        fit = _position_fit(item.fit)
+        fit = item.recording
         seg = fit.segmentation
         rows.append({**row, "dmp": path.name, "period": seg.period, "rhythm_start": session.start + seg.rhythm_start,
                      "rhythm_end": session.start + seg.rhythm_end, "stop_at": fit.stop_at, **report})
@@ -88,19 +86,6 @@ def _write_session_fits(name: str, fits: list[SessionFit], out: Path, plots: Mod
           f"wrote {len(rows) - sum('error' in row for row in rows)} DMPs and {out / 'report.json'}")
     if all("error" in row for row in rows):
         raise ValueError(f"demo: none of its {len(fits)} sessions could be fitted (see the table)")
-
-
-def _report(item: SessionFit) -> dict:
-    """The fit's figures (:func:`~rdmp_gym.recording_fit.recording_report`, of a pose
-    :func:`~rdmp_gym.pose_fit.pose_report`)."""
-    if isinstance(item.fit, PoseFit):
-        return pose_report(PoseDemonstration(item.demo, item.fit.reference), item.fit)
-    return recording_report(item.demo, item.fit)
-
-
-def _position_fit(fit: RecordingFit | PoseFit) -> RecordingFit:
-    """The recording's fit (segmentation, ``stop_at``) behind a position or a pose fit."""
-    return fit.recording if isinstance(fit, PoseFit) else fit
 
 
 def _reproduce(fit: RecordingFit | PoseFit) -> Callable[[np.ndarray], np.ndarray]:

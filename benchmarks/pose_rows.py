@@ -82,11 +82,8 @@ def _session_figures(pose: PoseDemonstration) -> dict:
     for item in fit_pose_sessions(pose, sessions):
         row = {"rhythm_onset": item.session.rhythm_onset, "rhythm_stop": item.session.rhythm_stop}
         try:
-            if item.fit is None:
-                raise ValueError(item.error)
-            report = pose_report(PoseDemonstration(item.demo, item.fit.reference), item.fit)
-            row.update(period=item.fit.recording.segmentation.period,
-                       **{key: report[key] for key, _ in _TARGETS})
+            report = item.report()
+            row.update(period=item.recording.segmentation.period, **{key: report[key] for key, _ in _TARGETS})
         except ValueError as error:
             row["error"] = str(error)
         rows.append(row)

@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym.recording_fit import recording_report
 from rdmp_gym.session_fit import fit_joint, fit_sessions, joint_report
 
 
@@ -36,13 +35,11 @@ def _session(item) -> dict:
     session = item.session
     out = {"start": session.start, "stop": session.stop, "onset": session.rhythm_onset,
            "rhythm_stop": session.rhythm_stop}
-    if item.fit is None:
-        return {**out, "error": item.error}
     try:
-        report = recording_report(item.demo, item.fit)
-    except ValueError as error:             # too few whole cycles to measure
+        report = item.report()
+    except ValueError as error:             # refused, or too few whole cycles to measure
         return {**out, "error": str(error)}
-    return {**out, "period": item.fit.segmentation.period,
+    return {**out, "period": item.recording.segmentation.period,
             **{key: report[key] for key in ("cycle_error", "cycle_variation", "error_ratio", "start_error",
                                             "rest_error", "acceleration_ratio")}}
 

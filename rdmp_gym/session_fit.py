@@ -20,8 +20,16 @@ from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
 from .fitting import FADE_BEFORE_T
 from .pose import PoseDemonstration
-from .pose_fit import PoseFit, fit_pose_recording
-from .recording_fit import ENTRY_PERIODS, SMOOTHNESS, RecordingFit, cycle_figures, fit_recording, normalise_tempo
+from .pose_fit import PoseFit, fit_pose_recording, pose_report
+from .recording_fit import (
+    ENTRY_PERIODS,
+    SMOOTHNESS,
+    RecordingFit,
+    cycle_figures,
+    fit_recording,
+    normalise_tempo,
+    recording_report,
+)
 from .segmentation import Segmentation, local_fit, segment_rhythm
 from .segmentation.sessions import SAME_PERIOD, Session, find_sessions
 
@@ -45,6 +53,21 @@ class SessionFit:
     demo: Demonstration
     fit: RecordingFit | PoseFit | None
     error: str | None
+
+    @property
+    def recording(self) -> RecordingFit | None:
+        """The recording's fit behind ``fit`` (segmentation, ``stop_at``; of a pose, its ``recording``)."""
+        return self.fit.recording if isinstance(self.fit, PoseFit) else self.fit
+
+    def report(self) -> dict[str, float | None]:
+        """How well ``fit`` reproduces ``demo``: :func:`~rdmp_gym.recording_fit.recording_report`, of a pose
+        :func:`~rdmp_gym.pose_fit.pose_report`. Raises ``ValueError`` (with ``error``) where the fit refused the
+        session, or where it holds too few whole cycles to measure."""
+        if self.fit is None:
+            raise ValueError(self.error)
+        if isinstance(self.fit, PoseFit):
+            return pose_report(PoseDemonstration(self.demo, self.fit.reference), self.fit)
+        return recording_report(self.demo, self.fit)
 
 
 def fit_sessions(demo: Demonstration, sessions: list[Session] | None = None, **fit_kwargs) -> list[SessionFit]:

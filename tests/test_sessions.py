@@ -12,7 +12,7 @@ from rdmp_gym.demonstrations import Demonstration, to_demonstration
 from rdmp_gym.recording_fit import recording_report
 from rdmp_gym.segmentation import segment_rhythm
 from rdmp_gym.segmentation.sessions import find_sessions
-from rdmp_gym.session_fit import fit_sessions
+from rdmp_gym.session_fit import SessionFit, fit_sessions
 from rdmp_gym.synthetic import realistic_recording
 from rdmp_gym.synthetic_sessions import multi_session_pose_recording, multi_session_recording
 
@@ -59,6 +59,14 @@ def test_each_session_is_fitted_within_the_targets(fits) -> None:
         assert report["error_ratio"] < 1.5
         assert report["acceleration_ratio"] < 1.5
         assert report["rest_error"] is not None and report["rest_error"] < 0.01
+        assert item.report() == report and item.recording is item.fit
+
+
+def test_a_refused_session_reports_why(fits) -> None:
+    refused = SessionFit(fits[0].session, fits[0].demo, None, "demo: the rhythm spans only 1.4 periods")
+    assert refused.recording is None
+    with pytest.raises(ValueError, match=r"spans only 1\.4 periods"):
+        refused.report()
 
 
 def test_one_session_is_the_whole_recording() -> None:
