@@ -3,6 +3,7 @@
 The fit (:mod:`rdmp_gym.fitting`), the segmentation of whole recordings (:mod:`rdmp_gym.segmentation`) and the
 stop's fit read velocities and accelerations of noisy samples through :func:`smooth_derivatives`; a recorder's
 samples lose their outliers through :func:`despike` (:func:`rdmp_gym.demonstrations.to_demonstration`).
+:func:`runs` and :func:`longest_run` find the stretches where a condition on the samples holds.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from scipy.signal import savgol_filter
 
 from .validation import as_finite_array, check_positive
 
-__all__ = ["despike", "smooth_derivatives"]
+__all__ = ["despike", "longest_run", "runs", "smooth_derivatives"]
 
 
 def smooth_derivatives(Y: np.ndarray, dt: float, window: float, polyorder: int = 5
@@ -49,3 +50,18 @@ def despike(Y: np.ndarray, window: int = 7, threshold: float = 6.0) -> np.ndarra
     floor = 1e-3 * np.maximum(np.ptp(Y, axis=0), 1e-12)   # a noise-free signal: only jumps of its size
     outlier = deviation > threshold * np.maximum(scale, floor)
     return np.where(outlier, median, Y)
+
+
+def runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(starts, stops)``: the runs of True in ``mask [L]``, ``mask[starts[k]:stops[k]]`` each (``[R]`` ints)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], np.asarray(mask).astype(np.int8), [0]])))
+    return edges[::2], edges[1::2]
+
+
+def longest_run(mask: np.ndarray) -> tuple[int, int]:
+    """``(first, stop)`` of the longest run of True in ``mask [L]`` (the earliest of equals; ``(0, 0)`` if none)."""
+    starts, stops = runs(mask)
+    if starts.size == 0:
+        return 0, 0
+    best = int(np.argmax(stops - starts))
+    return int(starts[best]), int(stops[best])

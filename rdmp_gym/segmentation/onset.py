@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
+from rdmp_gym.signals import runs
+
 __all__ = ["CONTACT_SHARE", "DRIFT_SHARE", "GAP_PERIODS", "SPEED_SHARE", "rhythm_bounds", "sweep_size"]
 
 CONTACT_SHARE = 0.5
@@ -61,8 +63,7 @@ def _stroking(Y: np.ndarray, normal: np.ndarray, first: int, last: int, window: 
 def _bridged(mask: np.ndarray, gap: int) -> np.ndarray:
     """``mask [L]`` with its runs of False shorter than ``gap`` samples between two runs of True set True."""
     out = mask.copy()
-    edges = np.flatnonzero(np.diff(np.r_[1, mask.astype(int), 1]))
-    for start, stop in zip(edges[::2], edges[1::2], strict=True):
+    for start, stop in zip(*runs(~mask), strict=True):
         if 0 < start and stop < mask.size and stop - start < gap:
             out[start:stop] = True
     return out

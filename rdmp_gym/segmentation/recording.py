@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rdmp_gym.demonstrations import Demonstration
+from rdmp_gym.signals import longest_run
 from rdmp_gym.validation import as_finite_array, check_positive
 
 from .fourier import local_fit
@@ -73,16 +74,6 @@ class RhythmSegmentation:
     slow: np.ndarray
     amplitude: np.ndarray
     rest_speed: float
-
-
-def _longest_run(mask: np.ndarray) -> tuple[int, int]:
-    """``(first, stop)`` of the longest run of True in ``mask [L]`` (``(0, 0)`` if none)."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
-    starts, stops = edges[::2], edges[1::2]
-    if starts.size == 0:
-        return 0, 0
-    best = int(np.argmax(stops - starts))
-    return int(starts[best]), int(stops[best])
 
 
 def segment_rhythm(demo: Demonstration, *, period: float | None = None, start: float | None = None,
@@ -179,7 +170,7 @@ def _rhythm_bounds(t: np.ndarray, amplitude: np.ndarray, full: float, start: flo
     """Indices of the first and last sample of the full-size rhythm: the longest run where the amplitude is at
     least ``full`` of its high level (or the given ``start``/``end``, s)."""
     level = high_level(amplitude)
-    low, high = _longest_run(amplitude >= full * level)
+    low, high = longest_run(amplitude >= full * level)
     if high == 0:
         raise ValueError("demo: no rhythm found (its amplitude never reaches its typical level)")
     first = low if start is None else int(np.searchsorted(t, start))

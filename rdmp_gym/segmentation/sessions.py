@@ -32,6 +32,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from rdmp_gym.demonstrations import Demonstration
+from rdmp_gym.signals import longest_run
 
 from .onset import sweep_size
 from .recording import RhythmSegmentation, segment_rhythm
@@ -253,8 +254,7 @@ def _cut(demo: Demonstration, previous: list[_Rhythm], following: list[_Rhythm])
     if before <= after + 1:
         return (after + before) // 2
     resting = speed[onset:before + 1] < rest_threshold(speed, demo.dt, float(np.median(speed)), 0.05)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], resting.astype(np.int8), [0]])))
-    if edges.size:
-        longest = int(np.argmax(edges[1::2] - edges[::2]))
-        return onset + (int(edges[2 * longest]) + int(edges[2 * longest + 1]) - 1) // 2
+    first, stop = longest_run(resting)
+    if stop > first:
+        return onset + (first + stop - 1) // 2
     return after + int(np.argmin(speed[after:before + 1]))
