@@ -445,6 +445,8 @@ class ContextualSearch(Learner):
             raise ValueError("batch.actions: not the actions returned by the last ask()")
         costs = batch.costs + self.config.control_cost * self.noise.control_cost(batch.actions)
         traces = np.asarray(batch.cost_traces, dtype=np.float64)
+        if self.time_weights is not None and traces.shape[1:] != self.time_weights.shape[:1]:
+            raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1:]}")
         if self.config.random_returns:
             costs = self.rng.standard_normal(batch.size)
             traces = self.rng.standard_normal(traces.shape) / np.sqrt(max(traces.shape[1], 1))
@@ -489,8 +491,6 @@ class ContextualSearch(Learner):
         """Per-step weighted fits averaged over time with ``(T - t) · activation``; ``[n, F + 1]``."""
         assert self.time_weights is not None
         traces = np.concatenate([b["traces"] for b in self._buffer])                     # [N, T]
-        if traces.shape[1] != self.time_weights.shape[0]:
-            raise ValueError(f"batch.cost_traces: expected {self.time_weights.shape[0]} steps, got {traces.shape[1]}")
         to_go = cost_to_go(data["costs"], traces)                                       # [N, T]
         advantage = to_go - ridge_hat(data["x"], self.config.gain_prior) @ to_go
         per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
