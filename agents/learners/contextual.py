@@ -117,6 +117,11 @@ class ContextualConfig(ContextualSettings):
         adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
         max_sigma: upper bound of each block's standard deviation.
         random_returns: the control: replace every return by a standard-normal draw.
+        fourier_features: ``D`` random Fourier features ``√(2/D) cos(Ω φ(s) + b)`` appended to ``φ(s)`` (0 = a
+            policy and baselines linear in the context): with them the policy's mean and the cost baselines are
+            smooth nonlinear functions of the raw context (``Ω ~ N(0, 1/fourier_length²)``, ``b ~ U[0, 2π)``,
+            drawn once from the learner's generator; no feature is chosen by hand).
+        fourier_length: length scale of the Fourier features in standardised context units.
     """
 
     weighting: str = "reps"
@@ -128,10 +133,14 @@ class ContextualConfig(ContextualSettings):
     adapt_rate: float = 0.5
     max_sigma: float = 0.6
     random_returns: bool = False
+    fourier_features: int = 0
+    fourier_length: float = 1.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_choice(self.weighting, "weighting", WEIGHTINGS)
+        check_range(self.fourier_features, "fourier_features", 0, None)
+        check_range(self.fourier_length, "fourier_length", 0.0, None, low_open=True)
         check_range(self.control_cost, "control_cost", 0.0, None)
         check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
         check_range(self.adapt_rate, "adapt_rate", 0.0, 1.0)
@@ -305,6 +314,24 @@ def context_features(observations: np.ndarray, center: np.ndarray, scale: np.nda
     return phi[:, used]
 
 
+def _draw_fourier(config: ContextualConfig, n_features: int, rng: np.random.Generator
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """``(Ω [D, F], b [D])`` of ``config.fourier_features`` random Fourier features (D = 0: nothing is drawn)."""
+    count = config.fourier_features if config.contextual else 0
+    if count == 0:
+        return np.zeros((0, n_features)), np.zeros(0)
+    frequencies = rng.normal(0.0, 1.0 / config.fourier_length, (count, n_features))
+    return frequencies, rng.uniform(0.0, 2.0 * np.pi, count)
+
+
+def _with_fourier(phi: np.ndarray, fourier: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """``[E, F + D]`` the features ``φ [E, F]`` followed by their random Fourier features ``(Ω [D, F], b [D])``."""
+    frequencies, phases = fourier
+    if phases.size == 0:
+        return phi
+    return np.concatenate([phi, np.sqrt(2.0 / phases.size) * np.cos(phi @ frequencies.T + phases)], axis=1)
+
+
 def _reps_weights(returns: np.ndarray, features: np.ndarray, epsilon: float) -> np.ndarray:
     """``[N]`` contextual REPS weights of returns ``[N]`` with value features ``[N, F]`` (may be F = 0)."""
     spread = returns.std()
@@ -380,7 +407,8 @@ class ContextualSearch(Learner):
         self.gate = None if space.context_gate is None else np.asarray(space.context_gate, dtype=np.int64)
         if self.gate is not None and (self.gate.shape != self.center.shape or np.any(self.gate >= self.center.size)):
             raise ValueError("space: context_gate must have the observation's length with indices < its length")
-        n_features = 1 + int(self._used.sum()) if self.config.contextual else 1
+        self.fourier = _draw_fourier(self.config, int(self._used.sum()), rng)
+        n_features = 1 + int(self._used.sum()) + self.fourier[1].size if self.config.contextual else 1
         self.gains = np.zeros((self.n_params, n_features))        # W = [θ̄, K]
         self.gains[:, 0] = unsquash(self._mean)
         self._sigma_factor = _block_factors(self.noise.blocks, slices, self.config.sigma_factors)
@@ -420,7 +448,8 @@ class ContextualSearch(Learner):
         ones = np.ones((obs.shape[0], 1))
         if not self.config.contextual:
             return ones
-        return np.concatenate([ones, context_features(obs, self.center, self.scale, self.gate)], axis=1)
+        return np.concatenate([ones, _with_fourier(context_features(obs, self.center, self.scale, self.gate),
+                                                   self.fourier)], axis=1)
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         """``[E, n]`` the policy's action for each context (no exploration)."""
@@ -515,9 +544,12 @@ class ContextualSearch(Learner):
         buffer = {key: np.concatenate([b[key].ravel() for b in self._buffer]) if self._buffer else np.zeros(0)
                   for key in _BUFFER_KEYS}
         buffer["sizes"] = np.array([b["costs"].size for b in self._buffer], dtype=np.int64)
-        return {"gains": self.gains.copy(), "sigmas": self.sigmas.copy(), "buffer": buffer,
-                "context_center": self.center.copy(), "context_scale": self.scale.copy(),
-                "context_gate": np.full(self.center.size, -1) if self.gate is None else self.gate.copy()}
+        state = {"gains": self.gains.copy(), "sigmas": self.sigmas.copy(), "buffer": buffer,
+                 "context_center": self.center.copy(), "context_scale": self.scale.copy(),
+                 "context_gate": np.full(self.center.size, -1) if self.gate is None else self.gate.copy()}
+        if self.fourier[1].size:                     # only then: a linear learner's state is what it always was
+            state.update(fourier_frequencies=self.fourier[0].copy(), fourier_phases=self.fourier[1].copy())
+        return state
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
         gains = np.asarray(state["gains"], dtype=np.float64)
@@ -527,6 +559,13 @@ class ContextualSearch(Learner):
         if not (np.allclose(state["context_center"], self.center) and np.allclose(state["context_scale"], self.scale)
                 and np.array_equal(state.get("context_gate", np.full(self.center.size, -1)), gate)):
             raise ValueError("state: written with another context standardisation")
+        if self.fourier[1].size:
+            fourier = (np.asarray(state["fourier_frequencies"], dtype=np.float64),
+                       np.asarray(state["fourier_phases"], dtype=np.float64))
+            if fourier[0].shape != self.fourier[0].shape or fourier[1].shape != self.fourier[1].shape:
+                raise ValueError(f"state.fourier_frequencies: expected shape {self.fourier[0].shape}, "
+                                 f"got {fourier[0].shape}")
+            self.fourier = (fourier[0].copy(), fourier[1].copy())
         self.gains = gains.copy()
         self.sigmas = np.asarray(state["sigmas"], dtype=np.float64).copy()
         buffer = state["buffer"]
@@ -556,7 +595,10 @@ def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.
     x = np.ones((obs.shape[0], 1))
     if gains.shape[1] > 1:
         gate = None if gate is None else np.asarray(gate, dtype=np.int64)
-        x = np.concatenate([x, context_features(obs, center, scale, gate)], axis=1)
+        phi = context_features(obs, center, scale, gate)
+        fourier = (np.asarray(state.get("fourier_frequencies", np.zeros((0, phi.shape[1]))), dtype=np.float64),
+                   np.asarray(state.get("fourier_phases", np.zeros(0)), dtype=np.float64))
+        x = np.concatenate([x, _with_fourier(phi, fourier)], axis=1)
     return squash(x @ gains.T)
 
 
