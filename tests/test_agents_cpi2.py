@@ -8,7 +8,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 import pytest
-from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
+from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
 
 N, T, K = 12, 20, 10
 EARLY, LATE = slice(0, N // 2), slice(N // 2, N)
@@ -115,3 +115,27 @@ def test_clear_errors_for_missing_or_misshaped_activations_and_traces():
         _learner(gain_prior=0.0)
     learner.tell(_batch(actions, np.zeros((K, T))))            # the refused batch left the learner as it was
     assert learner.state_dict()["buffer"]["sizes"].tolist() == [K]
+
+
+def test_fourier_features_extend_the_context_and_travel_with_the_state():
+    """``fourier_features`` D adds D bounded columns after ``[1, φ(s)]``; the state carries their draw (a twin
+    built from another generator acts the same after loading it); a linear learner's state has no such entry."""
+    learner = _learner(fourier_features=16, fourier_length=0.5)
+    contexts = np.random.default_rng(3).uniform(-1, 1, (K, 2))
+    x = learner.features(contexts)
+    assert x.shape == (K, 1 + 2 + 16)
+    np.testing.assert_array_equal(x[:, 1:3], contexts)
+    assert np.all(np.abs(x[:, 3:]) <= np.sqrt(2 / 16) + 1e-12) and x[:, 3:].std() > 0.05
+    _train(learner, 2)
+    twin = _learner(fourier_features=16, fourier_length=0.5, seed=42)
+    assert not np.allclose(twin.features(contexts), learner.features(contexts))
+    twin.load_state_dict(learner.state_dict())
+    np.testing.assert_array_equal(twin.policy_actions(contexts), learner.policy_actions(contexts))
+    np.testing.assert_array_equal(policy_from_state(learner.state_dict(), contexts), learner.policy_actions(contexts))
+    assert "fourier_phases" not in _learner().state_dict()
+    with pytest.raises(ValueError, match="state"):
+        _learner(fourier_features=8).load_state_dict(learner.state_dict())
+    with pytest.raises(ValueError, match="fourier_features"):
+        _learner(fourier_features=-1)
+    with pytest.raises(ValueError, match="fourier_length"):
+        _learner(fourier_features=4, fourier_length=0.0)
