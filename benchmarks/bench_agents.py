@@ -199,10 +199,20 @@ def _cache_key(config: TrainConfig, test_seeds: np.ndarray) -> str:
 
 
 def _cached_run(config: TrainConfig, path: Path, test_seeds: np.ndarray) -> dict | None:
+    """The run cached at ``path`` if it stands for ``config`` on ``test_seeds``: the same key, or one that differs
+    only in how the learner's options were written, e.g. before the learner gained a setting that ``config``
+    leaves at its default (its stored options then equal ``config``'s)."""
     if not path.is_file():
         return None
     saved = json.loads(path.read_text())
-    return saved["run"] if saved.get("key") == _cache_key(config, test_seeds) else None
+    wanted = _cache_key(config, test_seeds)
+    if saved.get("key") == wanted:
+        return saved["run"]
+    stored, wanted_fields = json.loads(saved.get("key") or "{}"), json.loads(wanted)
+    stored.pop("options", None)
+    wanted_fields.pop("options")
+    same = stored == wanted_fields and _same_options(saved["run"].get("options") or {}, config)
+    return saved["run"] if same else None
 
 
 def _store_run(config: TrainConfig, path: Path, test_seeds: np.ndarray, run: dict) -> None:

@@ -12,10 +12,12 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from bench_agents import (
     _cache_key,
+    _cached_run,
     _code,
     _labels,
     _parse,
     _seed_counts,
+    _store_run,
     code_versions,
     markdown_table,
     reusable_runs,
@@ -47,6 +49,24 @@ def test_cache_key_ignores_workers_but_not_options_or_test_contexts():
     assert _cache_key(config, seeds) != _cache_key(config, np.arange(4))
     other = TrainConfig(agent="bbrl", updates=2, rollouts=2, seed=0, workers=1, options={"sigma": 0.2})
     assert _cache_key(config, seeds) != _cache_key(other, seeds)
+
+
+def test_a_cached_run_written_before_a_new_default_setting_still_stands_for_its_config(tmp_path):
+    """A run cached when the learner had no ``fourier_features`` (its key and options lack the setting) stands
+    for a config that leaves it at its default, not for one with other options or other test contexts."""
+    config = TrainConfig(agent="cpi2", updates=2, rollouts=2, seed=0, workers=1)
+    seeds, path = np.arange(3), tmp_path / "cpi2-0.json"
+    options = config.options.to_dict()
+    old_options = {key: value for key, value in options.items() if not key.startswith("fourier")}
+    _store_run(config, path, seeds, {"options": old_options, "test_means": {"success": 0.5}})
+    saved = json.loads(path.read_text())
+    saved["key"] = saved["key"].replace(", fourier_features=0, fourier_length=1.0", "")
+    assert "fourier" not in saved["key"] and len(old_options) < len(options)
+    path.write_text(json.dumps(saved))
+    assert _cached_run(config, path, seeds) == {"options": old_options, "test_means": {"success": 0.5}}
+    assert _cached_run(config, path, np.arange(4)) is None
+    other = TrainConfig(agent="cpi2", updates=2, rollouts=2, seed=0, workers=1, options={"fourier_features": 8})
+    assert _cached_run(other, path, seeds) is None
 
 
 def test_code_versions_group_the_runs_by_the_commit_that_trained_them():
