@@ -211,7 +211,7 @@ def _cached_run(config: TrainConfig, path: Path, test_seeds: np.ndarray) -> dict
     stored, wanted_fields = json.loads(saved.get("key") or "{}"), json.loads(wanted)
     stored.pop("options", None)
     wanted_fields.pop("options")
-    same = stored == wanted_fields and _same_options(saved["run"].get("options") or {}, config)
+    same = stored == wanted_fields and "options" in saved["run"] and _same_options(saved["run"]["options"], config)
     return saved["run"] if same else None
 
 

@@ -324,12 +324,16 @@ def _draw_fourier(config: ContextualConfig, n_features: int, rng: np.random.Gene
     return frequencies, rng.uniform(0.0, 2.0 * np.pi, count)
 
 
-def _with_fourier(phi: np.ndarray, fourier: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """``[E, F + D]`` the features ``φ [E, F]`` followed by their random Fourier features ``(Ω [D, F], b [D])``."""
+def _regressors(observations: np.ndarray, center: np.ndarray, scale: np.ndarray, gate: np.ndarray | None,
+                fourier: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """``[E, 1 + F + D]`` the regressors ``[1, φ(s), √(2/D) cos(Ω φ(s) + b)]`` of observations ``[E, o]`` with the
+    random Fourier features ``(Ω [D, F], b [D])`` (D = 0: ``[1, φ(s)]``)."""
+    phi = context_features(observations, center, scale, gate)
     frequencies, phases = fourier
-    if phases.size == 0:
-        return phi
-    return np.concatenate([phi, np.sqrt(2.0 / phases.size) * np.cos(phi @ frequencies.T + phases)], axis=1)
+    columns = [np.ones((phi.shape[0], 1)), phi]
+    if phases.size:
+        columns.append(np.sqrt(2.0 / phases.size) * np.cos(phi @ frequencies.T + phases))
+    return np.concatenate(columns, axis=1)
 
 
 def _reps_weights(returns: np.ndarray, features: np.ndarray, epsilon: float) -> np.ndarray:
@@ -445,11 +449,9 @@ class ContextualSearch(Learner):
             raise ValueError(f"observations: expected shape [E, {self.center.size}], got {obs.shape}")
         if not np.all(np.isfinite(obs)):
             raise ValueError("observations: contains NaN or infinite values")
-        ones = np.ones((obs.shape[0], 1))
         if not self.config.contextual:
-            return ones
-        return np.concatenate([ones, _with_fourier(context_features(obs, self.center, self.scale, self.gate),
-                                                   self.fourier)], axis=1)
+            return np.ones((obs.shape[0], 1))
+        return _regressors(obs, self.center, self.scale, self.gate, self.fourier)
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         """``[E, n]`` the policy's action for each context (no exploration)."""
@@ -595,10 +597,9 @@ def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.
     x = np.ones((obs.shape[0], 1))
     if gains.shape[1] > 1:
         gate = None if gate is None else np.asarray(gate, dtype=np.int64)
-        phi = context_features(obs, center, scale, gate)
-        fourier = (np.asarray(state.get("fourier_frequencies", np.zeros((0, phi.shape[1]))), dtype=np.float64),
+        fourier = (np.asarray(state.get("fourier_frequencies", np.zeros((0, 0))), dtype=np.float64),
                    np.asarray(state.get("fourier_phases", np.zeros(0)), dtype=np.float64))
-        x = np.concatenate([x, _with_fourier(phi, fourier)], axis=1)
+        x = _regressors(obs, center, scale, gate, fourier)
     return squash(x @ gains.T)
 
 
