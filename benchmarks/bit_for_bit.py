@@ -2,7 +2,7 @@
 
 Each entry is a SHA-256 of the exact bytes of a result: the fitted DMPs of the built-in demonstrations (the
 library's defaults and the settings the environments pin), episodic returns and infos of the published task
-versions (v1, v2, v2 with the cup clearance, the step twins) on fixed reset seeds and actions, and short
+versions (v1, v2, v2 with the cup clearance, v3 on both robots, the step twins) on fixed reset seeds and actions, and short
 learner runs (a few updates of every learner, one worker).
 
     python benchmarks/bit_for_bit.py --out runs/bit_for_bit.json            # write the digests
@@ -101,7 +101,11 @@ def envs() -> dict[str, str]:
             "env/v2": _episodes("rdmp_gym/ArmarWipe-v2"),
             "env/v2_clearance": _episodes("rdmp_gym/ArmarWipe-v2", cup_clearance=0.01),
             "env/step_v1": _step_episodes("rdmp_gym/ArmarWipeStep-v1"),
-            "env/step_v2": _step_episodes("rdmp_gym/ArmarWipeStep-v2")}
+            "env/step_v2": _step_episodes("rdmp_gym/ArmarWipeStep-v2"),
+            "env/v3": _episodes("rdmp_gym/ArmarWipe-v3"),
+            "env/panda_v3": _episodes("rdmp_gym/PandaWipe-v3"),
+            "env/step_v3": _step_episodes("rdmp_gym/ArmarWipeStep-v3"),
+            "env/panda_step_v3": _step_episodes("rdmp_gym/PandaWipeStep-v3")}
 
 
 def learners() -> dict[str, str]:
