@@ -1,0 +1,47 @@
+"""A rhythmic DMP policy on any step-based Gymnasium env with a continuous action space (black-box wrapper).
+
+:class:`RhythmicBlackBoxWrapper` makes one ``step`` one whole episode: the action is the parameters of a rhythmic
+DMP in the env's joint space, which a tracking controller follows on the env's own actions. See the docs' page "Your
+own env". Importing this package registers ``rdmp_gym/RhythmicBlackBox-v0`` (:func:`make_blackbox`, keyword
+``env_id``)::
+
+    import gymnasium as gym
+    from rdmp_gym.envs.blackbox import RhythmicBlackBoxWrapper
+
+    env = RhythmicBlackBoxWrapper(gym.make("Swimmer-v5"), p_gains=10.0, d_gains=0.5, duration=4.0)
+    context, _ = env.reset(seed=0)
+    context, episode_return, _, _, info = env.step(env.action_space.sample() * 0)   # the initial DMP
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+from .controller import CONTROLLERS, MujocoJoints, PDController, PositionController, VelocityController, make_controller
+from .defaults import BLACKBOX_SCALES, ENV_DEFAULTS, default_demonstration, env_defaults
+from .params import JointParameterMap
+from .wrapper import DEFAULT_GROUPS, RhythmicBlackBoxWrapper, make_blackbox
+
+__all__ = [
+    "BLACKBOX_ID",
+    "BLACKBOX_SCALES",
+    "CONTROLLERS",
+    "DEFAULT_GROUPS",
+    "ENV_DEFAULTS",
+    "JointParameterMap",
+    "MujocoJoints",
+    "PDController",
+    "PositionController",
+    "RhythmicBlackBoxWrapper",
+    "VelocityController",
+    "default_demonstration",
+    "env_defaults",
+    "make_blackbox",
+    "make_controller",
+]
+
+#: the id of :func:`make_blackbox` (``gym.make(BLACKBOX_ID, env_id="Swimmer-v5", ...)``)
+BLACKBOX_ID = "rdmp_gym/RhythmicBlackBox-v0"
+
+if BLACKBOX_ID not in gym.registry:
+    gym.register(BLACKBOX_ID, entry_point="rdmp_gym.envs.blackbox.wrapper:make_blackbox")
