@@ -14,14 +14,14 @@ import mujoco
 
 from .robots import RobotDescription
 
-__all__ = ["ARENA_XML", "SPONGE_XML", "compose_scene", "self_contact_sensors"]
+__all__ = ["ARENA_XML", "SPONGE_XML", "add_contact_sensor", "compose_scene", "self_contact_sensors"]
 
 ARENA_XML = Path(__file__).resolve().parent / "assets" / "arena.xml"
 SPONGE_XML = Path(__file__).resolve().parent / "assets" / "sponge_tool.xml"
 
 # contact sensor settings (MuJoCo's intprm of a contact sensor: data fields as bits, reduction, number)
-_FOUND, _FORCE, _DIST = 1, 2, 8
-_MINDIST, _NETFORCE = 1, 3
+FOUND, FORCE, DIST = 1, 2, 8
+MINDIST, NETFORCE = 1, 3
 
 
 def self_contact_sensors(robot: RobotDescription) -> tuple[str, ...]:
@@ -29,8 +29,10 @@ def self_contact_sensors(robot: RobotDescription) -> tuple[str, ...]:
     return tuple(f"arm_{link}" for link in robot.body_links)
 
 
-def _contact(spec: mujoco.MjSpec, name: str, first: tuple[mujoco.mjtObj, str], second: tuple[mujoco.mjtObj, str],
-             data: int, reduce: int = 0) -> None:
+def add_contact_sensor(spec: mujoco.MjSpec, name: str, first: tuple[mujoco.mjtObj, str],
+                       second: tuple[mujoco.mjtObj, str], data: int, reduce: int = 0) -> None:
+    """Add a contact sensor ``name`` between ``first`` and ``second`` (``(object type, name)`` each) reporting the
+    ``data`` fields (bits: found 1, force 2, distance 8) reduced by ``reduce`` (min distance 1, net force 3)."""
     sensor = spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT, objtype=first[0], objname=first[1],
                              reftype=second[0], refname=second[1])
     sensor.intprm[:3] = [data, reduce, 1]
@@ -40,16 +42,16 @@ def _add_sensors(spec: mujoco.MjSpec, robot: RobotDescription, prefix: str, tool
     site, geom = mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtObj.mjOBJ_GEOM
     subtree, body = mujoco.mjtObj.mjOBJ_XBODY, mujoco.mjtObj.mjOBJ_BODY
     ft_site = prefix + robot.ft_site
-    spec.add_sensor(name="wrist_force", type=mujoco.mjtSensor.mjSENS_FORCE, objtype=site, objname=ft_site)
+    spec.add_sensor(name="wrist_force", type=mujoco.mjtSensor.mjSENSFORCE, objtype=site, objname=ft_site)
     spec.add_sensor(name="wrist_torque", type=mujoco.mjtSensor.mjSENS_TORQUE, objtype=site, objname=ft_site)
     spec.add_sensor(name="sponge_touch", type=mujoco.mjtSensor.mjSENS_TOUCH, objtype=site,
                     objname=tool + "sponge_touch")
-    _contact(spec, "sponge_table", (geom, tool + "sponge"), (geom, "table_top"), _FOUND | _FORCE, _NETFORCE)
-    _contact(spec, "robot_table", (subtree, prefix + robot.root_body), (geom, "table_top"), _FOUND)
+    add_contact_sensor(spec, "sponge_table", (geom, tool + "sponge"), (geom, "table_top"), FOUND | FORCE, NETFORCE)
+    add_contact_sensor(spec, "robot_table", (subtree, prefix + robot.root_body), (geom, "table_top"), FOUND)
     arm = (subtree, prefix + robot.arm_root)
     for name, link in zip(self_contact_sensors(robot), robot.body_links, strict=True):
-        _contact(spec, name, arm, (body, prefix + link), _FOUND | _DIST, _MINDIST)
-    _contact(spec, "arm_obstacle", arm, (body, "obstacle"), _FOUND)
+        add_contact_sensor(spec, name, arm, (body, prefix + link), FOUND | DIST, MINDIST)
+    add_contact_sensor(spec, "arm_obstacle", arm, (body, "obstacle"), FOUND)
 
 
 def compose_scene(robot: RobotDescription, prefix: str = "robot/", tool: str = "tool/") -> mujoco.MjModel:

@@ -122,6 +122,8 @@ class AdaptiveFrequencyStepper:
         frequency_time: ``tau_Omega`` (s; default one fitted period), the low-pass of the oscillator's frequency.
         frequency_coupling: gain of the oscillator's frequency equation (default ``coupling``).
         oscillator_phase: the oscillator's initial phase (default the DMP's, so a locked input keeps it).
+        frequency: the initial frequency (rad/s) of the oscillator and of the rhythm the DMP follows (default the
+            fitted one); e.g. a tempo announced before the start.
         start_blend: the smooth start of :meth:`rdmp_gym.RhythmicDMP.rollout` (default; in canonical time).
     """
 
@@ -129,18 +131,20 @@ class AdaptiveFrequencyStepper:
 
     def __init__(self, dmp, dt: float, transient: int = 0, coupling: float = 2.0, phase_gain: float = 1.0,
                  frequency_time: float | None = None, frequency_coupling: float | None = None,
-                 oscillator_phase: float | None = None, start_blend: bool = True) -> None:
+                 oscillator_phase: float | None = None, start_blend: bool = True,
+                 frequency: float | None = None) -> None:
         self.dmp, self.dt = dmp, check_positive(dt, "dt")
         self.transient = dmp._check_transient(transient)
         self.start_state = dmp.transients[self.transient]
         self.omega_fit = dmp.canonical.omega
         self.phase_gain = check_positive(phase_gain, "phase_gain")
-        self.oscillator = AdaptiveOscillator(self.omega_fit,
+        initial = self.omega_fit if frequency is None else check_positive(frequency, "frequency")
+        self.oscillator = AdaptiveOscillator(initial,
                                              self.start_state.phi0 if oscillator_phase is None else oscillator_phase,
                                              coupling, self.dt, frequency_coupling)
         self.frequency_time = dmp.period if frequency_time is None else check_positive(frequency_time,
                                                                                          "frequency_time")
-        self.smoothed_frequency = self.omega_fit
+        self.smoothed_frequency = initial
         self.s, self.time, self.rate = 0.0, 0.0, 1.0
         self._block_index, self._block = -1, np.empty((0, dmp.n_dims))
         self.y = self.start_state.start.copy()

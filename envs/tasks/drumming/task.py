@@ -1,0 +1,260 @@
+"""The drumming task: strike a drum on the beat of a metronome whose tempo changes once, then stop at rest.
+
+The DMP (fitted to :func:`~.demonstration.drumming_demonstration` with a stop) starts at rest beside the drum; its
+transient brings the stick above the membrane, and its phase and frequency follow the metronome's beat signal
+online through the adaptive-frequency oscillator (:class:`rdmp_gym.frequency.AdaptiveFrequencyStepper`, started at
+the announced tempo): when the tempo changes, the DMP adapts without a re-plan. After the last beat the DMP is asked
+to stop and its stop transient brings the stick to rest.
+
+Action (after the DMP's groups ``periodic``, ``transient``, ``amplitude``, ``stop``): ``coupling`` (the
+oscillator's gain ``K = 2 * 4**a``, 1/s), ``phase_gain`` (``k_phi = 2 * 4**a``, 1/s) and ``phase`` (the beat
+signal's shift, ``0.6 a`` rad: strike earlier or later than the beat).
+
+Beats: those after the transient up to 2.6 s before the end; the first two are a warm-up, and the first beat at the
+new tempo cannot be anticipated by a follower: the other beats are the **counted** ones.
+
+Success: at least 90 % of the counted beats struck (one strike in the beat's window, within ``tolerance`` of the
+beat, its impulse in ``impulse_band``), no extra strike (a double bounce, a strike outside the beats' windows),
+nothing touched but the membrane by the tip (no rim, no other part of the drum or the table, not the robot's own
+body), a smooth executable path (planned peak joint acceleration within the robot's limit, jerk at most
+``max_jerk_ratio`` times the imitation's) and the stick at rest at the end (tip speed below ``rest_speed``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import cached_property
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from rdmp_gym import RhythmicDMP
+from rdmp_gym.frequency import AdaptiveFrequencyStepper
+from rdmp_gym.stopping import fit_ending
+
+from ...robots import RobotDescription
+from ...scene import rotation_from_tilt
+from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
+from .context import DrumContext, DrumContextSpec
+from .demonstration import drumming_demonstration
+from .metronome import Metronome
+from .scene import add_drum, add_stick, place_drum
+from .strikes import Strikes, score_beats
+
+__all__ = ["DrumTask"]
+
+#: the last beat comes this long (s) before the end of the episode: time for the stop and the rest
+_STOP_RESERVE = 3.0
+#: the end over which the stick must be at rest (s)
+_REST_WINDOW = 0.3
+
+
+class DrumTask(TaskDescription):
+    """The drumming task; see the module docstring.
+
+    Args:
+        context: the context's ranges (:class:`~.context.DrumContextSpec`).
+        tolerance: a strike's timing tolerance (s).
+        impulse_band: (min, max) impulse of a strike (N s): softer makes no sound, harder damages.
+        max_jerk_ratio: the largest integrated squared jerk of the path, relative to the imitation's in the context.
+        rest_speed: the tip's largest speed (m/s) over the last 0.3 s for the stick to be at rest.
+    """
+
+    name = "Drum"
+    versions = (1,)
+    groups = ("periodic", "transient", "amplitude", "stop")
+    scales: Mapping[str, float] = {"periodic": 0.1, "transient": 0.1, "amplitude": 0.5, "stop": 0.1}
+    extras: Mapping[str, float] = {"coupling": 1.0, "phase_gain": 1.0, "phase": 0.6}
+    duration = 10.0
+    control_rate = 100.0
+
+    def __init__(self, context: DrumContextSpec | None = None, tolerance: float = 0.05,
+                 impulse_band: tuple[float, float] = (0.1, 1.0), max_jerk_ratio: float = 2.0,
+                 rest_speed: float = 0.02):
+        self.context_spec = DrumContextSpec() if context is None else context
+        if not (np.isfinite(tolerance) and tolerance > 0):
+            raise ValueError(f"tolerance: expected a positive number of seconds, got {tolerance!r}")
+        low, high = impulse_band
+        if not (0 <= low < high):
+            raise ValueError(f"impulse_band: expected (min, max) with 0 <= min < max, got {impulse_band!r}")
+        self.tolerance, self.impulse_band = float(tolerance), (float(low), float(high))
+        self.max_jerk_ratio, self.rest_speed = float(max_jerk_ratio), float(rest_speed)
+
+    # ------------------------------------------------------------------ objects and context
+    def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
+        add_stick(spec, robot, robot_prefix, tool_prefix)
+        add_drum(spec, robot, robot_prefix, tool_prefix)
+
+    def context_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.context_spec.low, self.context_spec.high
+
+    def sample_context(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> DrumContext:
+        return self.context_spec.sample(rng, options)
+
+    def frame(self, context: DrumContext, table_origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The drum frame in the world: the membrane's centre ``[3]`` and the drum's axes ``[3, 3]``."""
+        origin = table_origin + np.r_[context.drum_position, context.drum_height]
+        return origin, rotation_from_tilt(*context.drum_tilt)
+
+    def place(self, model: mujoco.MjModel, context: DrumContext) -> None:
+        table = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "table")
+        centre, _ = self.frame(context, model.body_pos[table])
+        place_drum(model, centre, context.drum_tilt, context.drum_height)
+
+    def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
+        low, high = robot.workspace
+        return low, np.r_[high[:2], high[2] + 0.15]       # the stick reaches above the sponge's box
+
+    # ------------------------------------------------------------------ the DMP and its plan
+    def imitation(self) -> RhythmicDMP:
+        return self._imitation
+
+    @cached_property
+    def _imitation(self) -> RhythmicDMP:
+        return fit_ending(drumming_demonstration(), n_periodic=20, n_transient=20)
+
+    @cached_property
+    def strike_phase(self) -> float:
+        """The imitation's phase (rad, mod 2 pi) where the tip first reaches the membrane's plane on its way down."""
+        dmp = self._imitation
+        start = dmp.transients[0]
+        t = np.arange(0.0, start.length + 3.0 * dmp.period, 1e-3)
+        z = dmp.rollout(t)[:, 2]
+        after = t >= start.length
+        crossing = np.flatnonzero(after[1:] & (z[:-1] > 0.0) & (z[1:] <= 0.0))[0] + 1
+        return float(np.mod(start.phi0 + dmp.canonical.omega * t[crossing], 2.0 * np.pi))
+
+    def stop_request(self, metronome: Metronome, last_beat: float) -> float:
+        """When (s) to ask for the stop so that the last stroke lands on ``last_beat`` (s): the stop leaves the cycle
+        at the demonstrated exit phase, and one more stroke follows the exit; the request comes half a radian of
+        phase before the exit that precedes the last beat by that stroke."""
+        lead = np.mod(self.strike_phase - self._imitation.ending.exit_phase, 2.0 * np.pi) + 2.0 * np.pi - 0.5
+        tempo = metronome.new_tempo if last_beat > metronome.change_time else metronome.tempo
+        return float(last_beat - lead / (2.0 * np.pi * tempo / 60.0))
+
+    def metronome(self, context: DrumContext) -> Metronome:
+        """The metronome of ``context``."""
+        start = self._imitation.transients[0].phi0
+        return Metronome.changing_at_beat(context.tempo, context.new_tempo, context.change_time, start,
+                                          self.strike_phase)
+
+    def beats(self, metronome: Metronome) -> tuple[np.ndarray, np.ndarray]:
+        """The beats ``[B]`` (s) up to the reserve for the stop, and which are counted ``[B]``: not the count-in
+        (beats during the transient), not the first two after it, not the first at the new tempo."""
+        transient = self._imitation.transients[0].length * self._imitation.canonical.omega / metronome.omega
+        beats = metronome.beats(self.duration - _STOP_RESERVE)
+        playing = beats > transient
+        counted = playing & (np.cumsum(playing) > 2)
+        first_new = np.flatnonzero(beats > metronome.change_time + 1e-9)
+        if first_new.size:
+            counted[first_new[0]] = False
+        return beats, counted
+
+    def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: DrumContext,
+             times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
+        coupling, phase_gain, shift = extras
+        params = dmp.with_params(theta, self.groups)
+        metronome = self.metronome(context)
+        beats, counted = self.beats(metronome)
+        dt = float(times[1] - times[0])
+        stepper = AdaptiveFrequencyStepper(params, dt, coupling=2.0 * 4.0**coupling, phase_gain=2.0 * 4.0**phase_gain,
+                                           frequency=metronome.omega)
+        signal = metronome.signal(times, shift=shift)
+        stop_at = self.stop_request(metronome, beats[-1]) if beats.size else times[-1]
+        path = np.empty((len(times), 3))
+        for k, t in enumerate(times):
+            if t >= stop_at and stepper.stop is None:
+                stepper.request_stop()
+            path[k] = stepper.y
+            stepper.step(signal[k])
+        origin, rotation = self.frame(context, table_origin)
+        return TaskPlan(path, origin, rotation, {"beats": beats, "counted": counted, "stop_at": stop_at,
+                                                 "change_time": metronome.change_time})
+
+    # ------------------------------------------------------------------ judgement
+    def evaluate(self, path: ToolPath, context: DrumContext, sensor: Mapping[str, slice]) -> Outcome:
+        plan, steps, frame_skip = path.plan, path.steps, path.frame_skip
+        count = len(plan.path)
+        fine_dt = path.dt / frame_skip
+        live = path.sensors[: steps * frame_skip]
+        hit = live[:, sensor["drum_hit"]]
+        force = np.abs(hit[:, 1:4] @ plan.rotation[:, 2])
+        strikes = Strikes.from_force(force, fine_dt)
+        beats, counted = plan.extras["beats"], plan.extras["counted"]
+        score = score_beats(strikes, beats, self.tolerance, self.impulse_band) if beats.size >= 2 else None
+        touches = _touches(live, sensor, hit[:, 0])
+        bad_steps = np.zeros(count)
+        for column in touches.values():
+            bad_steps[: steps] += column.reshape(steps, frame_skip).any(axis=1)
+        speed = np.linalg.norm(np.diff(path.tip[:steps], axis=0), axis=1) / path.dt
+        window = max(1, round(_REST_WINDOW / path.dt))
+        end_speed = float(speed[-window:].max()) if steps == count and speed.size else np.inf
+        cost, terms = self._costs(score, strikes, counted, beats, bad_steps, end_speed, path, count)
+        n_counted = max(int(counted.sum()), 1)
+        struck = float(score.struck[counted].sum()) / n_counted if score is not None else 0.0
+        doubles = int(np.sum(score.count[counted] > 1)) if score is not None else 0
+        extra = score.extra if score is not None else len(strikes.onsets)
+        info = {"struck_fraction": struck, "n_beats": int(counted.sum()), "double_strikes": doubles,
+                "extra_strikes": int(extra), "end_speed": end_speed, "jerk_ratio": path.jerk_ratio,
+                "peak_joint_accel": path.peak_joint_accel, "tempo": context.tempo, "new_tempo": context.new_tempo,
+                "change_time": plan.extras["change_time"], "beat_times": beats, "counted_beats": counted,
+                "strike_times": strikes.onsets, "strike_impulses": strikes.impulses,
+                "timing_error": score.error if score is not None else np.full(len(beats), np.nan),
+                "force_trace": force, **{f"{name}_steps": int(column.any(axis=0).sum() if column.ndim > 1
+                                                              else column.sum()) for name, column in touches.items()}}
+        info["mean_abs_timing_error"] = float(np.nanmean(np.abs(info["timing_error"][counted]))) if (
+            score is not None and np.isfinite(info["timing_error"][counted]).any()) else np.nan
+        causes = self._causes(info, path)
+        return Outcome(terms, cost, info, causes)
+
+    def _costs(self, score: Any, strikes: Strikes, counted: np.ndarray, beats: np.ndarray, bad_steps: np.ndarray,
+               end_speed: float, path: ToolPath, count: int) -> tuple[np.ndarray, dict[str, float]]:
+        """The per-step cost ``[T]`` and the reward terms (each term's costs charged where it happens)."""
+        n_counted = max(int(counted.sum()), 1)
+        step_of = np.minimum((np.asarray(beats) / path.dt).astype(int), count - 1)
+        traces = {name: np.zeros(count) for name in ("timing", "impulse", "extra", "contact", "smooth", "rest")}
+        if score is None:
+            traces["timing"][-1] = 4.0
+        else:
+            error = np.nan_to_num(np.abs(score.error) / self.tolerance, nan=2.0)
+            miss = np.minimum(error**2, 4.0)
+            np.add.at(traces["timing"], step_of[counted], miss[counted] / n_counted)
+            surplus = np.maximum(score.count - 1, 0)
+            np.add.at(traces["extra"], step_of, surplus / n_counted)
+        strike_steps = np.minimum(strikes.first // path.frame_skip, count - 1)
+        low, high = self.impulse_band
+        outside = np.log(np.clip(strikes.impulses, 1e-6, None) / np.clip(strikes.impulses, low, high)) / np.log(2.0)
+        np.add.at(traces["impulse"], strike_steps, np.minimum(outside**2, 4.0) / n_counted)
+        if score is not None:
+            np.add.at(traces["extra"], strike_steps[score.strike_beat < 0], 1.0 / n_counted)
+        traces["contact"] = 0.05 * bad_steps
+        traces["smooth"][:] = (max(0.0, path.jerk_ratio - 1.0)
+                               + max(0.0, path.peak_joint_accel / path.max_joint_accel - 1.0)) / count
+        traces["rest"][-1] = min(end_speed / self.rest_speed, 10.0) * 0.1
+        cost = sum(traces.values())
+        return cost, {name: -float(trace.sum()) for name, trace in traces.items()}
+
+    def _causes(self, info: dict, path: ToolPath) -> tuple[str, ...]:
+        met = {"timing": info["struck_fraction"] >= 0.9,
+               "extra strike": info["double_strikes"] == 0 and info["extra_strikes"] == 0,
+               "rim": info["rim_steps"] == 0,
+               "drum contact": info["drum_steps"] == 0,
+               "arm collision": info["table_steps"] == 0,
+               "self-collision": info["self_steps"] == 0,
+               "joint acceleration": path.peak_joint_accel <= path.max_joint_accel,
+               "jerk": path.jerk_ratio <= self.max_jerk_ratio,
+               "rest": info["end_speed"] <= self.rest_speed}
+        return tuple(name for name, ok in met.items() if not ok)
+
+
+def _touches(live: np.ndarray, sensor: Mapping[str, slice], tip_found: np.ndarray) -> dict[str, np.ndarray]:
+    """Per physics step: the rim touched, any other part of the drum touched by anything but the tip on the membrane,
+    a robot geom on the table, the arm on the robot's own body (``{name: [N] bool}``)."""
+    own = [name for name in sensor if name.startswith("arm_")]
+    self_touch = (np.any(np.stack([live[:, sensor[name]][:, 0] > 0 for name in own]), axis=0) if own
+                  else np.zeros(len(live), dtype=bool))
+    return {"rim": live[:, sensor["robot_rim"]][:, 0] > 0,
+            "drum": live[:, sensor["robot_drum"]][:, 0] - tip_found > 0.5,
+            "table": live[:, sensor["robot_table"]][:, 0] > 0,
+            "self": self_touch}
