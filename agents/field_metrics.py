@@ -13,9 +13,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy import stats
 
-from .protocol import Interval
+from .protocol import Interval, iqm
 
 __all__ = ["curve_intervals", "performance_profile", "probability_of_improvement", "stratified_interval"]
 
@@ -33,10 +32,6 @@ def _scores(values: np.ndarray, name: str) -> np.ndarray:
     return scores
 
 
-def _iqm(scores: np.ndarray) -> float:
-    return float(stats.trim_mean(scores.ravel(), 0.25))
-
-
 def _resampled(scores: np.ndarray, statistic: Callable[[np.ndarray], np.ndarray | float], rng: np.random.Generator,
                resamples: int) -> np.ndarray:
     """``[B, ...]`` the statistic of ``B`` stratified bootstrap resamples of ``scores [R, M]``."""
@@ -48,10 +43,10 @@ def _resampled(scores: np.ndarray, statistic: Callable[[np.ndarray], np.ndarray 
 def stratified_interval(scores: np.ndarray, seed: int = 0, resamples: int = 2000) -> Interval:
     """IQM of all scores ``[R, M]`` (or ``[R]``) with a 95 % stratified percentile-bootstrap interval."""
     values = _scores(scores, "scores")
-    estimate = _iqm(values)
+    estimate = iqm(values)
     if values.shape[0] == 1 or np.ptp(values) == 0:
         return Interval(estimate, estimate, estimate, values.shape[0])
-    draws = _resampled(values, _iqm, np.random.default_rng(seed), resamples)
+    draws = _resampled(values, iqm, np.random.default_rng(seed), resamples)
     low, high = np.quantile(draws, [(1 - _CONFIDENCE) / 2, (1 + _CONFIDENCE) / 2])
     return Interval(estimate, float(low), float(high), values.shape[0])
 

@@ -3,9 +3,13 @@ install (and the ``plots`` extra for ``--plot``)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
-from collections.abc import Sequence
+import re
+import shutil
+import tempfile
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -16,11 +20,11 @@ import tyro
 
 from rdmp_gym import Demonstration, save_dmp
 from rdmp_gym.pose_io import read_pose_csv
-from rdmp_gym.recording_fit import fit_recording, recording_report
+from rdmp_gym.recording_fit import constant_columns, fit_recording, recording_report
 from rdmp_gym.segmentation.sessions import Session
 from rdmp_gym.signals import despike
 
-from .fit_pose import fit_pose_command
+from .fit_pose import constant_note, fit_pose_command
 from .fit_sessions import fit_joint_command, fit_pose_sessions_command, fit_sessions_command, several_sessions
 from .imitation import fit_dmp, load_demonstration
 
@@ -61,7 +65,11 @@ class FitCommand:
     plot: bool = False
     """write fit.png (recording vs reproduction: position and acceleration; needs the plots extra)"""
     out: str = "runs/fit"
-    """output directory"""
+    """output directory (refused when it already holds a fit: dmp*.json, report.json, fit*.png)"""
+    overwrite: bool = False
+    """replace a fit already in --out: once the new fit is written, the earlier fit's files it did not rewrite
+    (dmp-3.json of a recording with more sessions, ...) are removed; if the new fit fails, the earlier one is put
+    back"""
     verbose: bool = False
     """log progress details"""
 
@@ -77,6 +85,53 @@ def command_fit(argv: Sequence[str]) -> None:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     out = Path(args.out)
+    with _fit_directory(out, args.overwrite):
+        _fit(args, out)
+
+
+#: the files a fit writes into --out: dmp.json or dmp-K.json, report.json, fit.png or fit-K.png
+_FIT_FILE = re.compile(r"(dmp(-\d+)?\.json|report\.json|fit(-\d+)?\.png)")
+
+
+def _fit_files(out: Path) -> list[Path]:
+    """The files of a fit in ``out`` (none where it does not exist), by name."""
+    if not out.is_dir():
+        return []
+    return sorted(path for path in out.iterdir() if _FIT_FILE.fullmatch(path.name) and not path.is_dir())
+
+
+@contextlib.contextmanager
+def _fit_directory(out: Path, overwrite: bool) -> Iterator[None]:
+    """Refuse an ``out`` that already holds a fit unless ``overwrite``; with ``overwrite``, set the earlier fit's
+    files aside while the new fit is written, then remove them (or, if the new fit fails, remove what it wrote
+    and put them back)."""
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(f"out: {out} is a file, not a directory; choose another --out")
+    previous = _fit_files(out)
+    if previous and not overwrite:
+        shown = ", ".join(path.name for path in previous[:5]) + (", ..." if len(previous) > 5 else "")
+        raise FileExistsError(f"out: {out} already holds a fit ({shown}); pass --overwrite to replace it or choose "
+                              "another --out")
+    if not previous:
+        yield
+        return
+    aside = Path(tempfile.mkdtemp(prefix=".earlier-fit-", dir=out))
+    for path in previous:
+        path.rename(aside / path.name)
+    try:
+        yield
+    except BaseException:
+        for path in _fit_files(out):                # what the failed fit wrote
+            path.unlink()
+        for path in previous:
+            (aside / path.name).rename(path)
+        aside.rmdir()
+        raise
+    shutil.rmtree(aside)
+
+
+def _fit(args: FitCommand, out: Path) -> None:
+    """Fit as ``args`` say and write the fit into ``out``."""
     plots = _plots() if args.plot else None
     if args.demo:
         _fit_whole_recording(args, out, plots)
@@ -160,11 +215,16 @@ def _fit_one_rhythm(demo: Demonstration, hints: dict, out: Path, plots: ModuleTy
           f"{1000 * report['start_error']:.2f} mm, rest error {rest_error}; peak acceleration "
           f"{report['peak_acceleration']:.2f} m/s^2 vs {report['recording_peak_acceleration']:.2f} (smoothed "
           f"recording, x{report['acceleration_ratio']:.2f})")
+    constant = constant_columns(demo.Y)
+    if constant:
+        print(constant_note(constant))
     (out / "report.json").write_text(json.dumps({"period": seg.period, "rhythm_start": seg.rhythm_start,
                                                  "rhythm_end": seg.rhythm_end, "rest_time": seg.rest_time,
-                                                 "stop_at": result.stop_at, **report}, indent=2) + "\n")
+                                                 "stop_at": result.stop_at, **report, "constant_columns": constant},
+                                                indent=2) + "\n")
     print(f"wrote {out / 'dmp.json'} and {out / 'report.json'}")
     if plots is not None:
         plots.plot_recording_fit(demo.t - demo.t[0], demo.Y, result.reproduce, out / "fit.png",
                            title=f"{demo.name}: recording vs DMP")
         print(f"wrote {out / 'fit.png'}")
+

@@ -15,7 +15,7 @@ import numpy as np
 from rdmp_gym import Demonstration, save_dmp
 from rdmp_gym.pose import ORIENTATION_DIMS, PoseDemonstration
 from rdmp_gym.pose_fit import PoseFit
-from rdmp_gym.recording_fit import RecordingFit
+from rdmp_gym.recording_fit import RecordingFit, constant_columns
 from rdmp_gym.segmentation.sessions import Session, find_sessions
 from rdmp_gym.session_fit import SessionFit, fit_joint, fit_pose_sessions, fit_sessions, joint_report
 
@@ -71,14 +71,15 @@ def _write_session_fits(name: str, fits: list[SessionFit], out: Path, plots: Mod
         save_dmp(item.fit.dmp, path)
         fit = item.recording
         seg = fit.segmentation
+        positions = item.demo.Y[:, :item.demo.n_dims - ORIENTATION_DIMS] if pose else item.demo.Y
         rows.append({**row, "dmp": path.name, "period": seg.period, "rhythm_start": session.start + seg.rhythm_start,
-                     "rhythm_end": session.start + seg.rhythm_end, "stop_at": fit.stop_at, **report})
-        orientation = f" {report['orientation_error_ratio']:13.2f} {report['angular_acceleration_ratio']:16.2f}" \
-            if pose else ""
+                     "rhythm_end": session.start + seg.rhythm_end, "stop_at": fit.stop_at, **report,
+                     "constant_columns": constant_columns(positions)})
+        orientation = "" if not pose else f" {'constant':>13} {'-':>16}" if report["orientation_constant"] else \
+            f" {report['orientation_error_ratio']:13.2f} {report['angular_acceleration_ratio']:16.2f}"
         print(f"{k:>7} {span} {seg.period:10.3f} {report['error_ratio']:11.2f} {report['acceleration_ratio']:11.2f}"
               f"{orientation}  {path.name}")
         if plots is not None:
-            positions = item.demo.Y[:, :item.demo.n_dims - ORIENTATION_DIMS] if pose else item.demo.Y
             plots.plot_recording_fit(item.demo.t - item.demo.t[0], positions, _reproduce(item.fit),
                                      out / f"fit-{k}.png", title=f"{name}, session {k}: recording vs DMP")
     (out / "report.json").write_text(json.dumps({"sessions": rows}, indent=2) + "\n")

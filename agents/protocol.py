@@ -144,8 +144,8 @@ def evaluate_actions(evaluator: Any, actions: np.ndarray, seeds: np.ndarray, ref
 
 
 def iqm(values: np.ndarray) -> float:
-    """Interquartile mean of ``values [N]`` (the mean of the middle 50 %)."""
-    return float(stats.trim_mean(np.asarray(values, dtype=np.float64), 0.25))
+    """Interquartile mean of ``values [N]`` (the mean of the middle 50 %; of all of them for ``[R, M]``)."""
+    return float(stats.trim_mean(np.asarray(values, dtype=np.float64).ravel(), 0.25))
 
 
 @dataclass(frozen=True)

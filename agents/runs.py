@@ -42,7 +42,7 @@ import numpy as np
 
 from .state_files import decode, encode
 
-__all__ = ["CHECKPOINT_FORMAT", "RunDirectory", "RunLockedError", "write_atomic"]
+__all__ = ["CHECKPOINT_FORMAT", "RunDirectory", "RunLockedError", "sha256_file", "write_atomic"]
 
 logger = logging.getLogger(__name__)
 
@@ -72,7 +72,8 @@ def _json_bytes(document: Any) -> bytes:
     return (json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n").encode()
 
 
-def _sha256(path: Path) -> str:
+def sha256_file(path: Path) -> str:
+    """The SHA-256 of the file at ``path`` (hex), read in blocks of 1 MiB."""
     digest = hashlib.sha256()
     with path.open("rb") as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
@@ -298,7 +299,7 @@ class RunDirectory:
             target = self.path / f"checkpoint-{update}-{key}{suffix}"
             write_atomic(target, blob)
             files[key] = target.name
-        hashes = {name: _sha256(self.path / name) for name in files.values()}
+        hashes = {name: sha256_file(self.path / name) for name in files.values()}
         document = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, "update": update,
                     "files": files, "sha256": hashes, "state": tree}
         write_atomic(self.checkpoint_path, _json_bytes(document))
@@ -332,7 +333,7 @@ class RunDirectory:
             path = self.path / name
             if not path.exists():
                 raise ValueError(f"{path}: missing (named by checkpoint.json); {redo}")
-            if _sha256(path) != hashes.get(name):
+            if sha256_file(path) != hashes.get(name):
                 raise ValueError(f"{path}: does not match the sha256 in checkpoint.json (changed or torn); {redo}")
         try:
             with np.load(self.path / files["arrays"], allow_pickle=False) as archive:

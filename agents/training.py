@@ -14,7 +14,6 @@ is done by callbacks (:mod:`rdmp_gym.agents.callbacks`).
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import platform
 import subprocess
@@ -36,7 +35,7 @@ from .plots import plot_learning_curve
 from .pool import Evaluator
 from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
 from .registry import agent_spec
-from .runs import RunDirectory, write_atomic
+from .runs import RunDirectory, sha256_file, write_atomic
 from .train_config import AGENTS, Agent, TrainConfig
 
 __all__ = ["AGENTS", "ESAgent", "NoValidEpisodesError", "TrainConfig", "environment_record", "load_run_config",
@@ -164,10 +163,6 @@ def environment_record() -> dict[str, Any]:
             "python": platform.python_version(), "packages": versions, "rdmp_gym": _git_commit()}
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 def load_run_config(run: RunDirectory | str | Path) -> TrainConfig:
     """The configuration of a run directory, with its demonstration resolved to the run's own copy.
 
@@ -185,7 +180,7 @@ def load_run_config(run: RunDirectory | str | Path) -> TrainConfig:
     if not demo.exists():
         raise FileNotFoundError(f"demo: {demo} (named by {run.config_path}) is missing")
     expected = run.read_provenance().get("demo", {}).get("sha256")
-    if expected is not None and _sha256(demo) != expected:
+    if expected is not None and sha256_file(demo) != expected:
         raise ValueError(f"demo: {demo} changed since the run started (sha256 differs from provenance.json); "
                          "restore it or start a new run")
     return replace(config, demo=str(demo))
@@ -216,7 +211,7 @@ def _resumed_config(run: RunDirectory, config: TrainConfig | None, changes: Mapp
         if key == "demo" and value and current:
             if not Path(value).exists():
                 raise FileNotFoundError(f"demo: {value} does not exist")
-            same = _sha256(Path(value)) == _sha256(Path(current))
+            same = sha256_file(Path(value)) == sha256_file(Path(current))
         else:
             same = value == current
         if not same:
@@ -235,7 +230,7 @@ def _start_files(run: RunDirectory, config: TrainConfig) -> TrainConfig:
         load_demonstration(str(source))                  # a clear error for a missing or broken file
         copy = run.path / f"demo{source.suffix.lower()}"
         write_atomic(copy, source.read_bytes())
-        provenance["demo"] = {"source": str(source), "copy": copy.name, "sha256": _sha256(copy)}
+        provenance["demo"] = {"source": str(source), "copy": copy.name, "sha256": sha256_file(copy)}
         stored = replace(config, demo=copy.name)
     run.write_provenance(provenance)
     return stored

@@ -22,7 +22,7 @@ from . import quaternion
 from .demonstrations import Demonstration
 from .dmp import RhythmicDMP
 from .pose import Pose, PoseDemonstration, PoseDMP
-from .recording_fit import ACCELERATION_SMOOTHING, RecordingFit, fit_recording, recording_report
+from .recording_fit import ACCELERATION_SMOOTHING, RecordingFit, constant_columns, fit_recording, recording_report
 from .signals import smooth_derivatives
 
 __all__ = ["PoseFit", "fit_pose_recording", "pose_report", "smoothed_peak_angular_acceleration"]
@@ -63,7 +63,7 @@ def _part(result: RecordingFit, dmp: RhythmicDMP) -> RecordingFit:
     return RecordingFit(dmp=dmp, segmentation=result.segmentation, stop_at=result.stop_at)
 
 
-def pose_report(pose: PoseDemonstration, result: PoseFit) -> dict[str, float | None]:
+def pose_report(pose: PoseDemonstration, result: PoseFit) -> dict[str, float | bool | None]:
     """How well ``result`` reproduces ``pose``: the keys of :func:`~rdmp_gym.recording_fit.recording_report` for
     the position, and for the orientation (degrees, deg/s^2):
 
@@ -71,8 +71,10 @@ def pose_report(pose: PoseDemonstration, result: PoseFit) -> dict[str, float | N
     variation, the cycle error and their ratio, in the tangent coordinates), ``orientation_rmse`` (the angle
     between reproduced and recorded orientation over the rhythm), ``orientation_start_error``,
     ``orientation_rest_error`` (``None`` without a final rest), ``peak_angular_acceleration``,
-    ``recording_peak_angular_acceleration`` (Savitzky-Golay smoothed over the same window as the position's) and
-    ``angular_acceleration_ratio``.
+    ``recording_peak_angular_acceleration`` (Savitzky-Golay smoothed over the same window as the position's),
+    ``angular_acceleration_ratio`` and ``orientation_constant`` (whether the recorded orientation never changes, as
+    a tool held level: the DMP holds it in its anchor; its variation is then 0 and its error the reproduction's
+    turning about its mean over the rhythm, see :func:`~rdmp_gym.recording_fit.recording_report`).
     """
     fitted = result.recording
     report = recording_report(pose.position, _part(fitted, result.dmp.position))
@@ -90,7 +92,8 @@ def pose_report(pose: PoseDemonstration, result: PoseFit) -> dict[str, float | N
                   orientation_start_error=float(np.degrees(tangent["start_error"])),
                   orientation_rest_error=None if seg.rest_time is None else float(np.mean(angles[t >= seg.rest_time])),
                   peak_angular_acceleration=peak, recording_peak_angular_acceleration=recorded_peak,
-                  angular_acceleration_ratio=peak / max(recorded_peak, 1e-12))
+                  angular_acceleration_ratio=peak / max(recorded_peak, 1e-12),
+                  orientation_constant=len(constant_columns(pose.tangent.Y)) == pose.tangent.n_dims)
     return report
 
 

@@ -46,8 +46,8 @@ from .stopping import fit_stop
 from .sweep import Sweep
 from .validation import check_positive
 
-__all__ = ["ACCELERATION_SMOOTHING", "ENTRY_PERIODS", "SMOOTHNESS", "RecordingFit", "cycle_figures", "fit_recording",
-           "normalise_tempo", "recording_report"]
+__all__ = ["ACCELERATION_SMOOTHING", "CONSTANT_RANGE", "ENTRY_PERIODS", "SMOOTHNESS", "RecordingFit",
+           "constant_columns", "cycle_figures", "fit_recording", "normalise_tempo", "recording_report"]
 
 logger = logging.getLogger(__name__)
 
@@ -58,6 +58,10 @@ _VIA_SPACING = 0.5          # s: the longest time between the anchor's via point
 _PHASE_POINTS = 64          # samples per cycle when cycles are compared
 #: s: the Savitzky-Golay window of the recording's acceleration (and of a pose recording's angular acceleration)
 ACCELERATION_SMOOTHING = 0.15
+CONSTANT_RANGE = 1e-12
+"""A column of a recording whose range (largest minus smallest sample) is at most this, relative to its largest
+magnitude where that exceeds 1, is constant (:func:`constant_columns`): rounding, not motion (an orientation held
+level, written as the same quaternion with either sign, has tangent coordinates equal to ~1e-16)."""
 SMOOTHNESS = 1.0
 """Weight smoothness of the fits: a person's entry into the rhythm has corners that 0.3 (RhythmicDMP.fit's default)
 follows with up to 1.7x the recording's peak acceleration."""
@@ -281,6 +285,10 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     ``start_error`` (at the first sample), ``rest_error`` (mean over the final rest; ``None`` without one),
     ``peak_acceleration``, ``recording_peak_acceleration`` (Savitzky-Golay over ``ACCELERATION_SMOOTHING`` s) and
     ``acceleration_ratio``.
+
+    A recording of which no column moves (:func:`constant_columns`: an orientation held level) has no cycles: its
+    ``cycle_variation`` is 0 and its ``cycle_error`` the RMS of the reproduction's motion about its mean over the
+    rhythm (0 when the DMP holds it still, as its anchor does).
     """
     seg = result.segmentation
     t = demo.t - demo.t[0]
@@ -289,8 +297,11 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
     fine = np.arange(0.0, t[-1], 1e-3)
     acceleration = np.diff(result.reproduce(fine), 2, axis=0) / 1e-6
     recorded = smooth_derivatives(demo.Y, demo.dt, ACCELERATION_SMOOTHING)[2]
-    variation, error = cycle_figures(t, demo.Y - slow, reproduction - slow, seg.period, seg.rhythm_start,
-                                     seg.rhythm_end)
+    if len(constant_columns(demo.Y)) == demo.n_dims:    # nothing moves: no cycles to cut (the anchor holds it)
+        variation, error = 0.0, _still_error(t, reproduction, seg.rhythm_start, seg.rhythm_end)
+    else:
+        variation, error = cycle_figures(t, demo.Y - slow, reproduction - slow, seg.period, seg.rhythm_start,
+                                         seg.rhythm_end)
     rhythm = (t >= seg.rhythm_start) & (t <= seg.rhythm_end)
     peak, recorded_peak = (float(np.max(np.linalg.norm(a, axis=1))) for a in (acceleration, recorded))
     rest = t >= seg.rest_time if seg.rest_time is not None else np.zeros(t.size, bool)
@@ -301,6 +312,22 @@ def recording_report(demo: Demonstration, result: RecordingFit) -> dict[str, flo
             else None,
             "peak_acceleration": peak, "recording_peak_acceleration": recorded_peak,
             "acceleration_ratio": peak / max(recorded_peak, 1e-12)}
+
+
+def constant_columns(Y: np.ndarray) -> list[int]:
+    """The indices of the columns of ``Y [L, d]`` that never change (range within :data:`CONSTANT_RANGE`): a
+    channel the recorder held still, which the fit encodes in the anchor alone."""
+    Y = np.asarray(Y, dtype=np.float64)
+    Y = Y[:, None] if Y.ndim == 1 else Y
+    limit = CONSTANT_RANGE * np.maximum(np.max(np.abs(Y), axis=0), 1.0)
+    return [int(k) for k in np.flatnonzero(np.ptp(Y, axis=0) <= limit)]
+
+
+def _still_error(t: np.ndarray, reproduction: np.ndarray, start: float, end: float) -> float:
+    """The cycle error against a recording that does not move between ``start`` and ``end`` (s, on ``t``): its cycles
+    are all its mean, so the error is the RMS of the reproduction's motion about its own mean there."""
+    inside = reproduction[(t >= start) & (t <= end)]
+    return float(np.sqrt(np.mean(np.sum((inside - inside.mean(axis=0)) ** 2, axis=1))))
 
 
 def cycle_figures(t: np.ndarray, recorded: np.ndarray, reproduced: np.ndarray, period: float, start: float,

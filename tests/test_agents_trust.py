@@ -81,7 +81,7 @@ def test_an_object_array_in_the_checkpoint_npz_is_refused(tmp_path):
     arrays["a0"] = np.array([_Payload(tmp_path / "ran")], dtype=object)
     with npz.open("wb") as handle:
         np.savez(handle, **arrays)
-    document["sha256"][npz.name] = runs_module._sha256(npz)       # a consistent, crafted checkpoint
+    document["sha256"][npz.name] = runs_module.sha256_file(npz)       # a consistent, crafted checkpoint
     run.checkpoint_path.write_text(json.dumps(document))
     with pytest.raises(ValueError, match=r"checkpoint-1.npz: unreadable"):
         run.load_checkpoint()
@@ -285,7 +285,7 @@ def test_a_ppo_checkpoint_is_sb3s_zip_of_which_only_the_weights_are_read(tmp_pat
                 data = json.dumps({**json.loads(data), "evil": {":type:": "x", ":serialized:": payload}}).encode()
             target.writestr(name, data)
     model.write_bytes(rewritten.getvalue())
-    document["sha256"][model.name] = runs_module._sha256(model)
+    document["sha256"][model.name] = runs_module.sha256_file(model)
     run.checkpoint_path.write_text(json.dumps(document))
     last = evaluate_run(run.path, 1, policy="last")
     assert last["trained"]["return_mean"] is not None

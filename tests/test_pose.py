@@ -127,3 +127,34 @@ def test_the_command_fits_a_pose_csv_and_names_bad_columns(tmp_path, capsys):
     np.savetxt(path, rows, delimiter=",", header="t,x,y,z,qw,qx,qy,qz", comments="")
     assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "bad")]) == 2
     assert "orientations: row 10 has norm 0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("held", [[1.0, 0.0, 0.0, 0.0], [0.6, -0.2, 0.7, 0.3]], ids=["identity", "tilted"])
+def test_a_constant_orientation_fits_as_the_anchor_and_the_report_says_so(wiping, held):
+    """A controller's log of a tool held level: the same quaternion on every row (with either sign)."""
+    recording, varying, varying_fit = wiping
+    q = np.asarray(held) / np.linalg.norm(held)
+    signs = np.where(np.random.default_rng(3).random(recording.t.size) < 0.5, -1.0, 1.0)[:, None]
+    pose = PoseDemonstration.from_samples(recording.t, recording.Y, q * signs, name="held")
+    result = fit_pose_recording(pose)
+    report = pose_report(pose, result)
+    assert report["orientation_constant"] and not pose_report(varying, varying_fit)["orientation_constant"]
+    assert report["orientation_variation"] == 0.0 and report["orientation_error"] < 1e-9
+    t = np.arange(0.0, pose.demo.t[-1] - pose.demo.t[0], 0.01)
+    assert np.degrees(quaternion.angle_between(result.reproduce(t).orientation, q)).max() < 1e-9
+    assert np.abs(result.dmp.tangent.weights).max() < 1e-12        # the anchor alone holds it
+    varied = pose_report(varying, varying_fit)        # the orientation does not touch the position's fit
+    position = [key for key in varied if "orientation" not in key and "angular" not in key]
+    assert "cycle_variation" in position and all(report[key] == varied[key] for key in position)
+
+
+def test_the_command_fits_a_pose_csv_with_a_constant_orientation(tmp_path, capsys):
+    recording = realistic_pose_recording("wiping", rng=np.random.default_rng(1))
+    path = tmp_path / "held.csv"
+    np.savetxt(path, np.column_stack([recording.t, recording.Y, np.tile([1.0, 0.0, 0.0, 0.0], (recording.t.size, 1))]),
+               delimiter=",", header="t,x,y,z,qw,qx,qy,qz", comments="")
+    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "out")]) == 0
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["orientation_constant"] and report["error_ratio"] < 1.5
+    assert "orientation: constant" in capsys.readouterr().out
+    assert isinstance(load_dmp(tmp_path / "out" / "dmp.json"), PoseDMP)

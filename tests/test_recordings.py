@@ -1,10 +1,13 @@
 """Realistic recordings, their segmentation and the whole-recording fit."""
 
+import json
+
 import numpy as np
 import pytest
+from rdmp_gym.agents.cli import main as cli_main
 
 from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.recording_fit import _cycle_cuts, fit_recording, recording_report
+from rdmp_gym.recording_fit import _cycle_cuts, constant_columns, fit_recording, recording_report
 from rdmp_gym.segmentation import segment_ending, segment_rhythm
 from rdmp_gym.signals import despike
 from rdmp_gym.synthetic import realistic_recording
@@ -120,3 +123,23 @@ def test_report_without_a_final_rest_has_no_rest_error() -> None:
     assert result.segmentation.rest_time is None and result.dmp.ending is None
     assert report["rest_error"] is None
     assert report["error_ratio"] < 1.5 and report["acceleration_ratio"] < 1.5
+
+
+
+def test_a_constant_column_is_held_by_the_anchor_and_named_in_the_report(tmp_path, capsys) -> None:
+    """A height a controller holds (the same z on every row) fits beside the moving columns; the report names it."""
+    recording, moving = _recording("wiping")
+    held = recording.Y.copy()
+    held[:, 2] = 0.8125
+    demo = to_demonstration(recording.t, held)
+    assert constant_columns(demo.Y) == [2] and constant_columns(moving.Y) == []
+    result = fit_recording(demo)
+    report = recording_report(demo, result)
+    assert report["error_ratio"] < 1.5 and report["acceleration_ratio"] < 1.5
+    assert np.abs(result.reproduce(np.arange(0.0, demo.duration, 0.01))[:, 2] - 0.8125).max() < 1e-9
+    path = tmp_path / "held.csv"
+    np.savetxt(path, np.column_stack([recording.t, held]), delimiter=",", header="t,x,y,z", comments="")
+    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
+    assert json.loads((tmp_path / "fit" / "report.json").read_text())["constant_columns"] == [2]
+    assert "constant: dimension(s) 2" in capsys.readouterr().out
+    assert constant_columns(np.column_stack([np.full(50, 0.3), np.linspace(0.0, 1e-3, 50)])) == [0]

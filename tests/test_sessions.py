@@ -9,6 +9,7 @@ from rdmp_gym.agents.cli import main as cli_main
 
 from rdmp_gym import load_dmp, quaternion
 from rdmp_gym.demonstrations import Demonstration, to_demonstration
+from rdmp_gym.pose_io import write_pose_csv
 from rdmp_gym.recording_fit import recording_report
 from rdmp_gym.segmentation import segment_rhythm
 from rdmp_gym.segmentation.sessions import find_sessions
@@ -193,3 +194,17 @@ def test_cli_fits_each_session_of_a_pose_recording(pose_sessions, tmp_path) -> N
             == (200, 4)
     joint = ["fit", "--demo", str(path), "--sessions", "joint", "--out", str(tmp_path / "joint")]
     assert cli_main(joint) == 2 and not (tmp_path / "joint").exists()
+
+
+def test_cli_fits_each_session_of_a_pose_recording_held_level(pose_sessions, tmp_path, capsys) -> None:
+    """The same quaternion on every row (a tool held level): every session fits, its orientation named constant."""
+    path = tmp_path / "held.csv"
+    write_pose_csv(path, pose_sessions.t, pose_sessions.Y, np.tile([0.0, 1.0, 0.0, 0.0], (pose_sessions.t.size, 1)))
+    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
+    rows = json.loads((tmp_path / "fit" / "report.json").read_text())["sessions"]
+    assert len(rows) == 2 and all("error" not in row for row in rows)
+    for row in rows:
+        assert row["orientation_constant"] and row["orientation_variation"] == 0.0 and row["error_ratio"] <= 1.5
+        held = load_dmp(tmp_path / "fit" / row["dmp"]).rollout(np.arange(0.0, 2.0, 0.01)).orientation
+        assert np.degrees(quaternion.angle_between(held, [0.0, 1.0, 0.0, 0.0])).max() < 1e-9
+    assert "constant" in capsys.readouterr().out
