@@ -2,8 +2,8 @@
 
 Each entry is a SHA-256 of the exact bytes of a result: the fitted DMPs of the built-in demonstrations (the
 library's defaults and the settings the environments pin), episodic returns and infos of the published task
-versions (v1, v2, v2 with the cup clearance, v3 on both robots, the step twins) on fixed reset seeds and actions, and short
-learner runs (a few updates of every learner, one worker).
+versions (v1, v2, v2 with the cup clearance, v3 on both robots, the step twins) on fixed reset seeds and actions,
+and short learner runs (a few updates of every learner, one worker).
 
     python benchmarks/bit_for_bit.py --out runs/bit_for_bit.json            # write the digests
     python benchmarks/bit_for_bit.py --check benchmarks/results/bit_for_bit.json   # compare, exit 1 on a change

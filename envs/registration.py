@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import gymnasium as gym
 
+from .tasks import TASKS
+
 __all__ = [
     "DEPRECATED_ENV_ID",
     "ENV_ID",
@@ -18,11 +20,14 @@ __all__ = [
     "LATEST_STEP_ID",
     "PANDA_ID_V3",
     "PANDA_STEP_ID_V3",
+    "ROBOT_ID_NAMES",
     "STEP_ID",
     "STEP_ID_V2",
     "STEP_ID_V3",
     "TRACKING_ID",
     "register_envs",
+    "register_task_ids",
+    "task_ids",
 ]
 
 #: The wiping task's first version (the pattern loops in place at the patch centre).
@@ -45,6 +50,11 @@ DEPRECATED_ENV_ID = "rdmp_gym/ArmarWipe-v0"
 #: Tracking a target rhythm with the DMP (no MuJoCo).
 TRACKING_ID = "rdmp_gym/DMPTracking-v0"
 
+#: robot registry name -> its part of an env id (``rdmp_gym/{Robot}{Task}-v{N}``)
+ROBOT_ID_NAMES: dict[str, str] = {"armar3": "Armar", "panda": "Panda"}
+
+_RHYTHMIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
+_RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
 _WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
 _STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
 _STEP_TWIN = "rdmp_gym.envs.step_twin:WipeStepEnv"
@@ -64,8 +74,32 @@ _SPECS: dict[str, tuple[str, dict]] = {
 }
 
 
+def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:
+    """The episodic and the step id of a task of the rhythmic face on a robot, e.g. ``("rdmp_gym/ArmarDrum-v1",
+    "rdmp_gym/ArmarDrumStep-v1")`` for ``("drum", "armar3", 1)``."""
+    name = f"{ROBOT_ID_NAMES.get(robot, robot.capitalize())}{TASKS[task].id_name}"
+    return f"rdmp_gym/{name}-v{version}", f"rdmp_gym/{name}Step-v{version}"
+
+
+def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)) -> list[str]:
+    """Register the ids of ``task`` (a name in :data:`rdmp_gym.envs.tasks.TASKS`) on ``robots`` (registered robot
+    names) for each of its versions; returns the episodic ids."""
+    ids = []
+    for robot in robots:
+        for version in TASKS[task].versions:
+            episodic, step = task_ids(task, robot, version)
+            kwargs = {"task": task, "robot": robot, "version": version}
+            for env_id, entry_point in ((episodic, _RHYTHMIC), (step, _RHYTHMIC_STEP)):
+                if env_id not in gym.registry:
+                    gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)
+            ids.append(episodic)
+    return ids
+
+
 def register_envs() -> None:
     """Register every rdmp-gym id with Gymnasium (ids already registered are left as they are)."""
     for env_id, (entry_point, kwargs) in _SPECS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)
+    for task in TASKS:
+        register_task_ids(task)

@@ -57,6 +57,7 @@ class RhythmicTaskEnv(gym.Env):
     Args:
         task: a registered task name (``"drum"``) or a :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
         robot: a registered robot name (``"armar3"``, ``"panda"``) or a ``RobotDescription``.
+        version: the task's version (one of its ``versions``; ``gym.make`` of an id sets it).
         render_mode: ``None`` or ``"rgb_array"``; width, height, camera: of the rendered frames.
         frame_stride: :meth:`record_episode` keeps a frame every this many control steps.
         **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``).
@@ -65,11 +66,15 @@ class RhythmicTaskEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
 
     def __init__(self, task: str | TaskDescription = "drum", robot: str | RobotDescription = "armar3",
-                 render_mode: str | None = None, width: int = 480, height: int = 360, camera: str = "front",
-                 frame_stride: int = 4, **task_settings: Any):
+                 version: int = 1, render_mode: str | None = None, width: int = 480, height: int = 360,
+                 camera: str = "front", frame_stride: int = 4, **task_settings: Any):
         super().__init__()
         self.task: TaskDescription = get_task(task, **task_settings)
         self.robot: RobotDescription = get_robot(robot)
+        if version not in self.task.versions:
+            raise ValueError(f"version: the task {self.task.name!r} has the versions {list(self.task.versions)}, "
+                             f"got {version!r}")
+        self.version = version
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode

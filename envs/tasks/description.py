@@ -24,14 +24,16 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import mujoco
 import numpy as np
 
-from rdmp_gym import RhythmicDMP
+if TYPE_CHECKING:          # the registry imports this module without MuJoCo (string entry points)
+    import mujoco
 
-from ..robots import RobotDescription
+    from rdmp_gym import RhythmicDMP
+
+    from ..robots import RobotDescription
 
 __all__ = ["Outcome", "TaskDescription", "TaskPlan", "ToolPath"]
 
@@ -159,6 +161,11 @@ class TaskDescription(ABC):
     def evaluate(self, path: ToolPath, context: Any, sensor: Mapping[str, slice]) -> Outcome:
         """The reward terms, cost trace, info and failure causes of an executed episode; ``sensor`` maps the
         scene's sensor names to their columns of ``path.sensors``."""
+
+    def cue(self, context: Any, times: np.ndarray) -> np.ndarray:
+        """What the task signals to the robot at the control times ``times [T]`` (a step-based policy observes it;
+        default: nothing, zeros)."""
+        return np.zeros(len(times))
 
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         """The box ``(low [3], high [3])`` of the table frame the tool tip may be commanded in."""

@@ -102,6 +102,10 @@ class DrumTask(TaskDescription):
         centre, _ = self.frame(context, model.body_pos[table])
         place_drum(model, centre, context.drum_tilt, context.drum_height)
 
+    def cue(self, context: DrumContext, times: np.ndarray) -> np.ndarray:
+        """The metronome's beat signal ``[T]`` (what a step-based policy hears)."""
+        return self.metronome(context).signal(times)
+
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         low, high = robot.workspace
         return low, np.r_[high[:2], high[2] + 0.15]       # the stick reaches above the sponge's box
