@@ -201,14 +201,29 @@ class RhythmicTaskEnv(gym.Env):
         return self.task.plan(self.dmp, np.asarray(theta, dtype=np.float64), np.asarray(extras, dtype=np.float64),
                               self.context, self.times, self.scene.table_origin)
 
+    def run_path(self, path: np.ndarray) -> tuple[float, dict]:
+        """Execute a given tool path ``[T, 3]`` (task frame, m) in this episode's context, bypassing the DMP (for
+        tests and hand-made motions: standing still, pressing, ...), judged as the task judges ``step``. Returns
+        (reward, info)."""
+        if self.context is None:
+            raise RuntimeError("call reset() before run_path()")
+        path = np.asarray(path, dtype=np.float64)
+        if path.shape != (self.n_steps, 3):
+            raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
+        plan = self._imitation_plan
+        given = TaskPlan(path, plan.origin, plan.rotation, plan.extras)
+        return self._execute(given, {"params": None, "extras": None})
+
     def _solve(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
         """The joint path of ``world [T, 3]``, the tool's axis along the task frame's z (converged: a rhythmic
         path's joint accelerations are what the success criteria judge)."""
         return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS)
 
     def _evaluate(self, theta: np.ndarray, extras: np.ndarray) -> tuple[float, dict]:
-        info: dict[str, Any] = {"params": theta.copy(), "extras": extras.copy()}
-        plan = self.plan(theta, extras)
+        return self._execute(self.plan(theta, extras), {"params": theta.copy(), "extras": extras.copy()})
+
+    def _execute(self, plan: TaskPlan, info: dict[str, Any]) -> tuple[float, dict]:
+        """Check, simulate and judge a plan (see the module docstring, steps 3 to 5)."""
         if not np.all(np.isfinite(plan.path)):
             return self._invalid(info, "nonfinite_path", 1.0)
         world = plan.world()

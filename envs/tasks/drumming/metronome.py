@@ -69,8 +69,10 @@ class Metronome:
     @classmethod
     def changing_at_beat(cls, tempo: float, new_tempo: float, near: float, start_phase: float,
                          strike_phase: float) -> Metronome:
-        """A metronome whose tempo changes at the beat (of the first tempo) nearest to ``near`` (s)."""
+        """A metronome whose tempo changes at the beat (of the first tempo) nearest to ``near`` (s; inf: never)."""
         steady = cls(tempo, tempo, np.inf, start_phase, strike_phase)
+        if not np.isfinite(near):
+            return steady
         beats = steady.beats(near + 60.0 / tempo)
         change = float(beats[np.argmin(np.abs(beats - near))])
         return cls(tempo, new_tempo, change, start_phase, strike_phase)

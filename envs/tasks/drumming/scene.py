@@ -22,11 +22,13 @@ from ...arena import FORCE, FOUND, NETFORCE, add_contact_sensor
 from ...robots import RobotDescription
 from ...scene import rotation_from_tilt
 
-__all__ = ["MEMBRANE_RADIUS", "RIM_HEIGHT", "STICK_LENGTH", "add_drum", "add_stick", "place_drum"]
+__all__ = ["DRUM_PREFIX", "MEMBRANE_RADIUS", "RIM_HEIGHT", "STICK_LENGTH", "add_drum", "add_stick", "place_drum"]
 
 STICK_LENGTH = 0.12
 MEMBRANE_RADIUS = 0.10
 RIM_HEIGHT = 0.006
+#: the drum's names in the scene start with this
+DRUM_PREFIX = "drum/"
 _RIM_PIECES = 16
 _SHELL_DEPTH = 0.08
 
@@ -59,7 +61,7 @@ def _drum_xml() -> str:
     return f"""
 <mujoco model="drum">
   <worldbody>
-    <body name="drum" pos="0.6 -0.28 1.0">
+    <body name="body" pos="0.6 -0.28 1.0">
       <geom name="membrane" type="cylinder" size="{MEMBRANE_RADIUS} 0.003" pos="0 0 -0.003" contype="1"
             conaffinity="2" solref="0.004 0.3" solimp="0.9 0.95 0.002" friction="0.3 0.005 0.0001"
             rgba="0.96 0.94 0.86 1"/>
@@ -84,23 +86,24 @@ def add_stick(spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, t
 def add_drum(spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
     """Add the drum to the room and the drumming sensors (see the module docstring)."""
     drum = mujoco.MjSpec.from_string(_drum_xml())
-    spec.attach(drum, frame=spec.worldbody.add_frame(), prefix="")
+    spec.attach(drum, frame=spec.worldbody.add_frame(), prefix=DRUM_PREFIX)
     geom, subtree = mujoco.mjtObj.mjOBJ_GEOM, mujoco.mjtObj.mjOBJ_XBODY
-    add_contact_sensor(spec, "drum_hit", (geom, tool_prefix + "tip"), (geom, "membrane"), FOUND | FORCE, NETFORCE)
+    add_contact_sensor(spec, "drum_hit", (geom, tool_prefix + "tip"), (geom, DRUM_PREFIX + "membrane"),
+                       FOUND | FORCE, NETFORCE)
     root = (subtree, robot_prefix + robot.root_body)
-    add_contact_sensor(spec, "robot_drum", root, (subtree, "drum"), FOUND)
-    add_contact_sensor(spec, "robot_rim", root, (subtree, "rim"), FOUND)
+    add_contact_sensor(spec, "robot_drum", root, (subtree, DRUM_PREFIX + "body"), FOUND)
+    add_contact_sensor(spec, "robot_rim", root, (subtree, DRUM_PREFIX + "rim"), FOUND)
 
 
 def place_drum(model: mujoco.MjModel, centre: np.ndarray, tilt: np.ndarray, height: float) -> None:
     """Move the drum: its membrane's centre to ``centre [3]`` (world), its axis tilted by ``tilt`` (roll, pitch; rad,
     as a table tilt), its stand reaching ``height`` (m) down to the table."""
-    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "drum")
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, DRUM_PREFIX + "body")
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, rotation_from_tilt(*tilt).ravel())
     model.body_pos[body] = centre
     model.body_quat[body] = quat
-    stand = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "stand")
+    stand = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, DRUM_PREFIX + "stand")
     length = max(0.5 * (height - _SHELL_DEPTH - 0.006), 0.005)
     model.geom_size[stand, 1] = length
     model.geom_pos[stand, 2] = -(_SHELL_DEPTH + 0.006 + length)

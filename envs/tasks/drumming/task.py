@@ -7,7 +7,7 @@ the announced tempo): when the tempo changes, the DMP adapts without a re-plan. 
 to stop and its stop transient brings the stick to rest.
 
 Action (after the DMP's groups ``periodic``, ``transient``, ``amplitude``, ``stop``): ``coupling`` (the
-oscillator's gain ``K = 2 * 4**a``, 1/s), ``phase_gain`` (``k_phi = 2 * 4**a``, 1/s) and ``phase`` (the beat
+oscillator's gain ``K = 2 * 4**(1.5 a)``, 1/s), ``phase_gain`` (``k_phi = 2 * 4**(1.5 a)``, 1/s) and ``phase`` (the beat
 signal's shift, ``0.6 a`` rad: strike earlier or later than the beat).
 
 Beats: those after the transient up to 2.6 s before the end; the first two are a warm-up, and the first beat at the
@@ -65,7 +65,7 @@ class DrumTask(TaskDescription):
     versions = (1,)
     groups = ("periodic", "transient", "amplitude", "stop")
     scales: Mapping[str, float] = {"periodic": 0.1, "transient": 0.1, "amplitude": 0.5, "stop": 0.1}
-    extras: Mapping[str, float] = {"coupling": 1.0, "phase_gain": 1.0, "phase": 0.6}
+    extras: Mapping[str, float] = {"coupling": 1.5, "phase_gain": 1.5, "phase": 0.6}
     duration = 10.0
     control_rate = 100.0
 
@@ -233,8 +233,9 @@ class DrumTask(TaskDescription):
         if score is not None:
             np.add.at(traces["extra"], strike_steps[score.strike_beat < 0], 1.0 / n_counted)
         traces["contact"] = 0.05 * bad_steps
-        traces["smooth"][:] = (max(0.0, path.jerk_ratio - 1.0)
-                               + max(0.0, path.peak_joint_accel / path.max_joint_accel - 1.0)) / count
+        rough = min(max(0.0, path.jerk_ratio - 1.0), 5.0)
+        fast = min(max(0.0, path.peak_joint_accel / path.max_joint_accel - 1.0), 5.0)
+        traces["smooth"][:] = (rough + fast) / count
         traces["rest"][-1] = min(end_speed / self.rest_speed, 10.0) * 0.1
         cost = sum(traces.values())
         return cost, {name: -float(trace.sum()) for name, trace in traces.items()}
