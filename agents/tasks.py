@@ -9,20 +9,17 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
-from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, ENV_ID_V3, LATEST_ENV_ID, PANDA_ID_V3
+from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
 
 from .imitation import load_demonstration
 
-__all__ = ["AGENT_TASK_DEFAULTS", "CONTEXTUAL_SEARCH_DEFAULTS", "MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS",
-           "MAIN_OPTIONS", "SMOOTH_EXPLORATION_DEFAULTS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions", "TaskSpec",
-           "episode_metrics", "failure_contexts", "run_episode", "task_options"]
+__all__ = ["MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS", "MAIN_OPTIONS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions",
+           "TaskSpec", "episode_metrics", "failure_contexts", "run_episode", "task_options"]
 
 #: the first wiping task (the ids are defined in ``rdmp_gym.envs.registration``)
 WIPE_ID = ENV_ID
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
 WIPE_V2_ID = ENV_ID_V2
-#: The tasks with v2's action space: v2 and the v3 tasks of every robot (the task defaults below apply to all).
-_TRAVELLING = (ENV_ID_V2, ENV_ID_V3, PANDA_ID_V3)
 
 #: The main job (``rdmp-gym main``, and ``rdmp-gym train`` without ``--agent``/``--env``): the learner that reached
 #: the validation target soonest in the benchmark, ``bbrl`` exploring the approach 3x wider, on the current task
@@ -32,39 +29,22 @@ MAIN_ENV = LATEST_ENV_ID
 MAIN_ENV_KWARGS: dict[str, Any] = {"cup_clearance": 0.01}
 MAIN_OPTIONS: dict[str, Any] = {"sigma_factors": {"approach": 3.0}}
 
-#: The contextual searches' settings for the wiping task (``creps``, ``cpibb``, ``cpi2`` and the random-return
-#: control, which must explore as they do); a run's own ``options`` override them. Measured on training and
-#: validation contexts only (see the docs' agents page): the context sets the pattern's amplitudes and the
-#: approach's lift (the rows of K), from the patch size and the cup's presence; every other weight is one
-#: shared refinement; the approach is explored over its whole range (only a lift near its full 6 cm clears
-#: the cup, so a small step never shows its worth).
-CONTEXTUAL_SEARCH_DEFAULTS: dict[str, dict[str, Any]] = {
-    WIPE_ID: {"gain_groups": ["amplitude", "approach"], "features": ["patch_size", "obstacle"],
-              "sigma_factors": {"approach": 3.0}},
-    **{env_id: {"gain_groups": ["amplitude", "approach", "sweep_x", "sweep_y"], "features": ["patch_size", "obstacle"],
-                "sigma_factors": {"approach": 3.0}} for env_id in _TRAVELLING},
-}
-_TASK_DEFAULT_AGENTS = ("creps", "cpibb", "cpi2", "random")
-#: smooth exploration for the one-θ learners and SB3's on the tasks published with it (ArmarWipe-v1's runs keep theirs)
-SMOOTH_EXPLORATION_DEFAULTS: dict[str, dict[str, Any]] = {env_id: {"length": 5.0} for env_id in _TRAVELLING}
-_SMOOTH_AGENTS = ("pi2", "pibb", "cmaes", "ppo", "sac")
-#: one learner's own settings on a task: PPO's step size with smooth actions on ArmarWipe-v2 (at v1's 3e-2 the
-#: policy mean ran far outside the action box, so nearly every weight was executed at a face; see the docs)
-AGENT_TASK_DEFAULTS: dict[str, dict[str, dict[str, Any]]] = {env_id: {"ppo": {"learning_rate": 3e-3}}
-                                                             for env_id in _TRAVELLING}
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
+
+
+#: options that name the env's action groups: a task's defaults assume its own layout and drop them under other groups
+_GROUP_OPTIONS = ("gain_groups", "features", "sigma_factors")
 
 
 def task_options(env_id: str, agent: str, options: Mapping[str, Any], env_kwargs: Mapping[str, Any] | None = None
                  ) -> dict[str, Any]:
-    """``options`` over the task's defaults for ``agent``: :data:`CONTEXTUAL_SEARCH_DEFAULTS` (none when
-    ``env_kwargs`` choose other action ``groups``, which the defaults may not name) and
-    :data:`SMOOTH_EXPLORATION_DEFAULTS` and :data:`AGENT_TASK_DEFAULTS`."""
-    chosen = agent in _TASK_DEFAULT_AGENTS and "groups" not in (env_kwargs or {})
-    defaults = CONTEXTUAL_SEARCH_DEFAULTS.get(env_id, {}) if chosen else {}
-    if agent in _SMOOTH_AGENTS:
-        defaults = SMOOTH_EXPLORATION_DEFAULTS.get(env_id, {})
-    return {**defaults, **AGENT_TASK_DEFAULTS.get(env_id, {}).get(agent, {}), **options}
+    """``options`` over what ``agent`` may read from the task of ``env_id``
+    (:func:`rdmp_gym.envs.registration.learner_defaults`); with ``env_kwargs`` that choose other action ``groups``,
+    the defaults that name groups are dropped."""
+    defaults = learner_defaults(env_id).get(agent, {})
+    if "groups" in (env_kwargs or {}):
+        defaults = {key: value for key, value in defaults.items() if key not in _GROUP_OPTIONS}
+    return {**defaults, **options}
 
 
 @dataclass(frozen=True)

@@ -44,8 +44,8 @@ class TrainConfig:
         reset_options: options for every reset (e.g. a fixed context), or None.
         options: the agent's settings: its typed settings object (``PI2Config``, ``BBRLConfig``, ``PPOConfig``, ...,
             used as given), or a mapping of their fields over the task's defaults for the agent
-            (``tasks.task_options``: e.g. a contextual search on the wiping task starts from
-            ``tasks.CONTEXTUAL_SEARCH_DEFAULTS``). Stored as the typed object.
+            (``tasks.task_options``: e.g. a contextual search on the wiping task starts from the task's learner
+            defaults, ``rdmp_gym.envs.registration.learner_defaults``). Stored as the typed object.
         start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
             ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
             a smaller, damped movement; the initial conditions as fitted).

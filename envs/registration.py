@@ -7,9 +7,13 @@ Gymnasium's way of saying that an import is wanted for its side effect).
 
 from __future__ import annotations
 
+import copy
+from typing import Any
+
 import gymnasium as gym
 
 from .tasks import TASKS
+from .versions import LEARNER_DEFAULTS
 
 __all__ = [
     "DEPRECATED_ENV_ID",
@@ -25,6 +29,7 @@ __all__ = [
     "STEP_ID_V2",
     "STEP_ID_V3",
     "TRACKING_ID",
+    "learner_defaults",
     "register_envs",
     "register_task_ids",
     "task_ids",
@@ -72,6 +77,22 @@ _SPECS: dict[str, tuple[str, dict]] = {
     PANDA_ID_V3: (_WIPE, {"obstacle": True, "version": 3, "robot": "panda"}),
     PANDA_STEP_ID_V3: (_STEP_TWIN, {"version": 3, "max_shift": (0.06, 0.06, 0.02), "robot": "panda"}),
 }
+
+
+def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
+    """What a learner may read from the task of a registered episodic env: ``{agent: options}`` (a fresh copy; empty
+    for ids of other packages, step twins and tasks that set none). Learners never name a task; they read this."""
+    if env_id not in gym.registry:
+        return {}
+    spec = gym.registry[env_id]
+    kwargs = spec.kwargs or {}
+    if spec.entry_point == _WIPE:
+        defaults = LEARNER_DEFAULTS.get(kwargs.get("version", 1), {})
+    elif spec.entry_point == _RHYTHMIC and kwargs.get("task") in TASKS:
+        defaults = TASKS[kwargs["task"]].learner_defaults()
+    else:
+        defaults = {}
+    return copy.deepcopy(dict(defaults))
 
 
 def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:

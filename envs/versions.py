@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TASK_VERSIONS", "TaskVersion"]
+__all__ = ["LEARNER_DEFAULTS", "TASK_VERSIONS", "TaskVersion"]
 
 #: Cup-rim clearance (m) beyond the pad's half-diagonal in v2.
 CUP_MARGIN = 0.01
@@ -92,4 +92,31 @@ TASK_VERSIONS = {
     3: TaskVersion(3, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
                    executable_success=True, event_charge=0.2, composed_scene=True, max_jerk_ratio=MAX_JERK_RATIO,
                    cup_from_touch=True, void_coverage=True),
+}
+
+
+def _contextual_search(gain_groups: list[str]) -> dict:
+    """The contextual searches' settings on the wiping task: the context sets the pattern's amplitudes and the
+    approach's lift (and on the travelling versions the sweep), from the patch size and the cup's presence; every
+    other weight is one shared refinement; the approach is explored over its whole range (only a lift near its full
+    6 cm clears the cup, so a small step never shows its worth). Measured on training and validation contexts only
+    (see the docs' agents page)."""
+    return {"gain_groups": gain_groups, "features": ["patch_size", "obstacle"], "sigma_factors": {"approach": 3.0}}
+
+
+_CONTEXTUAL = ("creps", "cpibb", "cpi2", "random")
+#: the one-theta learners' and SB3's smooth exploration on the travelling versions (v1's runs keep theirs)
+_SMOOTH = {agent: {"length": 5.0} for agent in ("pi2", "pibb", "cmaes", "sac")}
+_TRAVELLING = {**{agent: _contextual_search(["amplitude", "approach", "sweep_x", "sweep_y"]) for agent in _CONTEXTUAL},
+               **_SMOOTH,
+               # PPO's step size with smooth actions (at v1's 3e-2 the policy mean ran far outside the action box,
+               # so nearly every weight was executed at a face; see the docs)
+               "ppo": {"length": 5.0, "learning_rate": 3e-3}}
+
+#: What a learner may read from the wiping task, per version: ``{agent: options}`` (a run's own options override
+#: them; the episodic envs only, not the step twins).
+LEARNER_DEFAULTS: dict[int, dict[str, dict]] = {
+    1: {agent: _contextual_search(["amplitude", "approach"]) for agent in _CONTEXTUAL},
+    2: _TRAVELLING,
+    3: _TRAVELLING,
 }

@@ -254,9 +254,10 @@ def test_features_select_context_fields_by_name():
 
 def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_the_config():
     from rdmp_gym.agents.learners.contextual import AmplitudeConfig, CPI2Config, RandomReturnConfig
-    from rdmp_gym.agents.tasks import CONTEXTUAL_SEARCH_DEFAULTS, WIPE_ID
+    from rdmp_gym.agents.tasks import WIPE_ID
+    from rdmp_gym.envs.registration import learner_defaults
 
-    defaults = CONTEXTUAL_SEARCH_DEFAULTS[WIPE_ID]
+    defaults = learner_defaults(WIPE_ID)["cpi2"]
     config = TrainConfig(agent="cpi2", options={"sigma_factors": {"approach": 2}})
     assert config.options == CPI2Config.from_dict({**defaults, "sigma_factors": {"approach": 2.0}})  # the run's wins
     assert config.options.gain_groups == ("amplitude", "approach")                  # typed: lists, not comma strings

@@ -29,11 +29,20 @@ class TaskEntry:
 
     def build(self, **settings: Any) -> TaskDescription:
         """The description with ``settings``."""
-        factory = self.factory
-        if isinstance(factory, str):
-            module, attribute = factory.split(":")
-            factory = getattr(importlib.import_module(module), attribute)
-        return factory(**settings)
+        return self._factory()(**settings)
+
+    def learner_defaults(self) -> dict[str, dict[str, Any]]:
+        """The task's :attr:`~rdmp_gym.envs.tasks.description.TaskDescription.learner_defaults` (empty where the
+        factory is not a description class)."""
+        factory = self._factory()
+        defaults = getattr(factory, "learner_defaults", {}) if isinstance(factory, type) else {}
+        return {agent: dict(options) for agent, options in defaults.items()}
+
+    def _factory(self) -> Any:
+        if isinstance(self.factory, str):
+            module, attribute = self.factory.split(":")
+            return getattr(importlib.import_module(module), attribute)
+        return self.factory
 
 
 #: name -> entry of every task on the rhythmic face
