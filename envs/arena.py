@@ -42,7 +42,7 @@ def _add_sensors(spec: mujoco.MjSpec, robot: RobotDescription, prefix: str, tool
     site, geom = mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtObj.mjOBJ_GEOM
     subtree, body = mujoco.mjtObj.mjOBJ_XBODY, mujoco.mjtObj.mjOBJ_BODY
     ft_site = prefix + robot.ft_site
-    spec.add_sensor(name="wrist_force", type=mujoco.mjtSensor.mjSENSFORCE, objtype=site, objname=ft_site)
+    spec.add_sensor(name="wrist_force", type=mujoco.mjtSensor.mjSENS_FORCE, objtype=site, objname=ft_site)
     spec.add_sensor(name="wrist_torque", type=mujoco.mjtSensor.mjSENS_TORQUE, objtype=site, objname=ft_site)
     spec.add_sensor(name="sponge_touch", type=mujoco.mjtSensor.mjSENS_TOUCH, objtype=site,
                     objname=tool + "sponge_touch")
