@@ -1,0 +1,152 @@
+"""The task is a description: a third task (tap a marked point on the table, rhythmically) written in this file alone
+runs on ARMAR-III, the Panda and a robot written in a test file; no file outside a task's folder names its objects or
+info keys, and the agents name no task."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import pytest
+import rdmp_gym.envs  # noqa: F401  (registers the ids)
+from mini_arm import MINI
+from rdmp_gym.envs.arena import FORCE, FOUND, NETFORCE, add_contact_sensor
+from rdmp_gym.envs.registration import learner_defaults, register_task_ids, task_ids
+from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
+from rdmp_gym.envs.tasks import TASKS, Outcome, TaskDescription, TaskPlan, ToolPath, get_task, register_task
+
+from rdmp_gym import Demonstration, RhythmicDMP
+
+ROOT = Path(__file__).resolve().parent.parent
+
+_POINTER = """
+<mujoco model="pointer">
+  <worldbody>
+    <geom name="rod" type="capsule" fromto="0 0 0 -0.08 0 0" size="0.006" contype="6" conaffinity="1"/>
+    <site name="point" pos="-0.086 0 0" size="0.003"/>
+  </worldbody>
+</mujoco>
+"""
+
+
+class TapTask(TaskDescription):
+    """Tap a marked point on the table once per second with a pointer; success: at least 3 taps, all on the mark."""
+
+    name = "Tap"
+    groups = ("periodic", "transient", "amplitude")
+    tool_site = "point"
+    duration = 5.0
+
+    def compose(self, spec: mujoco.MjSpec, robot, robot_prefix: str, tool_prefix: str) -> None:
+        mount = robot.tool_mount
+        frame = spec.body(robot_prefix + mount.body).add_frame(pos=list(mount.pos), quat=list(mount.quat))
+        spec.attach(mujoco.MjSpec.from_string(_POINTER), frame=frame, prefix=tool_prefix)
+        marker = spec.worldbody.add_body(name="marker", pos=[0.6, -0.28, 0.9])
+        marker.add_geom(name="marker", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[0.02, 0.001, 0], contype=0,
+                        conaffinity=0, rgba=[0.9, 0.1, 0.1, 1])
+        add_contact_sensor(spec, "tap", (mujoco.mjtObj.mjOBJ_GEOM, tool_prefix + "rod"),
+                           (mujoco.mjtObj.mjOBJ_GEOM, "table_top"), FOUND | FORCE, NETFORCE)
+
+    def imitation(self) -> RhythmicDMP:
+        t = np.arange(0.0, 6.0, 0.01)
+        come = np.clip(t / 1.0, 0, 1)[:, None] ** 2 * (3 - 2 * np.clip(t / 1.0, 0, 1)[:, None])
+        tap = np.c_[np.zeros_like(t), np.zeros_like(t), 0.03 + 0.033 * np.cos(2 * np.pi * (t - 1.0))]
+        return RhythmicDMP.fit(Demonstration(t, np.array([0.0, 0.05, 0.1]) + come * (tap - [0.0, 0.05, 0.1])),
+                               n_periodic=10, n_transient=10)
+
+    def context_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array([0.0, -0.08]), np.array([0.08, 0.05])
+
+    def sample_context(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Any:
+        low, high = self.context_bounds()
+        point = np.asarray((options or {}).get("point", rng.uniform(low, high)), dtype=np.float64)
+        return type("TapContext", (), {"point": point, "vector": lambda self: self.point})()
+
+    def place(self, model: mujoco.MjModel, context: Any) -> None:
+        table = model.body("table").pos
+        model.body("marker").pos = table + np.r_[context.point, 0.0]
+
+    def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: Any, times: np.ndarray,
+             table_origin: np.ndarray) -> TaskPlan:
+        path = dmp.with_params(theta, self.groups).rollout(times)
+        return TaskPlan(path, table_origin + np.r_[context.point, 0.0], np.eye(3))
+
+    def evaluate(self, path: ToolPath, context: Any, sensor: Mapping[str, slice]) -> Outcome:
+        force = path.sensors[:, sensor["tap"]][:, 1:4] @ np.array([0.0, 0.0, 1.0])
+        pressing = np.abs(force) > 0.5
+        taps = int(np.sum(np.diff(pressing.astype(int)) == 1))
+        cost = np.zeros(len(path.plan.path))
+        cost[-1] = abs(taps - 4) / 4.0
+        return Outcome({"taps": -float(cost[-1])}, cost, {"taps": taps}, () if taps >= 3 else ("taps",))
+
+
+@pytest.fixture(scope="module", autouse=True)
+def tap_registered():
+    register_task("tap", TapTask, id_name="Tap")
+    yield register_task_ids("tap", robots=("armar3", "panda"))
+    TASKS.pop("tap")
+
+
+@pytest.mark.parametrize("robot", ["armar3", "panda", MINI])
+def test_a_task_described_alone_runs_on_both_robots_and_a_robot_described_alone(robot):
+    env = RhythmicTaskEnv("tap", robot)
+    observation, _ = env.reset(seed=0)
+    assert observation.shape == (2,)
+    _, reward, terminated, truncated, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    assert terminated and not truncated and info["valid"], info["invalid_reason"]
+    assert np.isclose(reward, -info["cost_trace"].sum())
+    assert info["taps"] >= 3 and info["is_success"]
+
+
+def test_a_registered_task_gets_episodic_and_step_ids_for_every_robot(tap_registered):
+    assert tap_registered == ["rdmp_gym/ArmarTap-v1", "rdmp_gym/PandaTap-v1"]
+    assert task_ids("tap", "panda", 1) == ("rdmp_gym/PandaTap-v1", "rdmp_gym/PandaTapStep-v1")
+    env = gym.make("rdmp_gym/ArmarTapStep-v1")
+    env.reset(seed=1)
+    total, done = 0.0, False
+    while not done:
+        _, reward, terminated, truncated, info = env.step(np.zeros(3))
+        total, done = total + reward, terminated or truncated
+    assert info["is_success"] and np.isclose(total, -info["cost_trace"].sum())
+
+
+def test_tasks_are_refused_by_name():
+    with pytest.raises(ValueError, match="task"):
+        get_task("juggling")
+    with pytest.raises(ValueError, match="version"):
+        RhythmicTaskEnv("tap", "armar3", version=2)
+    with pytest.raises(TypeError, match="factory"):
+        register_task("bad", 3)
+
+
+# ------------------------------------------------------------------ the seam holds
+_DRUMMING = ROOT / "envs" / "tasks" / "drumming"
+#: the drumming task's object names and info keys
+_DRUM_WORDS = ("membrane", "drum_hit", "robot_rim", "robot_drum", "struck_fraction", "strike_impulses",
+               "timing_error", "beat_times", "double_strikes")
+
+
+def _python_files(*folders: str) -> list[Path]:
+    return [path for folder in folders for path in (ROOT / folder).rglob("*.py")]
+
+
+def test_no_file_outside_the_drumming_folder_names_its_objects_or_info_keys():
+    pattern = re.compile("[\"'](" + "|".join(_DRUM_WORDS) + ")[\"']")
+    found = [f"{path.relative_to(ROOT)}: {match.group(0)}" for path in _python_files("envs", "agents", "rdmp_gym")
+             if _DRUMMING not in path.parents for match in pattern.finditer(path.read_text())]
+    assert not found
+
+
+def test_the_agents_name_no_env_id_and_read_task_defaults_from_the_env_registry():
+    literal = re.compile(r"[\"']rdmp_gym/[A-Z]\w*-v\d+[\"']")
+    found = [f"{path.relative_to(ROOT)}" for path in _python_files("agents") if literal.search(path.read_text())]
+    assert not found
+    assert learner_defaults("rdmp_gym/ArmarWipe-v2")["cpi2"]["gain_groups"][-2:] == ["sweep_x", "sweep_y"]
+    assert learner_defaults("rdmp_gym/ArmarWipeStep-v2") == {}
+    assert learner_defaults("rdmp_gym/ArmarDrum-v1") == {}                  # no drumming-specific structure
+    assert learner_defaults("CartPole-v1") == {}
