@@ -217,7 +217,7 @@ class RhythmicTaskEnv(gym.Env):
     def _solve(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
         """The joint path of ``world [T, 3]``, the tool's axis along the task frame's z (converged: a rhythmic
         path's joint accelerations are what the success criteria judge)."""
-        return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS)
+        return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS, coarse_iterations=150)
 
     def _evaluate(self, theta: np.ndarray, extras: np.ndarray) -> tuple[float, dict]:
         return self._execute(self.plan(theta, extras), {"params": theta.copy(), "extras": extras.copy()})

@@ -52,8 +52,8 @@ class DrumContextSpec:
 
     drum_x: tuple[float, float] = (0.0, 0.10)
     drum_y: tuple[float, float] = (-0.10, 0.06)
-    drum_height: tuple[float, float] = (0.09, 0.15)
-    drum_tilt: float = 0.12
+    drum_height: tuple[float, float] = (0.09, 0.14)
+    drum_tilt: float = 0.1
     tempo: tuple[float, float] = (60.0, 120.0)
     change_factor: tuple[float, float] = (0.8, 1.25)
     change_window: tuple[float, float] = (3.5, 5.5)

@@ -17,8 +17,8 @@ from rdmp_gym import Demonstration
 __all__ = ["DEMO_GOAL", "DEMO_START", "drumming_demonstration"]
 
 #: where the demonstrated tip starts and comes to rest (drum frame, m)
-DEMO_START = np.array([-0.08, 0.05, 0.12])
-DEMO_GOAL = np.array([-0.05, 0.0, 0.09])
+DEMO_START = np.array([-0.08, 0.05, 0.09])
+DEMO_GOAL = np.array([-0.05, 0.0, 0.07])
 
 
 def _smoothstep7(u: np.ndarray) -> np.ndarray:
@@ -28,7 +28,7 @@ def _smoothstep7(u: np.ndarray) -> np.ndarray:
 
 
 def drumming_demonstration(period: float = 0.6, transient: float = 1.5, n_periods: int = 6, stop: float = 1.2,
-                           rest: float = 1.0, top: float = 0.025, depth: float = 0.003, sway: float = 0.003,
+                           rest: float = 1.0, top: float = 0.018, depth: float = 0.003, sway: float = 0.003,
                            rate: float = 100.0, noise: float = 2e-4, rng: int | np.random.Generator = 0
                            ) -> Demonstration:
     """A demonstration ``Y [L, 3]`` of drumming at one tempo (``period`` s per beat); see the module docstring.

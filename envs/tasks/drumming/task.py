@@ -48,6 +48,8 @@ __all__ = ["DrumTask"]
 _STOP_RESERVE = 3.0
 #: the end over which the stick must be at rest (s)
 _REST_WINDOW = 0.3
+#: what a missed success criterion costs once, beside its graded cost
+_MISS = 0.5
 
 
 class DrumTask(TaskDescription):
@@ -214,29 +216,34 @@ class DrumTask(TaskDescription):
 
     def _costs(self, score: Any, strikes: Strikes, counted: np.ndarray, beats: np.ndarray, bad_steps: np.ndarray,
                end_speed: float, path: ToolPath, count: int) -> tuple[np.ndarray, dict[str, float]]:
-        """The per-step cost ``[T]`` and the reward terms (each term's costs charged where it happens)."""
+        """The per-step cost ``[T]`` and the reward terms, each charged where it happens. Every success criterion an
+        episode misses also costs a fixed :data:`_MISS` once, so that a return that beats another is a success where
+        one is possible."""
         n_counted = max(int(counted.sum()), 1)
         step_of = np.minimum((np.asarray(beats) / path.dt).astype(int), count - 1)
         traces = {name: np.zeros(count) for name in ("timing", "impulse", "extra", "contact", "smooth", "rest")}
         if score is None:
-            traces["timing"][-1] = 4.0
+            traces["timing"][-1] = 4.0 + _MISS
         else:
             error = np.nan_to_num(np.abs(score.error) / self.tolerance, nan=2.0)
-            miss = np.minimum(error**2, 4.0)
-            np.add.at(traces["timing"], step_of[counted], miss[counted] / n_counted)
-            surplus = np.maximum(score.count - 1, 0)
-            np.add.at(traces["extra"], step_of, surplus / n_counted)
+            np.add.at(traces["timing"], step_of[counted], np.minimum(error**2, 4.0)[counted] / n_counted)
+            if score.struck[counted].sum() < 0.9 * n_counted:
+                traces["timing"][-1] += _MISS
+            np.add.at(traces["extra"], step_of, _MISS * np.maximum(score.count - 1, 0) * counted)
+            np.add.at(traces["extra"], np.minimum(strikes.first // path.frame_skip, count - 1)[score.strike_beat < 0],
+                      _MISS)
         strike_steps = np.minimum(strikes.first // path.frame_skip, count - 1)
         low, high = self.impulse_band
-        outside = np.log(np.clip(strikes.impulses, 1e-6, None) / np.clip(strikes.impulses, low, high)) / np.log(2.0)
-        np.add.at(traces["impulse"], strike_steps, np.minimum(outside**2, 4.0) / n_counted)
-        if score is not None:
-            np.add.at(traces["extra"], strike_steps[score.strike_beat < 0], 1.0 / n_counted)
+        octaves = np.abs(np.log2(np.clip(strikes.impulses, 1e-6, None) / np.clip(strikes.impulses, low, high)))
+        np.add.at(traces["impulse"], strike_steps, (np.minimum(octaves**2, 4.0) + _MISS * (octaves > 0)) / n_counted)
         traces["contact"] = 0.05 * bad_steps
-        rough = min(max(0.0, path.jerk_ratio - 1.0), 5.0)
-        fast = min(max(0.0, path.peak_joint_accel / path.max_joint_accel - 1.0), 5.0)
-        traces["smooth"][:] = (rough + fast) / count
-        traces["rest"][-1] = min(end_speed / self.rest_speed, 10.0) * 0.1
+        if bad_steps.any():
+            traces["contact"][int(np.argmax(bad_steps > 0))] += _MISS
+        rough = max(0.0, path.jerk_ratio - 1.0)
+        fast = max(0.0, path.peak_joint_accel / path.max_joint_accel - 1.0)
+        traces["smooth"][:] = (min(rough, 5.0) + min(fast, 5.0)) / count
+        traces["smooth"][-1] += _MISS * ((path.jerk_ratio > self.max_jerk_ratio) + (fast > 0))
+        traces["rest"][-1] = min(end_speed / self.rest_speed, 10.0) * 0.1 + _MISS * (end_speed > self.rest_speed)
         cost = sum(traces.values())
         return cost, {name: -float(trace.sum()) for name, trace in traces.items()}
 
