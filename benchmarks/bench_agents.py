@@ -311,26 +311,36 @@ def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[st
         n = tester.n_actions
         reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
         imitation = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference).to_dict()
+        if not hasattr(tester.env.unwrapped, "hand_cup_gaps"):        # the coupling baseline lifts over the cup
+            return {"imitation": imitation}, observations, reference
         coupling = coupling_baseline_scores(tester.env, seeds)
     fields = PolicyScores.__dataclass_fields__
     coupling = {key: np.asarray(value).tolist() for key, value in coupling.items() if key in fields}
     return {"imitation": imitation, "coupling": coupling}, observations, reference
 
 
+def _interval(values: list | np.ndarray, statistic: str) -> dict | None:
+    """The interval of ``values``, or None where the task has no such figure (e.g. coverage on a drum: NaN)."""
+    values = np.asarray(values, dtype=float)
+    return None if np.isnan(values).all() else interval(values, statistic).to_dict()
+
+
 def _summary(runs: list[dict], baselines: dict[str, dict]) -> list[dict]:
     rows = [{"agent": name, "n": len(scores["success"]), "over": "contexts",
-             **{m: interval(np.asarray(scores[m], dtype=float), "mean").to_dict() for m in METRICS},
+             **{m: _interval(scores[m], "mean") for m in METRICS},
              "reached": None, "episodes_to_target": None} for name, scores in baselines.items()]
     for agent in dict.fromkeys(r["agent"] for r in runs):
         group = [r for r in runs if r["agent"] == agent]
         reached = [r["episodes_to_target"] for r in group if r["episodes_to_target"] is not None]
         rows.append({"agent": agent, "n": len(group), "over": "seeds",
-                     **{m: interval([r["test_means"][m] for r in group], "iqm").to_dict() for m in METRICS},
+                     **{m: _interval([r["test_means"][m] for r in group], "iqm") for m in METRICS},
                      "reached": len(reached), "episodes_to_target": float(np.median(reached)) if reached else None})
     return rows
 
 
-def _cell(entry: dict, digits: int = 3) -> str:
+def _cell(entry: dict | None, digits: int = 3) -> str:
+    if entry is None:
+        return "-"
     return f"{entry['estimate']:.{digits}f} [{entry['low']:.{digits}f}, {entry['high']:.{digits}f}]"
 
 

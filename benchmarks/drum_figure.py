@@ -44,7 +44,7 @@ def episode(env_id: str, video: Path | None) -> tuple[np.ndarray, dict, float]:
     face.record_frames = True
     _, _, _, _, info = env.step(action)
     face.record_frames = False
-    strike = int(round(info["strike_times"][2] / face.dt))
+    strike = round(float(info["strike_times"][2]) / face.dt)
     frame = face.frames[min(strike, len(face.frames) - 1)]
     env.close()
     return frame, info, face.dt

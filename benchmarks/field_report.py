@@ -111,13 +111,14 @@ def field_summary(document: dict) -> dict:
         group = [r for r in runs if r["agent"] == agent]
         episodes, values = _curves(group)
         coverage = np.array([r["test"]["coverage"] for r in group], dtype=float)
+        covered = not np.isnan(coverage).all()          # a task without dirt (drumming) has no coverage
         reached = {str(t): [episodes_to(r["curve"], t) for r in group] for t in TARGETS}
         result["agents"][agent] = {
             "seeds": len(group),
             "test_success": stratified_interval(success[agent].mean(axis=1, keepdims=True)).to_dict(),
-            "test_coverage": stratified_interval(coverage).to_dict(),
+            "test_coverage": stratified_interval(coverage).to_dict() if covered else None,
             "curve_episodes": episodes.tolist(), "curve": curve_intervals(values).tolist(),
-            "coverage_profile": performance_profile(coverage, THRESHOLDS).tolist(),
+            "coverage_profile": performance_profile(coverage, THRESHOLDS).tolist() if covered else None,
             "failure_causes": failure_counts(group),
             "episodes_to": {t: {"reached": sum(e is not None for e in v),
                                 "median": float(np.median([e for e in v if e is not None])) if any(
@@ -142,6 +143,8 @@ def plot(summary: dict, path: Path, title: str) -> None:
         episodes, band = np.array(entry["curve_episodes"]), np.array(entry["curve"])
         axes[0].plot(episodes, band[:, 0], color=f"C{index}", label=agent)
         axes[0].fill_between(episodes, band[:, 1], band[:, 2], color=f"C{index}", alpha=0.15)
+        if entry["coverage_profile"] is None:
+            continue
         profile = np.array(entry["coverage_profile"])
         axes[2].plot(summary["thresholds"], profile[:, 0], color=f"C{index}", label=agent)
         axes[2].fill_between(summary["thresholds"], profile[:, 1], profile[:, 2], color=f"C{index}", alpha=0.15)

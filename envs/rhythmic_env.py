@@ -132,6 +132,13 @@ class RhythmicTaskEnv(gym.Env):
         """An action ``[n]`` (float32) that maps to ``theta [P]``, with 0 in the task's own dimensions."""
         return np.r_[self.action_map.to_action(theta), np.zeros(len(self.extra_scales))].astype(np.float32)
 
+    def action_slices(self) -> dict[str, slice]:
+        """``{name: slice of the action}``: the DMP's groups, then each of the task's own dimensions."""
+        slices = dict(self.action_map.action_slices())
+        for index, name in enumerate(self.task.extras):
+            slices[name] = slice(self.action_map.size + index, self.action_map.size + index + 1)
+        return slices
+
     def action_time_weights(self) -> np.ndarray:
         """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1] (the task's
         own dimensions act throughout)."""
@@ -200,6 +207,10 @@ class RhythmicTaskEnv(gym.Env):
             raise RuntimeError("call reset() before plan()")
         return self.task.plan(self.dmp, np.asarray(theta, dtype=np.float64), np.asarray(extras, dtype=np.float64),
                               self.context, self.times, self.scene.table_origin)
+
+    def action_path(self, action: np.ndarray) -> np.ndarray:
+        """The tool path ``[T, 3]`` (task frame) that :meth:`step` plans for ``action [n]`` in this context."""
+        return self.plan(*self._split(self._check_action(action))).path
 
     def run_path(self, path: np.ndarray) -> tuple[float, dict]:
         """Execute a given tool path ``[T, 3]`` (task frame, m) in this episode's context, bypassing the DMP (for

@@ -225,6 +225,8 @@ class SearchSpace:
 def action_layout(env: Any) -> tuple[dict[str, slice], int]:
     """``({group: slice}, n_dims)`` of an env's action (``{"all": slice(0, n)}`` and 1 if it has no DMP groups)."""
     base = env.unwrapped
+    if hasattr(base, "action_slices"):    # the rhythmic tasks: DMP groups, then the task's own dimensions
+        return dict(base.action_slices()), int(base.dmp.n_dims)
     if hasattr(base, "action_map"):       # the wiping envs: DMP groups, then e.g. ``approach``, ``sweep_x``
         return dict(base.action_map.action_slices()), int(base.dmp.n_dims)
     if hasattr(base, "dmp") and hasattr(base, "groups"):
