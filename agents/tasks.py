@@ -77,10 +77,23 @@ class TaskSpec:
             raise ValueError(f"env_id: {error}") from error
         if not all(hasattr(env.unwrapped, name) for name in _EPISODIC_API):
             env.close()
-            raise ValueError(f"env_id: {self.env_id} is not an episodic DMP env (one step = one DMP rollout, "
-                             f"with {', '.join(_EPISODIC_API)} and info['cost_trace']), which the agents need; "
-                             f"use {WIPE_ID} or rdmp_gym/DMPTracking-v0")
+            return self._black_box(render_mode)
         return env
+
+    def _black_box(self, render_mode: str | None) -> gym.Env:
+        """A step-based env with a continuous action space, under the rhythmic black-box wrapper with its defaults
+        (``env_kwargs`` go to the env); ValueError saying why where the wrapper cannot drive it."""
+        from rdmp_gym.envs.blackbox import make_blackbox
+
+        if self.demo:
+            raise ValueError(f"demo: {self.env_id} is a step-based env; give the black-box wrapper its demonstration "
+                             f"through rdmp_gym/RhythmicBlackBox-v0's keywords instead")
+        try:
+            return make_blackbox(self.env_id, env_kwargs=self.env_kwargs, render_mode=render_mode)
+        except ValueError as error:
+            raise ValueError(f"env_id: {self.env_id} is not an episodic DMP env (one step = one DMP rollout, with "
+                             f"{', '.join(_EPISODIC_API)} and info['cost_trace']) and the rhythmic black-box wrapper "
+                             f"cannot drive it: {error}. Use {MAIN_ENV} or another rdmp_gym id") from error
 
     def make_with_options(self) -> gym.Env:
         """The environment, wrapped so that every reset without options uses ``reset_options``."""

@@ -320,3 +320,17 @@ def test_swimmer_one_short_episode():
         make_blackbox("Swimmer-v5", duration=2.0, posture=(0.0, 0.0, 0.0))
     env.close()
     again.close()
+
+
+def test_the_agents_wrap_a_step_based_env_and_refuse_one_the_wrapper_cannot_drive():
+    from rdmp_gym.agents.tasks import TaskSpec
+
+    env = TaskSpec("Swimmer-v5").make()
+    assert all(hasattr(env.unwrapped, name) for name in ("action_to_params", "params_to_action",
+                                                         "action_time_weights"))
+    env.reset(seed=0)
+    _, _, terminated, _, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    assert terminated and info["env_steps"] > 0 and np.isfinite(info["cost_trace"]).all()
+    env.close()
+    with pytest.raises(ValueError, match="continuous Box action space"):
+        TaskSpec("CartPole-v1").make()
