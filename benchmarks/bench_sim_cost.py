@@ -5,7 +5,9 @@ every control step recorded; then the same targets are replayed on a fresh copy 
 ``mj_step`` calls (one physics step at a time where the episode stepped finely, ``frame_skip`` at once
 elsewhere). Times are the process's CPU time (``time.process_time``), the best of ``--repeats`` runs, so that other
 processes on the machine do not count. Reported per env: the whole ``env.step`` (path, IK, simulation, reward),
-the simulation core alone (:func:`~rdmp_gym.envs.wiping.simulate_wipe`), the bare replay, and the ratios.
+the simulation core alone (:func:`~rdmp_gym.envs.wiping.simulate_wipe`, or for the rhythmic tasks
+:meth:`~rdmp_gym.envs.servo.ServoSimulation.run`, which steps one physics step at a time to record every sensor at
+500 Hz), the bare replay (``frame_skip`` steps at once where the core allows it), and the ratios.
 
     python benchmarks/bench_sim_cost.py --save          # writes benchmarks/results/sim_cost.json
 """
@@ -24,6 +26,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import rdmp_gym.envs  # registers the ids; its wipe_env module is patched below
+import rdmp_gym.envs.servo as servo
 import rdmp_gym.envs.wiping as wiping
 from output import add_save_argument, results_dir
 
@@ -62,14 +65,54 @@ class _Recorder:
         rdmp_gym.envs.wipe_env.simulate_wipe = self._simulate
 
 
+class _ServoRecorder:
+    """Wraps ``ServoSimulation.step`` and ``run`` (the rhythmic tasks' core) to record the targets and time the core;
+    the core steps the physics one step at a time to record every sensor at 500 Hz."""
+
+    def __init__(self) -> None:
+        self.targets: list[np.ndarray] = []
+        self.fine: list[bool] = []
+        self.core_seconds = 0.0
+        self._step, self._run = servo.ServoSimulation.step, servo.ServoSimulation.run
+
+    def __enter__(self) -> _ServoRecorder:
+        recorder, step, run = self, self._step, self._run
+
+        def recording_step(sim: servo.ServoSimulation, k: int, target: np.ndarray) -> bool:
+            stop = step(sim, k, target)
+            recorder.targets.append(sim.scene.data.ctrl.copy())
+            recorder.fine.append(False)        # the bare replay steps frame_skip at once
+            return stop
+
+        def timed_run(sim: servo.ServoSimulation, *args, **kwargs) -> None:
+            start = time.process_time()
+            run(sim, *args, **kwargs)
+            recorder.core_seconds += time.process_time() - start
+
+        servo.ServoSimulation.step = recording_step
+        servo.ServoSimulation.run = timed_run
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        servo.ServoSimulation.step, servo.ServoSimulation.run = self._step, self._run
+
+
+def _start_state(unwrapped: gym.Env, seed: int) -> None:
+    """Reset ``unwrapped`` to context ``seed`` with the arm at rest where the imitation's episode starts."""
+    unwrapped.reset(seed=seed)
+    if hasattr(unwrapped, "action_path"):          # a rhythmic task: the face solves its plan
+        plan = unwrapped.plan(unwrapped.action_map.theta0, np.zeros(len(unwrapped.extra_scales)))
+        unwrapped.scene.set_arm_state(unwrapped._solve(plan, plan.world()).q[0])
+        return
+    theta = unwrapped.action_to_params(np.zeros(unwrapped.action_space.shape))
+    unwrapped.scene.set_arm_state(unwrapped.solve_path(unwrapped.rollout_path(theta)).q[0])
+
+
 def _replay(env: gym.Env, seed: int, targets: list[np.ndarray], fine: list[bool]) -> float:
     """CPU seconds of the bare ``mj_step`` calls of a recorded episode, from the same start state."""
     unwrapped = env.unwrapped
-    unwrapped.reset(seed=seed)
-    theta = unwrapped.action_to_params(np.zeros(unwrapped.action_space.shape))
-    solution = unwrapped.solve_path(unwrapped.rollout_path(theta))
+    _start_state(unwrapped, seed)
     scene = unwrapped.scene
-    scene.set_arm_state(solution.q[0])
     model, data, skip = scene.model, scene.data, unwrapped.frame_skip
     step = mujoco.mj_step
     start = time.process_time()
@@ -86,12 +129,13 @@ def _replay(env: gym.Env, seed: int, targets: list[np.ndarray], fine: list[bool]
 def measure(env_id: str, seeds: list[int], repeats: int) -> dict:
     """Best-of-``repeats`` CPU seconds per episode: env.step, the simulation core, the bare replay."""
     env = gym.make(env_id)
+    recording = _ServoRecorder if hasattr(env.unwrapped, "action_path") else _Recorder
     rows = []
     for seed in seeds:
         best = {"episode": np.inf, "core": np.inf, "bare": np.inf}
         for _ in range(repeats):
             env.reset(seed=seed)
-            with _Recorder() as recorder:
+            with recording() as recorder:
                 start = time.process_time()
                 env.step(np.zeros(env.action_space.shape, np.float32))
                 episode = time.process_time() - start
@@ -108,7 +152,8 @@ def measure(env_id: str, seeds: list[int], repeats: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--env-id", nargs="+", default=["rdmp_gym/ArmarWipe-v3", "rdmp_gym/PandaWipe-v3",
-                                                        "rdmp_gym/ArmarWipe-v2"])
+                                                        "rdmp_gym/ArmarWipe-v2", "rdmp_gym/ArmarDrum-v1",
+                                                        "rdmp_gym/PandaDrum-v1"])
     parser.add_argument("--contexts", type=int, default=4, help="held-out contexts (reset seeds from 7000)")
     parser.add_argument("--repeats", type=int, default=3)
     add_save_argument(parser)
