@@ -46,13 +46,17 @@ from rdmp_gym import DMPStepper
 from .context import SIZE as CONTEXT_SIZE
 from .controller import ForceAdaptation
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .step_twin import axis_shift, coupling_action, sponge_position
+from .step_twin import UNSUPPORTED, axis_shift, coupling_action, sponge_position
 from .wipe_env import ArmarWipeEnv, outcome
 from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 
-__all__ = ["ArmarWipeStepEnv"]
+__all__ = ["REFUSED", "ArmarWipeStepEnv"]
 
 
+#: Settings of the episodic env that this step env cannot honour, and why: the step twin's, and the learned depth
+#: profile (this env runs its own control loop with the plain admittance law).
+REFUSED = {**UNSUPPORTED, "force_learning": "it learns the pressing depth over the periods of a planned episode; this "
+                                            "step env runs the plain admittance law (use the v3 step twin)"}
 _MAX_FORCE = 2000.0       # N: a larger wrist or contact force is a diverged simulation (as in simulate_wipe)
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 
@@ -68,7 +72,8 @@ class ArmarWipeStepEnv(gym.Env):
             posture (as the episodic path IK solves its knots; a warm start drifts in the null space, and
             stopping at a tolerance after a varying count makes the joint targets jump between steps).
         **kwargs: keywords of :class:`ArmarWipeEnv` (style, demonstration, dmp, n_periods, duration, control_rate,
-            target_force, force_band, reward_weights, adaptation, context_ranges, obstacle, render_mode, ...).
+            target_force, force_band, reward_weights, adaptation, context_ranges, obstacle, render_mode, ...);
+            ``cup_clearance``, ``record_frames`` and ``force_learning`` are refused by name (:data:`REFUSED`).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
@@ -76,6 +81,9 @@ class ArmarWipeStepEnv(gym.Env):
     def __init__(self, max_shift: float | tuple[float, float, float] = 0.02, ik_iterations: int = 30,
                  **kwargs: Any) -> None:
         super().__init__()
+        for key, why in REFUSED.items():
+            if kwargs.get(key) not in (None, False):
+                raise ValueError(f"{key}: the v1/v2 step env cannot honour it ({why})")
         shift = axis_shift(max_shift)
         if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")

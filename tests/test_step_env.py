@@ -165,3 +165,12 @@ def test_sb3_sac_trains_on_it(env):
     model.learn(80)
     action, _ = model.predict(env.reset(seed=1)[0], deterministic=True)
     assert action.shape == (3,) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.parametrize(("setting", "value"), [("cup_clearance", 0.01), ("force_learning", True),
+                                                ("record_frames", True)])
+def test_the_v1_v2_step_env_refuses_by_name_what_it_cannot_honour(setting, value):
+    from rdmp_gym.envs.step_env import ArmarWipeStepEnv
+
+    with pytest.raises(ValueError, match=setting):
+        ArmarWipeStepEnv(**{setting: value})
