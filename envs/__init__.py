@@ -1,7 +1,9 @@
-"""Gymnasium environments of rdmp-gym: table wiping with a rhythmic DMP, on ARMAR-III or a Franka Panda.
+"""Gymnasium environments of rdmp-gym: rhythmic tasks with a rhythmic DMP, on ARMAR-III or a Franka Panda.
 
-Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points): the current
-``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and ``-v1``.
+Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points): table wiping,
+the current ``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and
+``-v1``; drumming to a changing beat, ``rdmp_gym/ArmarDrum-v1`` and ``rdmp_gym/PandaDrum-v1`` and their step twins
+(a task of :mod:`rdmp_gym.envs.tasks` on the face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`).
 An episodic env's ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``)::
 
     import gymnasium as gym
