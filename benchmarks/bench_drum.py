@@ -77,7 +77,7 @@ def _probe(robot: str, name: str, seed: int) -> dict:
     if name == "jagged actions":
         return _episode(env, seed, rng.choice([-1.0, 1.0], n))
     face.reset(seed=int(seed))
-    imitation = face._imitation_plan.path
+    imitation = face.imitation_plan.path
     if name == "standing still":
         path = np.repeat(imitation[:1], len(imitation), axis=0)
     elif name == "pressing on the membrane":

@@ -102,7 +102,7 @@ def _start_state(unwrapped: gym.Env, seed: int) -> None:
     unwrapped.reset(seed=seed)
     if hasattr(unwrapped, "action_path"):          # a rhythmic task: the face solves its plan
         plan = unwrapped.plan(unwrapped.action_map.theta0, np.zeros(len(unwrapped.extra_scales)))
-        unwrapped.scene.set_arm_state(unwrapped._solve(plan, plan.world()).q[0])
+        unwrapped.scene.set_arm_state(unwrapped.solve_plan(plan, plan.world()).q[0])
         return
     theta = unwrapped.action_to_params(np.zeros(unwrapped.action_space.shape))
     unwrapped.scene.set_arm_state(unwrapped.solve_path(unwrapped.rollout_path(theta)).q[0])

@@ -97,6 +97,8 @@ class RhythmicTaskEnv(gym.Env):
         self.frames: list[np.ndarray] = []
         self.record_frames = False
         self.context: Any = None
+        #: the imitation's plan in this episode's context (set by ``reset``)
+        self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
 
     def _set_timing(self) -> None:
@@ -158,9 +160,9 @@ class RhythmicTaskEnv(gym.Env):
             raise ValueError(f"options: expected a dict, got {type(options).__name__}")
         self.context = self.task.sample_context(self.np_random, options)
         self.task.place(self.scene.model, self.context)
-        self._imitation_plan = self.plan(self.action_map.theta0, np.zeros(len(self.extra_scales)))
+        self.imitation_plan = self.plan(self.action_map.theta0, np.zeros(len(self.extra_scales)))
         self._imitation_jerk = None
-        start = self._solve(self._imitation_plan, self._imitation_plan.world()[:1])
+        start = self.solve_plan(self.imitation_plan, self.imitation_plan.world()[:1])
         self.scene.set_arm_state(start.q[0])
         self.frames = []
         return self._observation(), {"context": self.context.vector()}
@@ -221,11 +223,11 @@ class RhythmicTaskEnv(gym.Env):
         path = np.asarray(path, dtype=np.float64)
         if path.shape != (self.n_steps, 3):
             raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
-        plan = self._imitation_plan
+        plan = self.imitation_plan
         given = TaskPlan(path, plan.origin, plan.rotation, plan.extras)
         return self._execute(given, {"params": None, "extras": None})
 
-    def _solve(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
+    def solve_plan(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
         """The joint path of ``world [T, 3]``, the tool's axis along the task frame's z (converged: a rhythmic
         path's joint accelerations are what the success criteria judge)."""
         return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS, coarse_iterations=150)
@@ -243,7 +245,7 @@ class RhythmicTaskEnv(gym.Env):
         excess = float(np.max(np.maximum(low - local, 0.0) + np.maximum(local - high, 0.0)))
         if excess > 0:
             return self._invalid(info, "workspace", excess / 0.1)
-        solution = self._solve(plan, world)
+        solution = self.solve_plan(plan, world)
         bad = (solution.pos_error > _IK_TOLERANCE[0]) | (solution.rot_error > _IK_TOLERANCE[1])
         if np.any(bad):
             severity = 0.5 * np.mean(bad) + 0.5 * min(1.0, float(solution.pos_error.max()) / 0.1)
@@ -253,7 +255,7 @@ class RhythmicTaskEnv(gym.Env):
             return self._invalid(info, "joint_speed", speed / self.robot.max_joint_speed - 1.0)
         executed = self._simulate(solution)
         path = ToolPath(plan, solution.q, executed.sensors, executed.qpos, executed.qvel, executed.tip, executed.steps,
-                        executed.unstable, self.dt, self.frame_skip, self._jerk_ratio(plan.path),
+                        executed.unstable, self.dt, self.frame_skip, self.jerk_ratio(plan.path),
                         float(Smoothness.peak_accel(solution.q, self.dt).max()), self.robot.max_joint_accel)
         outcome = self.task.evaluate(path, self.context, self.scene.sensor)
         causes = ("unstable",) if executed.unstable else outcome.causes
@@ -270,10 +272,10 @@ class RhythmicTaskEnv(gym.Env):
         simulation.run(plan.q, callback)
         return simulation
 
-    def _jerk_ratio(self, path: np.ndarray) -> float:
+    def jerk_ratio(self, path: np.ndarray) -> float:
         """Integrated squared jerk of ``path [T, 3]`` over the imitation's in this context."""
         if self._imitation_jerk is None:
-            self._imitation_jerk = Smoothness.integrated_jerk(self._imitation_plan.path, self.dt)
+            self._imitation_jerk = Smoothness.integrated_jerk(self.imitation_plan.path, self.dt)
         return Smoothness.integrated_jerk(path, self.dt) / max(self._imitation_jerk, 1e-12)
 
     def _invalid(self, info: dict, reason: str, severity: float) -> tuple[float, dict]:

@@ -77,8 +77,8 @@ class RhythmicTaskStepEnv(gym.Env):
         super().reset(seed=seed)
         face = self.episodic
         _, info = face.reset(seed=seed, options=options)
-        plan = face._imitation_plan
-        solution = face._solve(plan, plan.world())
+        plan = face.imitation_plan
+        solution = face.solve_plan(plan, plan.world())
         self._plan, self._path = plan, plan.path.copy()
         self._imitation_q, self._q = solution.q, solution.q.copy()
         self._lead = face.scene.servo_lead()
@@ -159,7 +159,7 @@ class RhythmicTaskStepEnv(gym.Env):
         executed = simulation.steps if last else steps
         plan = TaskPlan(self._path, self._plan.origin, self._plan.rotation, self._plan.extras)
         record = ToolPath(plan, self._q, simulation.sensors, simulation.qpos, simulation.qvel, simulation.tip,
-                          executed, simulation.unstable, face.dt, face.frame_skip, face._jerk_ratio(self._path),
+                          executed, simulation.unstable, face.dt, face.frame_skip, face.jerk_ratio(self._path),
                           float(Smoothness.peak_accel(self._q, face.dt).max()), face.robot.max_joint_accel)
         outcome = face.task.evaluate(record, face.context, face.scene.sensor)
         judged = -float(np.sum(outcome.cost_trace)) if last else -float(np.sum(outcome.cost_trace[:steps]))

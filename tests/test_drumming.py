@@ -124,7 +124,7 @@ def test_the_same_seed_gives_the_same_numbers():
 def test_standing_still_and_pressing_on_the_membrane_fail(env):
     face = env.unwrapped
     face.reset(seed=2, options=STEADY)
-    imitation = face._imitation_plan.path
+    imitation = face.imitation_plan.path
     _, still = face.run_path(np.repeat(imitation[:1], len(imitation), axis=0))
     assert not still["is_success"] and still["struck_fraction"] == 0.0
     pressing = imitation.copy()
