@@ -397,7 +397,9 @@ def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
     agents = list(dict.fromkeys(r["agent"] for r in runs))
     imitation = next(r for r in rows if r["agent"] == "imitation")
     curves = ((0, "eval_success", "validation success rate"), (1, "eval_coverage", "validation coverage"))
-    for col, key, label in curves:
+    covered = any(c.get("eval_coverage") is not None and np.isfinite(c["eval_coverage"]) for r in runs
+                  for c in r["curve"])
+    for col, key, label in curves[:None if covered else 1]:
         axis = axes[col]
         for index, agent in enumerate(agents):
             group = [r for r in runs if r["agent"] == agent]
@@ -411,6 +413,9 @@ def _plot(runs: list[dict], rows: list[dict], path: Path, title: str) -> None:
         axis.set_xlabel("training episodes")
         axis.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
+    if not covered:
+        axes[1].set_axis_off()
+        axes[1].set_title("validation coverage: the task has none", fontsize=9)
     for col, metric, label in ((2, "success", "test success rate"), (3, "jerk_ratio", "test jerk / imitation")):
         axis = axes[col]
         shown = [imitation] + [r for r in rows if r["agent"] != "imitation"]
