@@ -29,23 +29,23 @@ CONTEXT = {"drum_position": [0.05, -0.02], "drum_height": 0.12, "drum_tilt": [0.
 
 def episode(env_id: str, video: Path | None) -> tuple[np.ndarray, dict, float]:
     """A frame ``[H, W, 3]`` at the tip's third strike, the episode's info and the control period."""
-    env = gym.make(env_id, render_mode="rgb_array", width=560, height=420, frame_stride=1, camera="side")
-    env.reset(seed=0, options=CONTEXT)
-    action = np.zeros(env.action_space.shape, np.float32)
-    size = env.unwrapped.action_map.size
-    action[size:size + 3] = [0.67, 0.5, -0.5]        # a stronger coupling that follows the tempo change
+    env = gym.make(env_id, render_mode="rgb_array", width=560, height=420, frame_stride=4, camera="side")
     face = env.unwrapped
+    action = np.zeros(env.action_space.shape, np.float32)
+    size = face.action_map.size
+    action[size:size + 3] = [0.67, 0.5, -0.5]        # a stronger coupling that follows the tempo change
+    env.reset(seed=0, options=CONTEXT)
     if video is not None:
         video.mkdir(parents=True, exist_ok=True)
-        face.frame_stride = 4
         _, _, _, _, info = face.record_episode(action, video / f"{env_id.split('/')[1]}.mp4", fps=25)
-        face.frame_stride = 1
-        env.reset(seed=0, options=CONTEXT)
+    else:
+        _, _, _, _, info = env.step(action)
+    env.reset(seed=0, options=CONTEXT)                # again, keeping the frame of the third strike only
+    face.frame_stride = round(float(info["strike_times"][2]) / face.dt)
     face.record_frames = True
-    _, _, _, _, info = env.step(action)
+    env.step(action)
     face.record_frames = False
-    strike = round(float(info["strike_times"][2]) / face.dt)
-    frame = face.frames[min(strike, len(face.frames) - 1)]
+    frame = face.frames[1]
     env.close()
     return frame, info, face.dt
 
