@@ -23,12 +23,13 @@ The ``anchor`` group cannot be in the action: the anchor is the dirt patch centr
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from typing import Any
 
 import numpy as np
 
 from rdmp_gym import RhythmicDMP
 
-__all__ = ["DEFAULT_SCALES", "ActionMap"]
+__all__ = ["DEFAULT_SCALES", "ActionMap", "checked_action"]
 
 #: Default fractions. Chosen so that a uniformly random action stays a plausible wiping motion: with
 #: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
@@ -39,6 +40,20 @@ __all__ = ["DEFAULT_SCALES", "ActionMap"]
 #: the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
 DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06,
                   "sweep_x": 0.06, "sweep_y": 0.06}
+
+
+def checked_action(action: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``action`` as float64 of ``shape`` (not clipped); ValueError naming ``action`` for a non-numeric value, a
+    wrong shape, NaN or infinite values."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"action: expected a numeric array of shape {shape}") from error
+    if a.shape != shape:
+        raise ValueError(f"action: expected shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("action: contains NaN or infinite values")
+    return a
 
 
 class ActionMap:

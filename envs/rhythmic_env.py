@@ -30,7 +30,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from .action import ActionMap
+from .action import ActionMap, checked_action
 from .controller import JointTargetPlan
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
@@ -111,15 +111,7 @@ class RhythmicTaskEnv(gym.Env):
 
     # ------------------------------------------------------------------ action <-> parameters
     def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action: expected a numeric array of shape {self.action_space.shape}") from error
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"action: expected shape {self.action_space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError("action: contains NaN or infinite values")
-        return np.clip(a, -1.0, 1.0)
+        return np.clip(checked_action(action, self.action_space.shape), -1.0, 1.0)
 
     def _split(self, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(DMP parameters ``[P]``, the task's own values ``[E]``) of a clipped action."""

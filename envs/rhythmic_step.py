@@ -30,13 +30,10 @@ import numpy as np
 from .reward import Smoothness
 from .rhythmic_env import RhythmicTaskEnv
 from .servo import ServoSimulation
-from .step_twin import axis_shift, coupling_action, coupling_filter
+from .step_twin import axis_shift, coupling_action, coupling_filter, joint_shift, plan_velocity
 from .tasks.description import TaskPlan, ToolPath
 
 __all__ = ["RhythmicTaskStepEnv"]
-
-#: damping (m) of the joint correction's least squares
-_DAMPING = 1e-3
 
 
 class RhythmicTaskStepEnv(gym.Env):
@@ -104,7 +101,7 @@ class RhythmicTaskStepEnv(gym.Env):
         count = face.n_steps
         if k + 1 < count:
             self._advance(k + 1, self.coupling_scale * a)
-        diverged = self._simulation.step(k, self._q[k] + self._lead * self._velocity(k))
+        diverged = self._simulation.step(k, self._q[k] + self._lead * plan_velocity(self._q, k, face.dt))
         self._k = k + 1
         last = diverged or self._k >= count
         reward, info = self._reward(last)
@@ -130,23 +127,8 @@ class RhythmicTaskStepEnv(gym.Env):
         if not np.any(offset):
             return
         self._path[k] = self._plan.path[k] + offset
-        self._q[k] = self._imitation_q[k] + self._joint_shift(self._imitation_q[k], self._plan.rotation @ offset)
-
-    def _joint_shift(self, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
-        """Joint change ``[n]`` that moves the tool tip by ``shift [3]`` (world, m) at fixed orientation (damped least
-        squares on the chain's Jacobian at ``q [n]``)."""
-        jac_pos, jac_rot = self.episodic.ik.kin.forward(q[None]).jacobian()
-        jac = np.vstack([jac_pos[0], jac_rot[0]])
-        return np.linalg.solve(jac.T @ jac + _DAMPING**2 * np.eye(len(q)), jac.T @ np.r_[shift, np.zeros(3)])
-
-    def _velocity(self, k: int) -> np.ndarray:
-        """The plan's joint velocity at step ``k`` [n], as ``np.gradient`` of the joint path (the episodic plan's)."""
-        q, dt, count = self._q, self.episodic.dt, self.episodic.n_steps
-        if k == 0:
-            return (q[1] - q[0]) / dt
-        if k == count - 1:
-            return (q[k] - q[k - 1]) / dt
-        return (q[k + 1] - q[k - 1]) / (2.0 * dt)
+        self._q[k] = self._imitation_q[k] + joint_shift(self.episodic.ik.kin, self._imitation_q[k],
+                                                          self._plan.rotation @ offset)
 
     # ------------------------------------------------------------------ reward
     def _reward(self, last: bool) -> tuple[float, dict[str, Any]]:

@@ -22,7 +22,9 @@ __all__ = [
     "TablePose",
     "WipeScene",
     "dirt_grid",
+    "read_arm",
     "rotation_from_tilt",
+    "servo_lead",
 ]
 
 logger = logging.getLogger(__name__)
@@ -57,6 +59,31 @@ def rotation_from_tilt(tilt_x: float, tilt_y: float) -> np.ndarray:
     rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
     ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
     return ry @ rx
+
+
+def read_arm(scene: object, model: mujoco.MjModel, joints: tuple[str, ...], argument: str) -> None:
+    """Set the arm's indices on ``scene`` for the model's ``joints`` (full names, chain order): ``joint_ids``,
+    ``qpos_adr``, ``dof_adr``, ``joint_lower``, ``joint_upper`` and ``actuator_ids`` (each ``[n]``); ValueError
+    naming ``argument`` where a joint has no joint actuator."""
+    joint_ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in joints])
+    actuator_of_joint = {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
+                         if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
+    missing = [n.split("/")[-1] for n, j in zip(joints, joint_ids, strict=True) if int(j) not in actuator_of_joint]
+    if missing:
+        raise ValueError(f"{argument}: no joint actuator for {missing}")
+    scene.joint_ids = joint_ids
+    scene.qpos_adr = model.jnt_qposadr[joint_ids].copy()
+    scene.dof_adr = model.jnt_dofadr[joint_ids].copy()
+    scene.joint_lower = model.jnt_range[joint_ids, 0].copy()
+    scene.joint_upper = model.jnt_range[joint_ids, 1].copy()
+    scene.actuator_ids = np.array([actuator_of_joint[int(j)] for j in joint_ids])
+
+
+def servo_lead(model: mujoco.MjModel, actuator_ids: np.ndarray) -> np.ndarray:
+    """``kv / kp`` of the position servos ``actuator_ids [n]``, ``[n]`` (s): the lag a moving target sees."""
+    kp = model.actuator_gainprm[actuator_ids, 0]
+    kv = -model.actuator_biasprm[actuator_ids, 2]
+    return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
 
 
 def dirt_grid(centre: np.ndarray, size: np.ndarray, cell: float) -> np.ndarray:
@@ -146,17 +173,7 @@ class WipeScene:
 
     def _read_joints(self) -> None:
         m, joint = self.model, mujoco.mjtObj.mjOBJ_JOINT
-        self.joint_ids = np.array([self.id(joint, "robot", n) for n in self.robot.joints])
-        self.qpos_adr = m.jnt_qposadr[self.joint_ids].copy()
-        self.dof_adr = m.jnt_dofadr[self.joint_ids].copy()
-        self.joint_lower = m.jnt_range[self.joint_ids, 0].copy()
-        self.joint_upper = m.jnt_range[self.joint_ids, 1].copy()
-        actuator_of_joint = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)
-                             if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
-        missing = [n for n, j in zip(self.robot.joints, self.joint_ids, strict=True) if int(j) not in actuator_of_joint]
-        if missing:
-            raise ValueError(f"xml_file: no joint actuator for {missing}")
-        self.actuator_ids = np.array([actuator_of_joint[int(j)] for j in self.joint_ids])
+        read_arm(self, m, tuple(self.name("robot", n) for n in self.robot.joints), "xml_file")
         self.slide_qpos = m.jnt_qposadr[self.id(joint, "tool", "sponge_slide")]
 
     def _read_arena(self) -> None:
@@ -309,6 +326,4 @@ class WipeScene:
 
     def servo_lead(self) -> np.ndarray:
         """``kv / kp`` of the arm's position servos, [n] (s): the lag a moving target sees."""
-        kp = self.model.actuator_gainprm[self.actuator_ids, 0]
-        kv = -self.model.actuator_biasprm[self.actuator_ids, 2]
-        return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
+        return servo_lead(self.model, self.actuator_ids)

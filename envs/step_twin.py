@@ -40,7 +40,8 @@ from .scene import WipeScene
 from .wipe_env import ArmarWipeEnv, outcome
 from .wiping import DirtField, WipeSimulation, WipeTrace
 
-__all__ = ["WipeStepEnv", "axis_shift", "coupling_action", "coupling_filter", "sponge_position"]
+__all__ = ["WipeStepEnv", "axis_shift", "coupling_action", "coupling_filter", "joint_shift", "plan_velocity",
+           "sponge_position"]
 
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 #: Settings of the episodic env that the step twin cannot honour (it does not know the path ahead).
@@ -128,7 +129,7 @@ class WipeStepEnv(gym.Env):
         task, k, count = self.task, self._k, self.task.n_steps
         if k + 1 < count:
             self._advance(k + 1, self.coupling_scale * a)
-        row = self._q[k] + self._lead * self._velocity(k)
+        row = self._q[k] + self._lead * plan_velocity(self._q, k, self.task.dt)
         diverged = self._simulation.step(k, row, self._ndq[k], float(self._path[k, 2]))
         self._wear_step(k, diverged)
         self._k = k + 1
@@ -179,26 +180,8 @@ class WipeStepEnv(gym.Env):
         target = np.clip(self._path[k] + offset, low, high)
         offset = target - self._path[k]
         self._path[k] = target
-        self._q[k] = self._imitation_q[k] + self._joint_shift(self._imitation_q[k], self._rotation @ offset)
+        self._q[k] = self._imitation_q[k] + joint_shift(self.task.ik.kin, self._imitation_q[k], self._rotation @ offset)
 
-    def _joint_shift(self, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
-        """Joint change ``[n]`` that moves the sponge by ``shift [3]`` (world, m) at fixed orientation, by damped
-        least squares on the chain's Jacobian at ``q [n]``."""
-        jac_pos, jac_rot = self.task.ik.kin.forward(q[None]).jacobian()
-        jac = np.vstack([jac_pos[0], jac_rot[0]])
-        rhs = np.r_[shift, np.zeros(3)]
-        return np.linalg.solve(jac.T @ jac + _DAMPING**2 * np.eye(len(q)), jac.T @ rhs)
-
-    def _velocity(self, k: int) -> np.ndarray:
-        """Joint velocity of the plan at step ``k`` [n]: ``np.gradient`` of the joint path, as the episodic plan."""
-        q, dt, count = self._q, self.task.dt, self.task.n_steps
-        if count == 1:
-            return np.zeros(q.shape[1])
-        if k == 0:
-            return (q[1] - q[0]) / dt
-        if k == count - 1:
-            return (q[k] - q[k - 1]) / dt
-        return (q[k + 1] - q[k - 1]) / (2.0 * dt)
 
     # ------------------------------------------------------------------ bookkeeping
     def _wear_step(self, k: int, diverged: bool) -> None:
@@ -262,6 +245,29 @@ class WipeStepEnv(gym.Env):
         parts = [np.cos(self._phase[k]), np.sin(self._phase[k]), self._radius[k], *position, *face, *velocity, force,
                  *self._context_obs]
         return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)
+
+
+def joint_shift(kinematics: Any, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """Joint change ``[n]`` that moves the chain's site by ``shift [3]`` (world, m) at fixed orientation, by damped
+    least squares on the Jacobian of ``kinematics`` (a :class:`~rdmp_gym.envs.kinematics.ChainKinematics`) at
+    ``q [n]``."""
+    jac_pos, jac_rot = kinematics.forward(q[None]).jacobian()
+    jac = np.vstack([jac_pos[0], jac_rot[0]])
+    rhs = np.r_[shift, np.zeros(3)]
+    return np.linalg.solve(jac.T @ jac + _DAMPING**2 * np.eye(len(q)), jac.T @ rhs)
+
+
+def plan_velocity(q: np.ndarray, k: int, dt: float) -> np.ndarray:
+    """Joint velocity ``[n]`` at step ``k`` of a joint path ``q [T, n]``: ``np.gradient`` of the path (as the
+    episodic plan's feed-forward), for one step, reading only steps ``k - 1 .. k + 1``."""
+    count = len(q)
+    if count == 1:
+        return np.zeros(q.shape[1])
+    if k == 0:
+        return (q[1] - q[0]) / dt
+    if k == count - 1:
+        return (q[k] - q[k - 1]) / dt
+    return (q[k + 1] - q[k - 1]) / (2.0 * dt)
 
 
 def coupling_action(action: Any) -> np.ndarray:

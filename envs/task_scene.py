@@ -18,6 +18,7 @@ from .arena import DIST, FOUND, MINDIST, add_contact_sensor, self_contact_sensor
 from .ik import BodyClearance, PathIK
 from .kinematics import ChainKinematics
 from .robots import RobotDescription, get_robot
+from .scene import read_arm, servo_lead
 from .tasks.description import TaskDescription
 
 __all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "TaskScene", "compose_task_scene"]
@@ -55,7 +56,7 @@ class TaskScene:
         self.task = task
         self.model = compose_task_scene(self.robot, task)
         self.data = mujoco.MjData(self.model)
-        self._read_arm()
+        read_arm(self, self.model, tuple(ROBOT_PREFIX + n for n in self.robot.joints), "robot")
         table = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "table")
         #: the nominal table frame in the world: origin [3] (on the top surface), rotation [3, 3]
         self.table_origin = self.model.body_pos[table].copy()
@@ -73,20 +74,6 @@ class TaskScene:
     def id(self, obj: mujoco.mjtObj, name: str) -> int:
         """The model id of object ``name`` (-1 if there is none)."""
         return mujoco.mj_name2id(self.model, obj, name)
-
-    def _read_arm(self) -> None:
-        m, joint = self.model, mujoco.mjtObj.mjOBJ_JOINT
-        self.joint_ids = np.array([self.id(joint, ROBOT_PREFIX + n) for n in self.robot.joints])
-        self.qpos_adr = m.jnt_qposadr[self.joint_ids].copy()
-        self.dof_adr = m.jnt_dofadr[self.joint_ids].copy()
-        self.joint_lower = m.jnt_range[self.joint_ids, 0].copy()
-        self.joint_upper = m.jnt_range[self.joint_ids, 1].copy()
-        actuator_of_joint = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)
-                             if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
-        missing = [n for n, j in zip(self.robot.joints, self.joint_ids, strict=True) if int(j) not in actuator_of_joint]
-        if missing:
-            raise ValueError(f"robot: no joint actuator for {missing}")
-        self.actuator_ids = np.array([actuator_of_joint[int(j)] for j in self.joint_ids])
 
     def path_ik(self) -> PathIK:
         """The path IK of the robot's chain to the task tool's site, with the robot's arm-from-body clearance."""
@@ -108,9 +95,7 @@ class TaskScene:
 
     def servo_lead(self) -> np.ndarray:
         """``kv / kp`` of the arm's position servos ``[n]`` (s): the lag a moving target sees."""
-        kp = self.model.actuator_gainprm[self.actuator_ids, 0]
-        kv = -self.model.actuator_biasprm[self.actuator_ids, 2]
-        return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
+        return servo_lead(self.model, self.actuator_ids)
 
     def table_to_world(self, points: np.ndarray) -> np.ndarray:
         """Nominal table-frame points ``[..., 3]`` in the world frame."""

@@ -43,7 +43,7 @@ from rdmp_gym.demonstrations import check_frame
 from rdmp_gym.fitting import FADE_BEFORE_T
 from rdmp_gym.pose import PoseDMP
 
-from .action import ActionMap
+from .action import ActionMap, checked_action
 from .approach import approach_direction, lift_profile
 from .clearance import Cup, CupClearance, HandPoints
 from .context import CONTEXT_FIELDS, Context, ContextSpec
@@ -432,15 +432,7 @@ class ArmarWipeEnv(gym.Env):
         return weights
 
     def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action: expected a numeric array of shape {self.action_space.shape}") from error
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"action: expected shape {self.action_space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError("action: contains NaN or infinite values")
-        return np.clip(a, -1.0, 1.0)
+        return np.clip(checked_action(action, self.action_space.shape), -1.0, 1.0)
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:

@@ -31,6 +31,7 @@ import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP
 
+from ..action import checked_action
 from .controller import JointReader, MujocoJoints, TrackingController, make_controller
 from .defaults import default_demonstration, env_defaults
 from .params import JointParameterMap
@@ -228,15 +229,7 @@ class RhythmicBlackBoxWrapper(gym.Env):
         return self.dmp.param_time_weights(self.t, groups=self.groups, transient=0)[1:]
 
     def _check_action(self, action: Any) -> np.ndarray:
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"action: expected a numeric array of shape {self.action_space.shape}") from error
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"action: expected shape {self.action_space.shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError("action: contains NaN or infinite values")
-        return a
+        return checked_action(action, self.action_space.shape)
 
     # ------------------------------------------------------------------ rollouts
     def _joint_state(self) -> tuple[np.ndarray, np.ndarray]:
