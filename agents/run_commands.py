@@ -37,12 +37,11 @@ from rdmp_gym.figures import write_paper_figures
 
 from .config import Settings
 from .imitation import load_demonstration
-from .learners import CONTEXTUAL
 from .plots import plot_fit
 from .protocol import interval
 from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
-from .tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, failure_contexts
+from .tasks import failure_contexts, main_env_kwargs, main_options
 from .train_config import AGENTS, START_MODES, TrainConfig
 from .training import MUTABLE_ON_RESUME, load_run_config, train
 
@@ -54,13 +53,15 @@ logger = logging.getLogger(__name__)
 #: a ``gym.make`` keyword's or reset option's value on the command line (``None`` for null)
 EnvValue = bool | int | float | str | None
 _WORKERS = os.cpu_count() or 1
+#: the run's defaults, defined once by :class:`TrainConfig` (the main learner on the current task)
+_RUN = {item.name: item.default for item in dataclasses.fields(TrainConfig)}
 
 
 @dataclass
 class TaskFlags:
     """The task: the env and its ``gym.make`` keywords."""
 
-    env: str = MAIN_ENV
+    env: str = _RUN["env_id"]
     """episodic env id (one step = one DMP rollout); rdmp_gym/DMPTracking-v0 is a physics-free DMP task"""
     style: int | None = None
     """built-in demonstration style 1-4 (default: the env's)"""
@@ -93,13 +94,13 @@ class TrainCommand(TaskFlags):
 
     out: str = ""
     """run directory (required)"""
-    agent: Literal[AGENTS] = MAIN_AGENT  # type: ignore[valid-type]
+    agent: Literal[AGENTS] = _RUN["agent"]  # type: ignore[valid-type]
     """learner; its settings are --options.NAME flags (see --agent NAME --help)"""
-    updates: int = 30
+    updates: int = _RUN["updates"]
     """updates"""
-    rollouts: int = 10
+    rollouts: int = _RUN["rollouts"]
     """episodes per update"""
-    seed: int = 0
+    seed: int = _RUN["seed"]
     """run seed"""
     workers: int = _WORKERS
     """worker processes (the numbers do not depend on it)"""
@@ -107,13 +108,13 @@ class TrainCommand(TaskFlags):
     """where the episodes run: local worker processes or Ray actors (the numbers are the same)"""
     ray_address: str | None = None
     """Ray cluster to join with --backend ray (default: $RAY_ADDRESS, else a new local Ray instance)"""
-    start: Literal[START_MODES] = "imitation"  # type: ignore[valid-type]
+    start: Literal[START_MODES] = _RUN["start"]  # type: ignore[valid-type]
     """start of the search"""
-    perturbation: float = 0.3
+    perturbation: float = _RUN["perturbation"]
     """std of the perturbed start"""
-    eval_episodes: int = 1
+    eval_episodes: int = _RUN["eval_episodes"]
     """validation contexts the policy is evaluated on"""
-    eval_every: int = 1
+    eval_every: int = _RUN["eval_every"]
     """updates between policy evaluations"""
     resume: bool = False
     """continue the run in --out from its checkpoint with its own config.json (flags only to change it)"""
@@ -179,8 +180,7 @@ def _env_kwargs(task: TaskFlags) -> dict[str, Any]:
     clash = sorted(set(task.env_option) & set(kwargs))
     if clash:
         raise ValueError(f"--env-option: {clash[0]} is also given by its own flag")
-    defaults = MAIN_ENV_KWARGS if task.env == MAIN_ENV else {}
-    return {**defaults, **kwargs, **task.env_option}
+    return {**main_env_kwargs(task.env), **kwargs, **task.env_option}
 
 
 def _prepare_demo(task: TaskFlags) -> str:
@@ -203,15 +203,13 @@ def train_config(command: TrainCommand, options: Settings | None = None) -> Trai
                        reset_options=dict(command.reset_option) or None,
                        options=_default_options(command) if options is None else options, start=command.start,
                        perturbation=command.perturbation, demo=_prepare_demo(command),
-                       eval_episodes=command.eval_episodes, eval_every=command.eval_every,
-                       shared_context=command.agent not in CONTEXTUAL)
+                       eval_episodes=command.eval_episodes, eval_every=command.eval_every)
 
 
 def _default_options(command: TrainCommand) -> Settings:
     """The learner's settings of a new run: the task's defaults for the agent (the main job's for its learner)."""
-    options = MAIN_OPTIONS if command.agent == MAIN_AGENT and command.env == MAIN_ENV else {}
     return TrainConfig(agent=command.agent, env_id=command.env, env_kwargs=_env_kwargs(command),
-                       options=options).options
+                       options=main_options(command.agent, command.env)).options
 
 
 _TASK_FLAGS = ("style", "n_periodic", "n_transient", "duration", "groups", "dmp")
@@ -224,10 +222,9 @@ def _saved_command(kind: type[TrainCommand], saved: TrainConfig, out: str) -> Tr
     flags = {name: env_kwargs.pop(name) for name in _TASK_FLAGS if name in env_kwargs}
     if "groups" in flags:
         flags["groups"] = tuple(flags["groups"])
-    if saved.env_id == MAIN_ENV:        # keep the main job's keywords out of the flags (they come back as defaults)
-        for key, value in MAIN_ENV_KWARGS.items():
-            if env_kwargs.get(key, object()) == value:
-                env_kwargs.pop(key)
+    for key, value in main_env_kwargs(saved.env_id).items():  # the main job's keywords come back as defaults
+        if env_kwargs.get(key, object()) == value:
+            env_kwargs.pop(key)
     return kind(env=saved.env_id, demo=saved.demo, env_option=env_kwargs, reset_option=dict(saved.reset_options or {}),
                 out=out, agent=saved.agent, updates=saved.updates, rollouts=saved.rollouts, seed=saved.seed,
                 workers=saved.workers, start=saved.start, perturbation=saved.perturbation,

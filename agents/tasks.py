@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -14,20 +15,33 @@ from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner
 from .imitation import load_demonstration
 
 __all__ = ["MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS", "MAIN_OPTIONS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions",
-           "TaskSpec", "episode_metrics", "failure_contexts", "run_episode", "task_options"]
+           "TaskSpec", "episode_metrics", "failure_contexts", "main_env_kwargs", "main_options", "run_episode",
+           "task_options"]
 
 #: the first wiping task (the ids are defined in ``rdmp_gym.envs.registration``)
 WIPE_ID = ENV_ID
 #: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
 WIPE_V2_ID = ENV_ID_V2
 
-#: The main job (``rdmp-gym main``, and ``rdmp-gym train`` without ``--agent``/``--env``): the learner that reached
-#: the validation target soonest in the benchmark, ``bbrl`` exploring the approach 3x wider, on the current task
-#: executed with the hand's clearance from the cup. Given options and env keywords of the same name replace these.
+#: The defaults of every layer, defined here once: the main job (``rdmp-gym main``), ``rdmp-gym train`` without
+#: ``--agent``/``--env``, ``TrainConfig()`` and ``TaskSpec()`` all run the learner that reached the validation target
+#: soonest in the benchmark, ``bbrl`` exploring the approach 3x wider, on the current task executed with the hand's
+#: clearance from the cup. Given options and env keywords of the same name replace these.
 MAIN_AGENT = "bbrl"
 MAIN_ENV = LATEST_ENV_ID
 MAIN_ENV_KWARGS: dict[str, Any] = {"cup_clearance": 0.01}
 MAIN_OPTIONS: dict[str, Any] = {"sigma_factors": {"approach": 3.0}}
+
+
+def main_env_kwargs(env_id: str) -> dict[str, Any]:
+    """The env keywords a run gets when none are given: :data:`MAIN_ENV_KWARGS` on the main env, else none."""
+    return copy.deepcopy(MAIN_ENV_KWARGS) if env_id == MAIN_ENV else {}
+
+
+def main_options(agent: str, env_id: str) -> dict[str, Any]:
+    """The learner settings a run gets when none are given: :data:`MAIN_OPTIONS` for the main learner on the main
+    env, else none (the task's learner defaults still apply: :func:`task_options`)."""
+    return copy.deepcopy(MAIN_OPTIONS) if agent == MAIN_AGENT and env_id == MAIN_ENV else {}
 
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
@@ -52,17 +66,23 @@ class TaskSpec:
     """A picklable recipe for the task's environment (worker processes rebuild it from this).
 
     Attributes:
-        env_id: a registered episodic env (``rdmp_gym/ArmarWipe-v1``, the default, or ``rdmp_gym/DMPTracking-v0``).
-        env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...).
+        env_id: a registered episodic env (default :data:`MAIN_ENV`, the current wiping task), or a step-based
+            Gymnasium env with a continuous action space (run under the rhythmic black-box wrapper).
+        env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...); None:
+            :func:`main_env_kwargs`.
         reset_options: ``options`` passed to every ``reset`` (e.g. to fix the context), or None.
         demo: a CSV/NPZ demonstration (table frame, m) that the env fits instead of its built-in
             style ("" = none); passed as the env's ``demonstration`` keyword.
     """
 
-    env_id: str = WIPE_ID
-    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    env_id: str = MAIN_ENV
+    env_kwargs: Mapping[str, Any] | None = None
     reset_options: Mapping[str, Any] | None = None
     demo: str = ""
+
+    def __post_init__(self) -> None:
+        if self.env_kwargs is None:
+            object.__setattr__(self, "env_kwargs", main_env_kwargs(self.env_id))
 
     def make(self, render_mode: str | None = None) -> gym.Env:
         """Build the environment (importing the packages that register the ids)."""

@@ -8,16 +8,17 @@ The loop (:mod:`rdmp_gym.agents.training`) and its callbacks (:mod:`rdmp_gym.age
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 from typing import Any, Protocol
 
 import numpy as np
+from rdmp_gym.envs.registration import env_settings
 
 from . import sb3_config  # noqa: F401  (declares PPO and SAC)
 from .config import Settings, check_choice, check_range
-from .learners import EpisodeBatch
+from .learners import CONTEXTUAL, EpisodeBatch
 from .registry import REGISTRY, agent_spec
-from .tasks import WIPE_ID, TaskSpec, task_options
+from .tasks import MAIN_AGENT, MAIN_ENV, TaskSpec, main_env_kwargs, main_options, task_options
 
 __all__ = ["AGENTS", "START_MODES", "Agent", "TrainConfig"]
 
@@ -32,20 +33,24 @@ class TrainConfig:
     """Everything that defines a training run (stored as ``config.json``).
 
     Attributes:
-        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``creps``, ``cpibb``, ``cpi2``, ``pi2``, ``pibb``,
-            ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``.
+        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``pi2``,
+            ``pibb``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the main
+            learner (:data:`~rdmp_gym.agents.tasks.MAIN_AGENT`).
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
         workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
             (PPO's parallel envs are its own setting ``envs``).
-        env_id: the episodic env.
-        env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...).
+        env_id: the episodic env; default the current task (:data:`~rdmp_gym.agents.tasks.MAIN_ENV`).
+        env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...), validated once
+            against the env's typed settings (:attr:`env_settings`; an unknown or bad setting is an error naming
+            it); None: the main job's keywords on its env, else none (:func:`~rdmp_gym.agents.tasks.main_env_kwargs`).
         reset_options: options for every reset (e.g. a fixed context), or None.
         options: the agent's settings: its typed settings object (``PI2Config``, ``BBRLConfig``, ``PPOConfig``, ...,
             used as given), or a mapping of their fields over the task's defaults for the agent
             (``tasks.task_options``: e.g. a contextual search on the wiping task starts from the task's learner
-            defaults, ``rdmp_gym.envs.registration.learner_defaults``). Stored as the typed object.
+            defaults, ``rdmp_gym.envs.registration.learner_defaults``); None: the main job's options for the main
+            learner on its env, else none (:func:`~rdmp_gym.agents.tasks.main_options`). Stored as the typed object.
         start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
             ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
             a smaller, damped movement; the initial conditions as fitted).
@@ -54,23 +59,24 @@ class TrainConfig:
         eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
         eval_every: evaluate the policy every this many updates (and after the last one).
         shared_context: all rollouts of one update use the same reset seed (same context); the contextual
-            learners (``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context per rollout.
+            learners (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context
+            per rollout. None: shared for the others, not for them (the same episodes either way).
     """
 
-    agent: str = "pi2"
+    agent: str = MAIN_AGENT
     updates: int = 30
     rollouts: int = 10
     seed: int = 0
     workers: int = 1
-    env_id: str = WIPE_ID
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    env_id: str = MAIN_ENV
+    env_kwargs: Mapping[str, Any] | None = None
     reset_options: dict[str, Any] | None = None
-    options: Settings | Mapping[str, Any] = field(default_factory=dict)
+    options: Settings | Mapping[str, Any] | None = None
     start: str = "imitation"
     perturbation: float = 0.3
     demo: str = ""
     eval_episodes: int = 1
-    shared_context: bool = True
+    shared_context: bool | None = None
     eval_every: int = 1
 
     def __post_init__(self) -> None:
@@ -83,8 +89,15 @@ class TrainConfig:
         check_range(self.eval_episodes, "eval_episodes", 1, None)
         check_range(self.eval_every, "eval_every", 1, None)
         check_choice(self.start, "start", START_MODES)
+        if self.env_kwargs is None:
+            object.__setattr__(self, "env_kwargs", main_env_kwargs(self.env_id))
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"env_kwargs: expected a mapping, got {type(self.env_kwargs).__name__}")
+        env_settings(self.env_id, self.env_kwargs)
+        if self.options is None:
+            object.__setattr__(self, "options", main_options(self.agent, self.env_id))
+        if self.shared_context is None:
+            object.__setattr__(self, "shared_context", self.agent not in CONTEXTUAL)
         if self.reset_options is not None and not isinstance(self.reset_options, Mapping):
             raise TypeError(f"reset_options: expected a mapping or None, got {type(self.reset_options).__name__}")
         settings = agent_spec(self.agent).config
@@ -120,6 +133,12 @@ class TrainConfig:
         values = {item.name: getattr(self, item.name) for item in fields(self)}
         return {**values, "env_kwargs": dict(self.env_kwargs), "options": self.options.to_dict(),
                 "reset_options": None if self.reset_options is None else dict(self.reset_options)}
+
+    @property
+    def env_settings(self) -> Any:
+        """The env's typed, validated settings (:func:`rdmp_gym.envs.registration.env_settings`: the wiping task's
+        :class:`~rdmp_gym.envs.settings.EnvConfig`, else its keywords)."""
+        return env_settings(self.env_id, self.env_kwargs)
 
     @property
     def task(self) -> TaskSpec:

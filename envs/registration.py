@@ -8,6 +8,8 @@ Gymnasium's way of saying that an import is wanted for its side effect).
 from __future__ import annotations
 
 import copy
+import inspect
+from collections.abc import Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -29,6 +31,7 @@ __all__ = [
     "STEP_ID_V2",
     "STEP_ID_V3",
     "TRACKING_ID",
+    "env_settings",
     "learner_defaults",
     "register_envs",
     "register_task_ids",
@@ -61,15 +64,16 @@ ROBOT_ID_NAMES: dict[str, str] = {"armar3": "Armar", "panda": "Panda"}
 _RHYTHMIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 _RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
 _WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
+_DEPRECATED = "rdmp_gym.envs.wipe_env:deprecated_v0"
 _STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
 _STEP_TWIN = "rdmp_gym.envs.step_twin:WipeStepEnv"
 
 #: id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
-    ENV_ID: (_WIPE, {"obstacle": True}),
-    DEPRECATED_ENV_ID: ("rdmp_gym.envs.wipe_env:deprecated_v0", {}),
+    ENV_ID: (_WIPE, {"obstacle": True, "version": 1}),
+    DEPRECATED_ENV_ID: (_DEPRECATED, {}),
     TRACKING_ID: ("rdmp_gym.envs.tracking:TrackingEnv", {}),
-    STEP_ID: (_STEP, {}),
+    STEP_ID: (_STEP, {"version": 1}),
     ENV_ID_V2: (_WIPE, {"obstacle": True, "version": 2}),
     STEP_ID_V2: (_STEP, {"version": 2, "max_shift": (0.06, 0.06, 0.02)}),
     ENV_ID_V3: (_WIPE, {"obstacle": True, "version": 3}),
@@ -93,6 +97,40 @@ def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
     else:
         defaults = {}
     return copy.deepcopy(dict(defaults))
+
+
+def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
+    """The settings ``gym.make(env_id, **kwargs)`` builds its env with, validated without building it.
+
+    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.settings.EnvConfig`; the other ids of this
+    package give the keywords (registered and given), checked against the env's signature and, for a task of the
+    rhythmic face, against its description; ids of other packages give the keywords as they are (their env checks
+    them). Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take
+    or a value it refuses.
+    """
+    if env_id not in gym.registry:
+        raise ValueError(f"env_id: no env registered as {env_id!r} (import the package that registers it)")
+    spec = gym.registry[env_id]
+    settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
+    if not isinstance(spec.entry_point, str) or not spec.entry_point.startswith("rdmp_gym."):
+        return settings
+    if spec.entry_point in (_WIPE, _DEPRECATED):
+        from .settings import EnvConfig
+
+        return EnvConfig.from_kwargs(**settings)
+    creator = gym.envs.registration.load_env_creator(spec.entry_point)
+    try:
+        bound = inspect.signature(creator).bind(**settings)
+    except TypeError as error:
+        raise TypeError(f"env_kwargs: {env_id} does not take these settings: {error}") from None
+    if spec.entry_point in (_RHYTHMIC, _RHYTHMIC_STEP):
+        from .tasks import get_task
+
+        try:
+            get_task(settings["task"], **bound.arguments.get("task_settings", {}))
+        except TypeError as error:
+            raise TypeError(f"env_kwargs: {env_id} does not take these settings: {error}") from None
+    return settings
 
 
 def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:

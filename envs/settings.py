@@ -167,7 +167,8 @@ class TaskConfig:
     """What the task is: its version, the imitation, the action, the episode's length, the dirt and the limits.
 
     Attributes:
-        version: the task version (:mod:`rdmp_gym.envs.versions`; ``gym.make`` of ``rdmp_gym/ArmarWipe-v2`` sets 2).
+        version: the task version (:mod:`rdmp_gym.envs.versions`; default the current, 3; ``gym.make`` of an id sets
+            its own).
         style: synthetic demonstration style 1..4 (used when neither ``demonstration`` nor ``dmp`` is given).
         demonstration: a ``rdmp_gym.Demonstration`` with 3 dimensions (x, y, z in the table frame) to fit (not JSON).
         dmp: a ``dmp.json`` path (or a ``RhythmicDMP``, which is not JSON) used as the imitation without fitting.
@@ -188,7 +189,7 @@ class TaskConfig:
             ``CupClearance`` with such a margin, or None (off).
     """
 
-    version: int = 1
+    version: int = 3
     style: int = 1
     demonstration: Demonstration | None = None
     dmp: str | RhythmicDMP | None = None

@@ -71,8 +71,9 @@ class ArmarWipeStepEnv(gym.Env):
         ik_iterations: damped-least-squares iterations of the IK per control step, a fixed count from the IK's
             posture (as the episodic path IK solves its knots; a warm start drifts in the null space, and
             stopping at a tolerance after a varying count makes the joint targets jump between steps).
-        **kwargs: keywords of :class:`ArmarWipeEnv` (style, demonstration, dmp, n_periods, duration, control_rate,
-            target_force, force_band, reward_weights, adaptation, context_ranges, obstacle, render_mode, ...);
+        **kwargs: keywords of :class:`ArmarWipeEnv` (version 1, the default, or 2; style, demonstration, dmp,
+            n_periods, duration, control_rate, target_force, force_band, reward_weights, adaptation, context_ranges,
+            obstacle, render_mode, ...);
             ``cup_clearance``, ``record_frames`` and ``force_learning`` are refused by name (:data:`REFUSED`).
     """
 
@@ -84,6 +85,10 @@ class ArmarWipeStepEnv(gym.Env):
         for key, why in REFUSED.items():
             if kwargs.get(key) not in (None, False):
                 raise ValueError(f"{key}: the v1/v2 step env cannot honour it ({why})")
+        kwargs.setdefault("version", 1)
+        if kwargs["version"] not in (1, 2):
+            raise ValueError(f"version: this step env runs the versions 1 and 2, got {kwargs['version']!r}; "
+                             f"version 3's step twin is rdmp_gym/ArmarWipeStep-v3")
         shift = axis_shift(max_shift)
         if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")

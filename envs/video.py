@@ -5,7 +5,7 @@ Gymnasium's ``RecordVideo`` calls ``render()`` after ``reset`` and after each ``
 env for the frames it captures during the rollout (``record_frames``, every ``frame_stride`` control
 steps) and writes one video per recorded episode::
 
-    env = RecordEpisodeVideo(gym.make("rdmp_gym/ArmarWipe-v1"), "runs/videos", episode_trigger=lambda i: i % 10 == 0)
+    env = RecordEpisodeVideo(gym.make("rdmp_gym/ArmarWipe-v3"), "runs/videos", episode_trigger=lambda i: i % 10 == 0)
 """
 
 from __future__ import annotations

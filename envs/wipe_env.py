@@ -1,7 +1,8 @@
-"""``rdmp_gym/ArmarWipe-v2`` (and v1): episodic table wiping with a rhythmic DMP on a simulated ARMAR-III.
+"""``rdmp_gym/ArmarWipe-v3`` (and v1, v2, ``PandaWipe-v3``): episodic table wiping with a rhythmic DMP.
 
-What v2 changes (the travelling pattern, solvable contexts, the smoothness measure, executable success) is
-listed in :mod:`rdmp_gym.envs.versions`; ``version`` selects it.
+What each version changes (v2: the travelling pattern, solvable contexts, the smoothness measure, executable
+success; v3: the composed scene of any robot and a smooth-path success) is listed in :mod:`rdmp_gym.envs.versions`;
+``version`` selects it (default 3, the current task).
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
@@ -225,8 +226,8 @@ class ArmarWipeEnv(gym.Env):
             rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
-        version: the task version, 1 or 2 (:mod:`rdmp_gym.envs.versions`); ``gym.make`` of
-            ``rdmp_gym/ArmarWipe-v2`` sets 2.
+        version: the task version, 1, 2 or 3 (:mod:`rdmp_gym.envs.versions`; default 3, the current task as
+            ``rdmp_gym/ArmarWipe-v3`` makes it); ``gym.make`` of an id sets its own.
         cup_clearance: execute every path with a clearance term that keeps the hand (fingers, thumb, palm,
             sponge) this many metres from the cup's side (:class:`~rdmp_gym.envs.clearance.CupClearance`, or one
             given); ``None`` (default): the path as commanded. The reward and the success criteria are the same;
@@ -742,7 +743,8 @@ def deprecated_v0(**kwargs: Any) -> ArmarWipeEnv:
     robot; v1 (:class:`ArmarWipeEnv`) fixes all of it and changes the reward's meaning, hence the new version.
     """
     warnings.warn("rdmp_gym/ArmarWipe-v0 is deprecated and will be removed: its reward could be gamed. It now "
-                  "makes rdmp_gym/ArmarWipe-v1 with obstacle=False; use rdmp_gym/ArmarWipe-v1.",
+                  "makes rdmp_gym/ArmarWipe-v1 with obstacle=False; use rdmp_gym/ArmarWipe-v3, the current task.",
                   DeprecationWarning, stacklevel=2)
     kwargs.setdefault("obstacle", False)
+    kwargs.setdefault("version", 1)
     return ArmarWipeEnv(**kwargs)

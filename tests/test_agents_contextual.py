@@ -258,13 +258,14 @@ def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_th
     from rdmp_gym.envs.registration import learner_defaults
 
     defaults = learner_defaults(WIPE_ID)["cpi2"]
-    config = TrainConfig(agent="cpi2", options={"sigma_factors": {"approach": 2}})
+    config = TrainConfig(agent="cpi2", env_id=WIPE_ID, options={"sigma_factors": {"approach": 2}})
     assert config.options == CPI2Config.from_dict({**defaults, "sigma_factors": {"approach": 2.0}})  # the run's wins
     assert config.options.gain_groups == ("amplitude", "approach")                  # typed: lists, not comma strings
     assert TrainConfig.from_dict(config.to_dict()) == config                       # and it round-trips
-    assert TrainConfig(agent="random").options == RandomReturnConfig.from_dict(defaults)  # the control explores alike
-    assert TrainConfig(agent="amplitude").options == AmplitudeConfig()
-    assert TrainConfig(agent="cpi2", env_kwargs={"groups": ["periodic"]}).options == CPI2Config()
+    control = TrainConfig(agent="random", env_id=WIPE_ID).options
+    assert control == RandomReturnConfig.from_dict(defaults)                       # the control explores alike
+    assert TrainConfig(agent="amplitude", env_id=WIPE_ID).options == AmplitudeConfig()
+    assert TrainConfig(agent="cpi2", env_id=WIPE_ID, env_kwargs={"groups": ["periodic"]}).options == CPI2Config()
     assert TrainConfig(agent="cpi2", env_id=TRACKING_ID).options == CPI2Config()
     given = CPI2Config(sigma=0.2)                                                   # a typed object is used as given
     assert TrainConfig(agent="cpi2", options=given).options is given

@@ -34,7 +34,7 @@ TODAY = {
     "obstacle_probability": 0.75, "cell_size": 0.01, "wear_rate": 2.0e-3, "penetration_limit": 0.005,
     "limit_margin": 0.02, "ik_tolerance": (0.005, float(np.deg2rad(5.0))), "max_joint_speed": None, "xml_file": None,
     "render_mode": None, "width": 480, "height": 480, "camera": "front", "record_frames": False, "frame_stride": 4,
-    "version": 1, "cup_clearance": None, "robot": "armar3",
+    "version": 3, "cup_clearance": None, "robot": "armar3",
 }
 
 #: The context rules of ArmarWipe-v2 on the packaged table (cup radius 3.5 cm; the pad's half-diagonal + 1 cm).
