@@ -16,26 +16,9 @@ from typing import Any, ClassVar, TypeVar, get_args, get_origin, get_type_hints
 
 from typeguard import TypeCheckError, check_type
 
-__all__ = ["Settings", "check_choice", "check_range"]
+__all__ = ["Settings"]
 
 S = TypeVar("S", bound="Settings")
-
-
-def check_range(value: float, name: str, low: float | None = None, high: float | None = None, *,
-                low_open: bool = False, high_open: bool = False) -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``low (<|<=) value (<|<=) high``."""
-    too_low = low is not None and (value <= low if low_open else value < low)
-    too_high = high is not None and (value >= high if high_open else value > high)
-    if too_low or too_high or value != value:
-        left = "(" if low_open else "["
-        right = ")" if high_open else "]"
-        raise ValueError(f"{name}: expected a value in {left}{low}, {high}{right}, got {value!r}")
-
-
-def check_choice(value: str, name: str, choices: tuple[str, ...]) -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is one of ``choices``."""
-    if value not in choices:
-        raise ValueError(f"{name}: expected one of {list(choices)}, got {value!r}")
 
 
 def _legacy_items(text: str) -> tuple[str, ...]:

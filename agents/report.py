@@ -18,7 +18,8 @@ import gymnasium as gym
 import numpy as np
 from tqdm.auto import tqdm
 
-from .config import check_choice
+from rdmp_gym.validation import check_choice
+
 from .learners import CONTEXTUAL, policy_from_state
 from .plots import plot_policy_comparison
 from .pool import Evaluator

@@ -44,7 +44,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .config import Settings, check_range
+from rdmp_gym.validation import check_range
+
+from .config import Settings
 from .registry import register
 
 __all__ = ["PPOConfig", "SACConfig", "SB3Settings"]

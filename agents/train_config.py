@@ -14,8 +14,10 @@ from typing import Any, Protocol
 import numpy as np
 from rdmp_gym.envs.registration import env_settings
 
+from rdmp_gym.validation import check_choice, check_range
+
 from . import sb3_config  # noqa: F401  (declares PPO and SAC)
-from .config import Settings, check_choice, check_range
+from .config import Settings
 from .learners import CONTEXTUAL, EpisodeBatch
 from .registry import REGISTRY, agent_spec
 from .tasks import MAIN_AGENT, MAIN_ENV, TaskSpec, main_env_kwargs, main_options, task_options

@@ -8,6 +8,7 @@ Gymnasium's way of saying that an import is wanted for its side effect).
 from __future__ import annotations
 
 import copy
+import importlib
 import inspect
 from collections.abc import Mapping
 from typing import Any
@@ -108,9 +109,13 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     them). Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take
     or a value it refuses.
     """
-    if env_id not in gym.registry:
-        raise ValueError(f"env_id: no env registered as {env_id!r} (import the package that registers it)")
-    spec = gym.registry[env_id]
+    module, _, name = env_id.rpartition(":")       # "module:id", as gym.make takes it: the module registers the id
+    try:
+        if module:
+            importlib.import_module(module)
+        spec = gym.spec(name)
+    except (gym.error.Error, ModuleNotFoundError) as error:
+        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
     settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
     if not isinstance(spec.entry_point, str) or not spec.entry_point.startswith("rdmp_gym."):
         return settings

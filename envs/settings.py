@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -47,6 +46,17 @@ import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP
 from rdmp_gym.fitting import FIT_METHODS
+from rdmp_gym.validation import (
+    SettingTypeError,
+    check_flag,
+    check_integer,
+    check_mapping,
+    check_number,
+    check_optional_number,
+    check_pair,
+    check_path,
+    is_number,
+)
 
 from .clearance import CupClearance
 from .context import ContextSpec
@@ -87,76 +97,6 @@ FORMAT_VERSION = 1
 
 
 # ---------------------------------------------------------------------------------------------- checks
-class SettingTypeError(TypeError, ValueError):
-    """A setting of the wrong type. It is a ``TypeError`` and also a ``ValueError``, so code that catches the
-    ``ValueError`` the env raised for bad settings before they were data still sees it."""
-
-
-def _is_number(value: object) -> bool:
-    return not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, float, np.integer, np.floating))
-
-
-def _number(value: object, name: str, *, low: float | None = None, high: float | None = None,
-            strict_low: bool = True, what: str = "") -> float:
-    """``value`` as a finite float, checked against ``low`` (strictly above unless ``strict_low``) and ``high``."""
-    if not _is_number(value):
-        raise SettingTypeError(f"{name}: expected a number{what}, got {value!r} ({type(value).__name__})")
-    number = float(value)
-    if not math.isfinite(number):
-        raise ValueError(f"{name}: expected a finite number{what}, got {value!r}")
-    if low is not None and (number <= low if strict_low else number < low):
-        raise ValueError(f"{name}: expected a number {'>' if strict_low else '>='} {low:g}{what}, got {value!r}")
-    if high is not None and number > high:
-        raise ValueError(f"{name}: expected a number <= {high:g}{what}, got {value!r}")
-    return number
-
-
-def _optional_number(value: object, name: str, **kwargs: Any) -> float | None:
-    return None if value is None else _number(value, name, **kwargs)
-
-
-def _integer(value: object, name: str, low: int = 1) -> int:
-    """``value`` as an int (an integral float is accepted), ``>= low``."""
-    if _is_number(value) and float(value).is_integer():
-        number = int(value)
-        if number < low:
-            raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}")
-        return number
-    raise SettingTypeError(f"{name}: expected an integer, got {value!r} ({type(value).__name__})")
-
-
-def _flag(value: object, name: str) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise SettingTypeError(f"{name}: expected True or False, got {value!r} ({type(value).__name__})")
-    return bool(value)
-
-
-def _pair(value: object, name: str, what: str) -> tuple[float, float]:
-    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
-        raise SettingTypeError(f"{name}: expected {what}, got {value!r}")
-    items = tuple(value)
-    if len(items) != 2:
-        raise ValueError(f"{name}: expected {what}, got {value!r}")
-    return tuple(_number(item, name, what=f" ({what})") for item in items)  # type: ignore[return-value]
-
-
-def _path(value: object, name: str) -> str | None:
-    if value is None:
-        return None
-    if not isinstance(value, (str, Path)) or not str(value):
-        raise SettingTypeError(f"{name}: expected a file path, got {value!r} ({type(value).__name__})")
-    return str(value)
-
-
-def _mapping(value: object, name: str, what: str) -> dict:
-    if not isinstance(value, Mapping):
-        raise SettingTypeError(f"{name}: expected {what}, got {value!r} ({type(value).__name__})")
-    for key in value:
-        if not isinstance(key, str):
-            raise SettingTypeError(f"{name}: expected names (str) as keys, got {key!r}")
-    return dict(value)
-
-
 def _set(obj: object, name: str, value: object) -> None:
     object.__setattr__(obj, name, value)
 
@@ -209,10 +149,10 @@ class TaskConfig:
     cup_clearance: float | CupClearance | None = None
 
     def __post_init__(self) -> None:
-        if not _is_number(self.version) or self.version not in TASK_VERSIONS:
+        if not is_number(self.version) or self.version not in TASK_VERSIONS:
             raise ValueError(f"version: expected one of {sorted(TASK_VERSIONS)}, got {self.version!r}")
         _set(self, "version", int(self.version))
-        if not _is_number(self.style) or self.style not in (1, 2, 3, 4):
+        if not is_number(self.style) or self.style not in (1, 2, 3, 4):
             raise ValueError(f"style: expected 1, 2, 3 or 4, got {self.style!r}")
         _set(self, "style", int(self.style))
         if self.demonstration is not None:
@@ -232,8 +172,8 @@ class TaskConfig:
                 _set(self, "dmp", str(self.dmp))
             else:
                 raise SettingTypeError(f"dmp: expected a dmp.json path or a RhythmicDMP, got {type(self.dmp).__name__}")
-        _set(self, "n_periodic", _integer(self.n_periodic, "n_periodic"))
-        _set(self, "n_transient", _integer(self.n_transient, "n_transient"))
+        _set(self, "n_periodic", check_integer(self.n_periodic, "n_periodic"))
+        _set(self, "n_transient", check_integer(self.n_transient, "n_transient"))
         if self.fit_method not in FIT_METHODS:
             raise ValueError(f"fit_method: expected one of {FIT_METHODS}, got {self.fit_method!r}")
         if self.groups is not None:
@@ -245,25 +185,25 @@ class TaskConfig:
                 raise ValueError(f"groups: expected one or more group names, got {self.groups!r}")
             _set(self, "groups", groups)
         if self.scales is not None:
-            scales = _mapping(self.scales, "scales", "{group: fraction} or None")
-            _set(self, "scales", {key: _number(value, f"scales: {key}", low=0.0, what=" (an action scale > 0)")
+            scales = check_mapping(self.scales, "scales", "{group: fraction} or None")
+            _set(self, "scales", {key: check_number(value, f"scales: {key}", low=0.0, what=" (an action scale > 0)")
                                   for key, value in scales.items()})
-        _set(self, "n_periods", _optional_number(self.n_periods, "n_periods", low=0.0))
-        _set(self, "duration", _optional_number(self.duration, "duration", low=0.0, what=" (s)"))
-        _set(self, "cell_size", _number(self.cell_size, "cell_size", low=0.0, what=" (m)"))
-        _set(self, "wear_rate", _number(self.wear_rate, "wear_rate", low=0.0))
-        _set(self, "penetration_limit", _number(self.penetration_limit, "penetration_limit", low=0.0, what=" (m)"))
-        margin = _number(self.limit_margin, "limit_margin", low=0.0, strict_low=False, what=" (rad)")
+        _set(self, "n_periods", check_optional_number(self.n_periods, "n_periods", low=0.0))
+        _set(self, "duration", check_optional_number(self.duration, "duration", low=0.0, what=" (s)"))
+        _set(self, "cell_size", check_number(self.cell_size, "cell_size", low=0.0, what=" (m)"))
+        _set(self, "wear_rate", check_number(self.wear_rate, "wear_rate", low=0.0))
+        _set(self, "penetration_limit", check_number(self.penetration_limit, "penetration_limit", low=0.0, what=" (m)"))
+        margin = check_number(self.limit_margin, "limit_margin", low=0.0, strict_low=False, what=" (rad)")
         if margin >= MAX_LIMIT_MARGIN:
             raise ValueError(f"limit_margin: expected a margin below {MAX_LIMIT_MARGIN} rad (the distance to a joint "
                              f"limit that counts as at the limit; with {margin:g} every step is at a limit), "
                              f"got {self.limit_margin!r}")
         _set(self, "limit_margin", margin)
-        tolerance = _pair(self.ik_tolerance, "ik_tolerance", "(position m, angle rad)")
+        tolerance = check_pair(self.ik_tolerance, "ik_tolerance", "(position m, angle rad)")
         if min(tolerance) <= 0.0:
             raise ValueError(f"ik_tolerance: expected (position m, angle rad) > 0, got {self.ik_tolerance!r}")
         _set(self, "ik_tolerance", tolerance)
-        _set(self, "max_joint_speed", _optional_number(self.max_joint_speed, "max_joint_speed", low=0.0,
+        _set(self, "max_joint_speed", check_optional_number(self.max_joint_speed, "max_joint_speed", low=0.0,
                                                        what=" (rad/s)"))
         _set(self, "cup_clearance", _cup_clearance(self.cup_clearance))
 
@@ -284,9 +224,9 @@ def _cup_clearance(value: object) -> float | CupClearance | None:
     if value is None:
         return None
     margin = value.margin if isinstance(value, CupClearance) else value
-    if not isinstance(value, CupClearance) and not _is_number(value):
+    if not isinstance(value, CupClearance) and not is_number(value):
         raise SettingTypeError(f"cup_clearance: expected None, a margin in metres or a CupClearance, got {value!r}")
-    number = _number(margin, "cup_clearance", low=0.0, what=" (margin, m)")
+    number = check_number(margin, "cup_clearance", low=0.0, what=" (margin, m)")
     if number > MAX_CUP_CLEARANCE:
         raise ValueError(f"cup_clearance: expected a margin in (0, {MAX_CUP_CLEARANCE}] m (a larger one pushes the "
                          f"sponge off the patch), got {margin!r}")
@@ -309,10 +249,10 @@ class TimingConfig:
     timestep: float | None = None
 
     def __post_init__(self) -> None:
-        _set(self, "timestep", _optional_number(self.timestep, "timestep", low=0.0, what=" (s)"))
-        _set(self, "control_rate", _number(self.control_rate, "control_rate", low=0.0, what=" (Hz)"))
+        _set(self, "timestep", check_optional_number(self.timestep, "timestep", low=0.0, what=" (s)"))
+        _set(self, "control_rate", check_number(self.control_rate, "control_rate", low=0.0, what=" (Hz)"))
         if self.frame_skip is not None:
-            _set(self, "frame_skip", _integer(self.frame_skip, "frame_skip"))
+            _set(self, "frame_skip", check_integer(self.frame_skip, "frame_skip"))
         self._check_rate(DEFAULT_TIMESTEP if self.timestep is None else self.timestep)
 
     def _check_rate(self, timestep: float) -> None:
@@ -333,7 +273,7 @@ class TimingConfig:
     def frame_skip_for(self, model_timestep: float) -> int:
         """Physics steps per control step on a model whose step is ``model_timestep`` (s; ``timestep`` replaces it
         when given), checked as in ``__post_init__`` (the env's own rule: ``round(1 / (rate * timestep))``)."""
-        timestep = _number(model_timestep, "timestep", low=0.0) if self.timestep is None else self.timestep
+        timestep = check_number(model_timestep, "timestep", low=0.0) if self.timestep is None else self.timestep
         self._check_rate(timestep)
         if self.frame_skip is not None:
             return self.frame_skip
@@ -361,18 +301,18 @@ class ForceConfig:
     force_learning: bool | ForceProfileSettings = False
 
     def __post_init__(self) -> None:
-        band = _pair(self.force_band, "force_band", "(min, max) in N")
+        band = check_pair(self.force_band, "force_band", "(min, max) in N")
         if not 0.0 <= band[0] < band[1]:
             raise ValueError(f"force_band: expected (min, max) with 0 <= min < max, got {self.force_band!r}")
         _set(self, "force_band", band)
-        target = _number(self.target_force, "target_force", low=0.0, what=" (N)")
+        target = check_number(self.target_force, "target_force", low=0.0, what=" (N)")
         if not band[0] < target < band[1]:
             raise ValueError(f"target_force: expected a force inside force_band ({band[0]:g}, {band[1]:g}) N (outside "
                              f"it no episode can hold the force in the band), got {self.target_force!r}")
         _set(self, "target_force", target)
-        _set(self, "force_sigma", _number(self.force_sigma, "force_sigma", low=0.0, what=" (N)"))
-        _set(self, "adaptation", _flag(self.adaptation, "adaptation"))
-        _set(self, "admittance_gain", _number(self.admittance_gain, "admittance_gain", low=0.0, strict_low=False,
+        _set(self, "force_sigma", check_number(self.force_sigma, "force_sigma", low=0.0, what=" (N)"))
+        _set(self, "adaptation", check_flag(self.adaptation, "adaptation"))
+        _set(self, "admittance_gain", check_number(self.admittance_gain, "admittance_gain", low=0.0, strict_low=False,
                                               what=" (m/(N s))"))
         if isinstance(self.force_learning, (bool, np.bool_)):
             _set(self, "force_learning", bool(self.force_learning))
@@ -406,8 +346,8 @@ class RewardConfig:
         if isinstance(self.weights, RewardWeights):
             weights = dataclasses.asdict(self.weights)
         else:
-            weights = _mapping(self.weights, "reward_weights", "{term: weight} or None")
-        weights = {key: _number(value, f"reward_weights: {key}", low=0.0, strict_low=False)
+            weights = check_mapping(self.weights, "reward_weights", "{term: weight} or None")
+        weights = {key: check_number(value, f"reward_weights: {key}", low=0.0, strict_low=False)
                    for key, value in weights.items()}
         RewardWeights.from_mapping(weights)                 # unknown terms raise, naming reward_weights
         _set(self, "weights", weights)
@@ -430,10 +370,10 @@ class ContextConfig:
 
     def __post_init__(self) -> None:
         if self.ranges is not None:
-            ranges = _mapping(self.ranges, "context_ranges", "{field: (low, high)} or None")
+            ranges = check_mapping(self.ranges, "context_ranges", "{field: (low, high)} or None")
             _set(self, "ranges", {key: _range(value, key) for key, value in ranges.items()})
-        _set(self, "obstacle", _flag(self.obstacle, "obstacle"))
-        _set(self, "obstacle_probability", _number(self.obstacle_probability, "obstacle_probability", low=0.0,
+        _set(self, "obstacle", check_flag(self.obstacle, "obstacle"))
+        _set(self, "obstacle_probability", check_number(self.obstacle_probability, "obstacle_probability", low=0.0,
                                                    strict_low=False, high=1.0, what=" in [0, 1]"))
         self.spec()                                   # fields, bounds, low <= high: raise naming context_ranges
 
@@ -457,8 +397,8 @@ def _range(value: object, key: str) -> tuple:
         raise ValueError(f"{name}: expected (low, high), got {value!r}")
     out = []
     for end in ends:
-        if _is_number(end):
-            out.append(_number(end, name))
+        if is_number(end):
+            out.append(check_number(end, name))
             continue
         try:
             array = np.asarray(end)
@@ -466,7 +406,7 @@ def _range(value: object, key: str) -> tuple:
             raise ValueError(f"{name}: expected (low, high) of numbers, got {value!r}") from error
         if array.ndim != 1 or array.dtype.kind not in "iuf":
             raise SettingTypeError(f"{name}: expected (low, high) of numbers, got {value!r}")
-        out.append(tuple(_number(x.item(), name) for x in array))
+        out.append(tuple(check_number(x.item(), name) for x in array))
     return tuple(out)
 
 
@@ -492,12 +432,12 @@ class RenderConfig:
     def __post_init__(self) -> None:
         if self.render_mode is not None and self.render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode: expected None or one of {list(RENDER_MODES)}, got {self.render_mode!r}")
-        _set(self, "width", _integer(self.width, "width"))
-        _set(self, "height", _integer(self.height, "height"))
+        _set(self, "width", check_integer(self.width, "width"))
+        _set(self, "height", check_integer(self.height, "height"))
         if self.camera is not None and not isinstance(self.camera, str):
             raise SettingTypeError(f"camera: expected a camera name or None, got {self.camera!r}")
-        _set(self, "record_frames", _flag(self.record_frames, "record_frames"))
-        _set(self, "frame_stride", _integer(self.frame_stride, "frame_stride"))
+        _set(self, "record_frames", check_flag(self.record_frames, "record_frames"))
+        _set(self, "frame_stride", check_integer(self.frame_stride, "frame_stride"))
 
 
 # ---------------------------------------------------------------------------------------------- the whole
@@ -571,7 +511,7 @@ class EnvConfig:
     def __post_init__(self) -> None:
         if not isinstance(self.robot, RobotDescription) and not (isinstance(self.robot, str) and self.robot):
             raise SettingTypeError(f"robot: expected a robot's name or a RobotDescription, got {self.robot!r}")
-        _set(self, "xml_file", _path(self.xml_file, "xml_file"))
+        _set(self, "xml_file", check_path(self.xml_file, "xml_file"))
         for name, cls in _GROUPS.items():
             if not isinstance(getattr(self, name), cls):
                 raise SettingTypeError(f"{name}: expected a {cls.__name__}, got {type(getattr(self, name)).__name__}")
@@ -633,7 +573,7 @@ class EnvConfig:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> EnvConfig:
         """Inverse of :meth:`to_dict` (missing entries default; unknown ones raise ValueError naming them)."""
-        data = _mapping(data, "config", "a mapping (EnvConfig.to_dict)")
+        data = check_mapping(data, "config", "a mapping (EnvConfig.to_dict)")
         version = data.pop("format_version", FORMAT_VERSION)
         if version != FORMAT_VERSION:
             raise ValueError(f"format_version: expected {FORMAT_VERSION}, got {version!r}")
@@ -645,7 +585,7 @@ class EnvConfig:
         for group, group_cls in _GROUPS.items():
             if group not in data:
                 continue
-            values = _mapping(data[group], group, f"a mapping of {group_cls.__name__}'s fields")
+            values = check_mapping(data[group], group, f"a mapping of {group_cls.__name__}'s fields")
             names = {f.name for f in fields(group_cls)}
             bad = sorted(set(values) - names)
             if bad:

@@ -34,7 +34,7 @@ def _without_time(records):
 def test_ray_backend_gives_the_numbers_of_the_local_pool(tmp_path):
     ray = pytest.importorskip("ray")
     context = gym.make(WIPE_ID, disable_env_checker=True, **FAST).reset(seed=3)[1]["context"]
-    config = TrainConfig(agent="pi2", updates=2, rollouts=4, seed=1, workers=2, env_kwargs=FAST,
+    config = TrainConfig(agent="pi2", env_id=WIPE_ID, updates=2, rollouts=4, seed=1, workers=2, env_kwargs=FAST,
                          reset_options={"context": context.tolist()}, start="perturbed", options={"sigma": 0.3},
                          eval_episodes=2)
     local = train(config, tmp_path / "local")

@@ -74,3 +74,26 @@ def test_the_run_carries_the_envs_typed_settings():
     drum = TrainConfig(agent="cmaes", env_id="rdmp_gym/PandaDrum-v1", env_kwargs={"tolerance": 0.04})
     assert drum.env_settings == {"task": "drum", "robot": "panda", "version": 1, "tolerance": 0.04}
     assert dataclasses.replace(config, seed=1).env_settings == settings
+
+
+def test_the_input_checks_have_one_home():
+    """``rdmp_gym.validation`` defines every check; no module of the core, the envs or the agents defines its own."""
+    import ast
+    from pathlib import Path
+
+    import rdmp_gym.validation as validation
+
+    root = Path(__file__).resolve().parent.parent
+    homes = {}
+    for folder in ("rdmp_gym", "envs", "agents"):
+        for path in sorted((root / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and node.name.lstrip("_") in validation.__all__:
+                    homes.setdefault(node.name.lstrip("_"), []).append(str(path.relative_to(root)))
+    shared = "rdmp_gym/validation.py"
+    assert homes and all(files == [shared] for files in homes.values()), homes
+    assert SettingTypeError is validation.SettingTypeError
+    with pytest.raises(ValueError, match="rollouts"):
+        TrainConfig(rollouts=1)                                 # the agents' range check, from the same home
+    with pytest.raises(SettingTypeError, match="target_force"):
+        EnvConfig.from_kwargs(target_force="strong")            # the envs' number check, from the same home

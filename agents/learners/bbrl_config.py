@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..config import check_choice, check_range
+from rdmp_gym.validation import check_choice, check_range
+
 from ..registry import register
 from .contextual import ContextualSettings
 

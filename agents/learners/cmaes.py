@@ -21,7 +21,9 @@ from typing import Any
 import cma
 import numpy as np
 
-from ..config import Settings, check_choice, check_range
+from rdmp_gym.validation import check_choice, check_range
+
+from ..config import Settings
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs
 from .smooth_exploration import exploration_factor

@@ -36,7 +36,9 @@ from typing import Any
 import numpy as np
 from scipy.optimize import minimize
 
-from ..config import Settings, check_choice, check_range
+from rdmp_gym.validation import check_choice, check_range
+
+from ..config import Settings
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
 from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash

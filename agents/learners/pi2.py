@@ -24,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from ..config import Settings, check_range
+from rdmp_gym.validation import check_range
+
+from ..config import Settings
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights
 from .smooth_exploration import exploration_factor

@@ -13,7 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from ..config import Settings, check_choice, check_range
+from rdmp_gym.validation import check_choice, check_range
+
+from ..config import Settings
 from ..registry import register
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights
 from .smooth_exploration import exploration_factor

@@ -143,7 +143,7 @@ def _periodic_coefficients(demo: Demonstration, seg: Segmentation, period: float
     return coefficients[1:k + 1] - 1j * coefficients[k + 1:]
 
 
-def _check_pair(demo: object, seg: object, name: str) -> None:
+def _check_segmented(demo: object, seg: object, name: str) -> None:
     if not isinstance(demo, Demonstration):
         raise TypeError(f"{name}: expected a Demonstration, got {type(demo).__name__}")
     if not isinstance(seg, Segmentation):
@@ -164,8 +164,8 @@ def phase_shift(reference: Demonstration, reference_seg: Segmentation, other: De
     the distance between the series' harmonics (the mean is left out, so anchors may differ), each
     dimension weighted by the inverse square of the reference's range.
     """
-    _check_pair(reference, reference_seg, "reference")
-    _check_pair(other, other_seg, "other")
+    _check_segmented(reference, reference_seg, "reference")
+    _check_segmented(other, other_seg, "other")
     if other.n_dims != reference.n_dims:
         raise ValueError(f"other: has {other.n_dims} dimension(s), "
                          f"reference has {reference.n_dims}")
