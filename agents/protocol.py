@@ -45,6 +45,7 @@ __all__ = [
     "interval",
     "iqm",
     "path_jerk",
+    "stratified_validation_seeds",
     "success",
     "validation_seeds",
 ]
@@ -68,6 +69,33 @@ def final_test_seeds(n: int) -> np.ndarray:
 def validation_seeds(n: int) -> np.ndarray:
     """``[n]`` the reset seeds of the validation contexts (selection and learning curves)."""
     return TRAIN_SEED_LIMIT + _VALIDATION_OFFSET + np.arange(_count(n, "n"), dtype=np.int64)
+
+
+def stratified_validation_seeds(env: Any, n: int, options: dict[str, Any] | None = None, pool: int = 400
+                                ) -> np.ndarray:
+    """``[n]`` validation reset seeds spread evenly over the kinds of context the env names.
+
+    The env's ``context_kind(observation) -> str`` (e.g. the wiping task's cup on the approach, cup beside the
+    patch, largest patch, no cup) sorts the first ``pool`` seeds of the validation range; the seeds are then taken
+    from each kind in turn (kinds in the order they first appear, seeds in order), so a rare kind is represented
+    as often as a common one. The choice depends on the env's contexts alone: it is made before any run and never
+    touches the test seeds. An env without ``context_kind`` gives :func:`validation_seeds`.
+    """
+    count = _count(n, "n")
+    kind_of = getattr(getattr(env, "unwrapped", env), "context_kind", None)
+    if kind_of is None:
+        return validation_seeds(count)
+    by_kind: dict[str, list[int]] = {}
+    for seed in validation_seeds(max(_count(pool, "pool"), count)):
+        observation = env.reset(seed=int(seed), options=None if options is None else dict(options))[0]
+        by_kind.setdefault(str(kind_of(observation)), []).append(int(seed))
+    queues = list(by_kind.values())
+    chosen: list[int] = []
+    while len(chosen) < count:
+        for queue in queues:
+            if queue and len(chosen) < count:
+                chosen.append(queue.pop(0))
+    return np.array(sorted(chosen), dtype=np.int64)
 
 
 def context_observations(env: Any, seeds: np.ndarray, options: dict[str, Any] | None = None) -> np.ndarray:

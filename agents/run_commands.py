@@ -116,6 +116,8 @@ class TrainCommand(TaskFlags):
     """validation contexts the policy is evaluated on"""
     eval_every: int = _RUN["eval_every"]
     """updates between policy evaluations"""
+    stratified_validation: bool = _RUN["stratified_validation"]
+    """spread the validation contexts evenly over the kinds of context the env names (e.g. cup on the approach)"""
     resume: bool = False
     """continue the run in --out from its checkpoint with its own config.json (flags only to change it)"""
     video: bool = False
@@ -203,7 +205,8 @@ def train_config(command: TrainCommand, options: Settings | None = None) -> Trai
                        reset_options=dict(command.reset_option) or None,
                        options=_default_options(command) if options is None else options, start=command.start,
                        perturbation=command.perturbation, demo=_prepare_demo(command),
-                       eval_episodes=command.eval_episodes, eval_every=command.eval_every)
+                       eval_episodes=command.eval_episodes, eval_every=command.eval_every,
+                       stratified_validation=command.stratified_validation)
 
 
 def _default_options(command: TrainCommand) -> Settings:
@@ -228,7 +231,8 @@ def _saved_command(kind: type[TrainCommand], saved: TrainConfig, out: str) -> Tr
     return kind(env=saved.env_id, demo=saved.demo, env_option=env_kwargs, reset_option=dict(saved.reset_options or {}),
                 out=out, agent=saved.agent, updates=saved.updates, rollouts=saved.rollouts, seed=saved.seed,
                 workers=saved.workers, start=saved.start, perturbation=saved.perturbation,
-                eval_episodes=saved.eval_episodes, eval_every=saved.eval_every, resume=True, **flags)
+                eval_episodes=saved.eval_episodes, eval_every=saved.eval_every,
+                stratified_validation=saved.stratified_validation, resume=True, **flags)
 
 
 def _parse_flags(kind: type[TrainCommand], argv: Sequence[str], prog: str, *, read_run: bool = True

@@ -63,6 +63,9 @@ class TrainConfig:
         shared_context: all rollouts of one update use the same reset seed (same context); the contextual
             learners (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context
             per rollout. None: shared for the others, not for them (the same episodes either way).
+        stratified_validation: the validation contexts spread evenly over the kinds of context the env names
+            (:func:`~rdmp_gym.agents.protocol.stratified_validation_seeds`; e.g. the wiping task's cup on the
+            approach, cup beside the patch, largest patch, no cup), instead of the first ``eval_episodes`` seeds.
     """
 
     agent: str = MAIN_AGENT
@@ -79,6 +82,7 @@ class TrainConfig:
     demo: str = ""
     eval_episodes: int = 1
     shared_context: bool | None = None
+    stratified_validation: bool = False
     eval_every: int = 1
 
     def __post_init__(self) -> None:
@@ -119,7 +123,8 @@ class TrainConfig:
         unknown = sorted(set(values) - known)
         if unknown:
             raise ValueError(f"config: unknown option(s) {unknown}; expected some of {sorted(known)}")
-        for name, kind in (("agent", str), ("env_id", str), ("start", str), ("demo", str), ("shared_context", bool)):
+        for name, kind in (("agent", str), ("env_id", str), ("start", str), ("demo", str), ("shared_context", bool),
+                           ("stratified_validation", bool)):
             if name in values and not isinstance(values[name], kind):
                 raise TypeError(f"config.{name}: expected {kind.__name__}, got {values[name]!r}")
         for name in ("updates", "rollouts", "seed", "workers", "eval_episodes", "eval_every"):

@@ -33,7 +33,7 @@ from .imitation import load_demonstration
 from .learners import EpisodeBatch, Learner, SearchSpace, make_learner
 from .plots import plot_learning_curve
 from .pool import Evaluator
-from .protocol import TRAIN_SEED_LIMIT, context_observations, validation_seeds
+from .protocol import TRAIN_SEED_LIMIT, context_observations, stratified_validation_seeds, validation_seeds
 from .registry import agent_spec
 from .runs import RunDirectory, sha256_file, write_atomic
 from .train_config import AGENTS, Agent, TrainConfig
@@ -286,7 +286,8 @@ def train(config: TrainConfig | None, out: str | Path, *, resume: bool = False,
         streams = _seed_streams(config.seed)
         with Evaluator(config.task, config.workers, backend, ray_address) as evaluator:
             initial = _initial_action(config, evaluator, streams["start"])
-            seeds = validation_seeds(config.eval_episodes)
+            seeds = stratified_validation_seeds(evaluator.env, config.eval_episodes, config.task.options()) \
+                if config.stratified_validation else validation_seeds(config.eval_episodes)
             observations = np.stack([evaluator.env.reset(seed=int(s), options=config.task.options())[0]
                                      for s in seeds])
             agent = _make_agent(config, evaluator, streams, initial, run.path)

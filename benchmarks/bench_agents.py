@@ -87,6 +87,8 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--test-contexts", type=int, default=20, help="test contexts (final policy)")
     parser.add_argument("--val-contexts", type=int, default=10, help="validation contexts (learning curves)")
     parser.add_argument("--eval-every", type=int, default=5, help="updates between validation evaluations")
+    parser.add_argument("--stratified-validation", action="store_true",
+                        help="validation contexts spread evenly over the kinds of context the env names")
     parser.add_argument("--workers", type=int, default=2, help="processes per run (local backend)")
     parser.add_argument("--backend", choices=("local", "ray"), default="local",
                         help="ray: the runs (agent x seed) are Ray tasks of one CPU each, each run on 1 worker; "
@@ -195,6 +197,8 @@ def code_versions(runs: list[dict]) -> dict[str, list[str]]:
 def _cache_key(config: TrainConfig, test_seeds: np.ndarray) -> str:
     """Everything a cached run must match to stand for ``config`` tested on ``test_seeds``."""
     fields = {key: value for key, value in vars(config).items() if key != "workers"}
+    if not fields["stratified_validation"]:            # runs from before the setting existed keep their key
+        del fields["stratified_validation"]
     return json.dumps({**fields, "test_seeds": test_seeds.tolist()}, sort_keys=True, default=str)
 
 
@@ -225,7 +229,8 @@ def _same_protocol(saved: dict, config: TrainConfig, test_seeds: np.ndarray) -> 
     return (saved["env_id"] == config.env_id and saved["env_kwargs"] == config.env_kwargs
             and saved["budget"] // saved["rollouts"] == config.updates and saved["rollouts"] == config.rollouts
             and saved["val_contexts"] == config.eval_episodes and saved["eval_every"] == config.eval_every
-            and saved["final_test_seeds"] == test_seeds.tolist())
+            and saved["final_test_seeds"] == test_seeds.tolist()
+            and saved.get("stratified_validation", False) == config.stratified_validation)
 
 
 def _same_options(saved: dict, config: TrainConfig) -> bool:
@@ -484,7 +489,8 @@ def main() -> None:
         configs = [TrainConfig(agent=learner, env_id=args.env_id, updates=args.budget // args.rollouts,
                                rollouts=args.rollouts, seed=seed, workers=workers, env_kwargs=env_kwargs,
                                options=options.get(label, {}), eval_episodes=args.val_contexts,
-                               eval_every=args.eval_every, shared_context=False)
+                               eval_every=args.eval_every, shared_context=False,
+                               stratified_validation=args.stratified_validation)
                    for label, learner in labels.items() for seed in range(counts[label])]
         names = [label for label in labels for _ in range(counts[label])]
         if args.only_seeds is not None:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["CONTEXT_FIELDS", "Context", "ContextSpec"]
+__all__ = ["CONTEXT_FIELDS", "CONTEXT_KINDS", "Context", "ContextSpec"]
 
 #: name -> (first index, length) in the context vector
 CONTEXT_FIELDS: dict[str, tuple[int, int]] = {
@@ -85,6 +85,15 @@ class Context:
         present = bool(v[10] >= 0.5)
         return cls(float(v[0]), v[1:3].copy(), v[3:5].copy(), v[5:7].copy(), v[7:10].copy(), present,
                    v[11:13].copy() if present else np.zeros(2))
+
+
+#: the kinds of wiping context, in the order of :meth:`ContextSpec.kind`'s priority
+CONTEXT_KINDS = ("cup on the approach", "cup beside the patch", "largest patch", "no cup")
+#: a cup within this distance (m) of the line from the sponge start to the patch centre, between them, stands on
+#: the approach (the corridor's cups stand within 1 cm of it)
+APPROACH_LANE = 0.015
+#: the largest patches: an area in the top quarter of the drawable areas' span
+LARGE_PATCH_SHARE = 0.75
 
 
 class ContextSpec:
@@ -214,6 +223,20 @@ class ContextSpec:
         if present and "obstacle_position" in given:
             self._check_start(context, position)
         return context
+
+    def kind(self, context: Context) -> str:
+        """The kind of ``context`` (one of :data:`CONTEXT_KINDS`): a cup on the approach (within
+        :data:`APPROACH_LANE` of the line from the sponge start to the patch centre, between them), a cup elsewhere
+        (beside the patch), no cup on one of the largest patches, or no cup."""
+        if context.obstacle:
+            start, centre = context.sponge_start[:2], context.patch_centre
+            line = centre - start
+            along = float(np.dot(context.obstacle_position - start, line) / max(float(np.dot(line, line)), 1e-12))
+            across = float(np.linalg.norm(context.obstacle_position - (start + along * line)))
+            return CONTEXT_KINDS[0] if 0.0 < along < 1.0 and across <= APPROACH_LANE else CONTEXT_KINDS[1]
+        low, high = np.prod(self.low[5:7]), np.prod(self.high[5:7])
+        large = np.prod(context.patch_size) >= low + LARGE_PATCH_SHARE * (high - low)
+        return CONTEXT_KINDS[2] if large else CONTEXT_KINDS[3]
 
     def _check_start(self, context: Context, xy: np.ndarray) -> None:
         """A given cup keeps what a drawn one keeps from the sponge start (projected on the table): its radius plus

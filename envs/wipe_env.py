@@ -504,6 +504,11 @@ class ArmarWipeEnv(gym.Env):
         return result
 
     # ------------------------------------------------------------------ episode
+    def context_kind(self, observation: np.ndarray) -> str:
+        """The kind of the context ``observation [13]`` (:data:`rdmp_gym.envs.context.CONTEXT_KINDS`: a cup on the
+        approach, a cup beside the patch, no cup on one of the largest patches, no cup), for stratified validation."""
+        return self.context_spec.kind(Context.from_vector(np.asarray(observation, dtype=np.float64)))
+
     def rollout_path(self, theta: np.ndarray) -> np.ndarray:
         """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in this episode's context.
 
