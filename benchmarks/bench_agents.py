@@ -393,6 +393,10 @@ def _report(document: dict, folder: Path, name: str, markdown: bool = False) -> 
             causes = ", ".join(f"{cause} {n}" for cause, n in counts["causes"].items()) or "none"
             print(f"{agent}: {counts['failures']} failed (seed, test context) pairs in {counts['runs']} run(s) that "
                   f"name their causes: {causes}")
+        for kind, row in (entry["by_kind"] or {}).items():
+            named = ", ".join(f"{cause} {n}" for cause, n in row["causes"].items()) or "none"
+            print(f"    {kind} ({row['contexts']} contexts): success {row['success']:.2f}, "
+                  f"{row['failures']} failed pairs: {named}")
     hardest = ", ".join(f"{h['index']} ({h['success']:.2f})" for h in field["hardest"]) or "none"
     print(f"test contexts that {field['best']} solves in fewer than half of its seeds (index, share): {hardest}")
 

@@ -11,6 +11,9 @@
 - why the final policies fail: per learner, how many (seed, test context) pairs miss each success criterion
   (the env's ``failure_causes``: coverage, force, cup, collisions, joint acceleration or limit), from the runs
   that recorded them;
+- by kind of test context (where the env names kinds, ``context_kind``; wiping: cup on the approach, cup beside the
+  patch, largest patch, no cup): per learner, how many test contexts of each kind, the share of (seed, context)
+  pairs that succeed and the criteria the failed ones miss;
 - each learner's hardest test contexts (the figure and the top-level ``hardest``: the best learner's): those it
   solves in fewer than half of its seeds, with their context vectors (where the document holds them), to read
   what they share.
@@ -99,10 +102,47 @@ def failure_counts(runs: list[dict]) -> dict:
             "causes": dict(sorted(causes.items(), key=lambda item: -item[1]))}
 
 
+def context_kinds(document: dict) -> list[str] | None:
+    """The kind of each test context of ``document`` (its env's ``context_kind`` of the stored test contexts), or
+    None where the env names no kinds or the document holds no contexts."""
+    contexts = document.get("test_contexts")
+    if not contexts:
+        return None
+    import gymnasium as gym
+    import rdmp_gym.envs  # noqa: F401  (registers the ids)
+
+    settings = document["settings"]
+    env = gym.make(settings["env_id"], disable_env_checker=True, **settings.get("env_kwargs", {}))
+    kind_of = getattr(env.unwrapped, "context_kind", None)
+    kinds = None if kind_of is None else [str(kind_of(np.asarray(c, dtype=float))) for c in contexts]
+    env.close()
+    return kinds
+
+
+def by_kind(runs: list[dict], kinds: list[str]) -> dict:
+    """``{kind: {"contexts", "success", "failures", "causes"}}`` over the (seed, test context) pairs of ``runs``
+    (one agent's), by the kind of the test context; causes only from runs that name them."""
+    result: dict[str, dict] = {}
+    for kind in dict.fromkeys(kinds):
+        where = [i for i, k in enumerate(kinds) if k == kind]
+        success = np.array([[r["test"]["success"][i] for i in where] for r in runs], dtype=float)
+        causes: dict[str, int] = {}
+        for run in runs:
+            failures = run["test"].get("failures")
+            for i in where if failures is not None else ():
+                for cause in filter(None, failures[i].split("+")):
+                    causes[cause] = causes.get(cause, 0) + 1
+        result[kind] = {"contexts": len(where), "success": float(success.mean()),
+                        "failures": int((success == 0).sum()),
+                        "causes": dict(sorted(causes.items(), key=lambda item: -item[1]))}
+    return result
+
+
 def field_summary(document: dict) -> dict:
     """Every number of the module docstring, per agent; ``best`` is the agent with the highest IQM test success."""
     runs, agents = document["runs"], _agents(document["runs"])
-    result: dict = {"agents": {}, "thresholds": THRESHOLDS.tolist(),
+    kinds = context_kinds(document)
+    result: dict = {"context_kinds": kinds, "agents": {}, "thresholds": THRESHOLDS.tolist(),
                     "ceiling": ceiling(document["settings"]["final_test_seeds"], document["settings"]["env_id"]),
                     "imitation_success": float(np.mean(document["baselines"]["imitation"]["success"]))}
     success = {agent: np.array([r["test"]["success"] for r in runs if r["agent"] == agent], dtype=float)
@@ -120,6 +160,7 @@ def field_summary(document: dict) -> dict:
             "curve_episodes": episodes.tolist(), "curve": curve_intervals(values).tolist(),
             "coverage_profile": performance_profile(coverage, THRESHOLDS).tolist() if covered else None,
             "failure_causes": failure_counts(group),
+            "by_kind": None if kinds is None else by_kind(group, kinds),
             "episodes_to": {t: {"reached": sum(e is not None for e in v),
                                 "median": float(np.median([e for e in v if e is not None])) if any(
                                     e is not None for e in v) else None} for t, v in reached.items()},

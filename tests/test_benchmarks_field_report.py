@@ -60,3 +60,14 @@ def test_failure_counts_add_each_missed_criterion_over_the_runs_that_name_them()
     assert counts == {"runs": 2, "failures": 3, "causes": {"cup": 2, "coverage": 2}}
     assert failure_counts([]) == {"runs": 0, "failures": 0, "causes": {}}
     assert field_summary(_document())["agents"]["good"]["failure_causes"]["runs"] == 0
+
+
+def test_by_kind_counts_success_and_causes_per_kind_of_test_context():
+    from field_report import by_kind
+
+    runs = [{"test": {"success": [1, 0, 0, 1], "failures": ["", "cup", "coverage+cup", ""]}},
+            {"test": {"success": [1, 1, 0, 0], "failures": ["", "", "coverage", "jerk"]}}]
+    rows = by_kind(runs, ["a", "b", "b", "a"])
+    assert rows["a"] == {"contexts": 2, "success": 0.75, "failures": 1, "causes": {"jerk": 1}}
+    assert rows["b"]["contexts"] == 2 and rows["b"]["success"] == 0.25 and rows["b"]["failures"] == 3
+    assert rows["b"]["causes"] == {"coverage": 2, "cup": 2}
