@@ -202,7 +202,9 @@ class BestPolicyCallback(Callback):
             env = state.evaluator.env.unwrapped
             params = env.action_to_params(found.actions[0])
             state.run.save_best(found.actions[0], params, state.best)
-            if hasattr(env, "dmp") and hasattr(env, "groups"):
+            if hasattr(env, "policy_dmp"):        # an env whose action holds more than the DMP's groups (a tempo)
+                save_dmp(env.policy_dmp(params), state.run.path / "dmp.json")
+            elif hasattr(env, "dmp") and hasattr(env, "groups"):
                 save_dmp(env.dmp.with_params(params, env.groups), state.run.path / "dmp.json")
         state.record["best_eval_return"] = None if state.best is None else state.best["eval_return_mean"]
 

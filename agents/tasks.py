@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -46,6 +47,19 @@ def main_options(agent: str, env_id: str) -> dict[str, Any]:
 _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 
 
+def _own_id(env_id: str) -> bool:
+    """Whether ``env_id`` (``"module:id"`` as ``gym.make`` takes it) is an env of this package (unknown ids: True,
+    so that ``gym.make`` names the problem)."""
+    module, _, name = env_id.rpartition(":")
+    try:
+        if module:
+            importlib.import_module(module)
+        entry = gym.spec(name).entry_point
+    except (gym.error.Error, ModuleNotFoundError):
+        return True
+    return not isinstance(entry, str) or entry.startswith("rdmp_gym.")
+
+
 #: options that name the env's action groups: a task's defaults assume its own layout and drop them under other groups
 _GROUP_OPTIONS = ("gain_groups", "features", "sigma_factors")
 
@@ -85,7 +99,14 @@ class TaskSpec:
             object.__setattr__(self, "env_kwargs", main_env_kwargs(self.env_id))
 
     def make(self, render_mode: str | None = None) -> gym.Env:
-        """Build the environment (importing the packages that register the ids)."""
+        """Build the environment (importing the packages that register the ids). On an env of another package,
+        ``env_kwargs`` that are settings of the rhythmic black-box wrapper (``p_gains``, ``groups``, ``duration``,
+        ...) build it under the wrapper with them; the rest go to the env."""
+        if not _own_id(self.env_id):
+            from rdmp_gym.envs.blackbox import split_settings
+
+            if split_settings(self.env_id, self.env_kwargs)[0]:    # ValueError naming a setting nobody takes
+                return self._black_box(render_mode)
         kwargs = dict(self.env_kwargs)
         if render_mode is not None:
             kwargs["render_mode"] = render_mode
@@ -102,14 +123,16 @@ class TaskSpec:
 
     def _black_box(self, render_mode: str | None) -> gym.Env:
         """A step-based env with a continuous action space, under the rhythmic black-box wrapper with its defaults
-        (``env_kwargs`` go to the env); ValueError saying why where the wrapper cannot drive it."""
-        from rdmp_gym.envs.blackbox import make_blackbox
+        (the wrapper's settings among ``env_kwargs`` replace them, the rest go to the env); ValueError saying why
+        where the wrapper cannot drive it."""
+        from rdmp_gym.envs.blackbox import make_blackbox, split_settings
 
         if self.demo:
             raise ValueError(f"demo: {self.env_id} is a step-based env; give the black-box wrapper its demonstration "
                              f"through rdmp_gym/RhythmicBlackBox-v0's keywords instead")
+        wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)
         try:
-            return make_blackbox(self.env_id, env_kwargs=self.env_kwargs, render_mode=render_mode)
+            return make_blackbox(self.env_id, env_kwargs=env_kwargs, render_mode=render_mode, **wrapper)
         except ValueError as error:
             raise ValueError(f"env_id: {self.env_id} is not an episodic DMP env (one step = one DMP rollout, with "
                              f"{', '.join(_EPISODIC_API)} and info['cost_trace']) and the rhythmic black-box wrapper "

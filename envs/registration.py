@@ -105,9 +105,10 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
 
     The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.settings.EnvConfig`; the other ids of this
     package give the keywords (registered and given), checked against the env's signature and, for a task of the
-    rhythmic face, against its description; ids of other packages give the keywords as they are (their env checks
-    them). Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take
-    or a value it refuses.
+    rhythmic face, against its description; ids of other packages give the keywords as they are, checked to be
+    keywords of the env or settings of the rhythmic black-box wrapper (:func:`~rdmp_gym.envs.blackbox.split_settings`).
+    Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take or a value
+    it refuses.
     """
     module, _, name = env_id.rpartition(":")       # "module:id", as gym.make takes it: the module registers the id
     try:
@@ -118,6 +119,10 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
         raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
     settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
     if not isinstance(spec.entry_point, str) or not spec.entry_point.startswith("rdmp_gym."):
+        if isinstance(spec.entry_point, str):     # another package's env: its keywords, or the black-box wrapper's
+            from .blackbox.wrapper import split_settings
+
+            split_settings(env_id, kwargs)
         return settings
     if spec.entry_point in (_WIPE, _DEPRECATED):
         from .settings import EnvConfig

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -334,3 +336,72 @@ def test_the_agents_wrap_a_step_based_env_and_refuse_one_the_wrapper_cannot_driv
     env.close()
     with pytest.raises(ValueError, match="continuous Box action space"):
         TaskSpec("CartPole-v1").make()
+
+
+# ------------------------------------------------------------------ HalfCheetah, tempo, settings through the agents
+def test_halfcheetah_defaults_build_and_track():
+    env = make_blackbox("HalfCheetah-v5", duration=1.0)
+    defaults = env_defaults("HalfCheetah-v5")
+    assert defaults["controller"] == "pd" and defaults["p_gains"] > 0 and defaults["period"] == pytest.approx(1 / 3)
+    assert env.n_joints == 6 and env.n_steps == 20 and env.controller.name == "pd"
+    env.reset(seed=0)
+    _, reward, terminated, _, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    assert terminated and np.isfinite(reward) and info["env_steps"] == 20
+    desired = info["desired_positions"]
+    assert np.ptp(desired[1:], axis=0).min() > 0.05                  # every joint moves in the pattern ...
+    assert info["tracking_rmse"] < 0.35 and info["clipped_fraction"] < 0.05     # ... and the PD follows it
+    env.close()
+
+
+def test_tempo_is_one_action_dimension_and_a_plus_runs_the_cycle_faster():
+    env = make_blackbox("Swimmer-v5", groups=("periodic", "tempo"), duration=20.0)
+    plain = make_blackbox("Swimmer-v5", groups=("periodic",), duration=20.0)
+    assert env.action_space.shape[0] == plain.action_space.shape[0] + 1
+    assert list(env.action_slices()) == ["periodic", "tempo"]
+    assert env.action_time_weights().shape == (env.n_steps, env.action_space.shape[0])
+    env.reset(seed=0)
+    zero = np.zeros(env.action_space.shape, np.float32)
+    faster = zero.copy()
+    faster[-1] = 0.6                                                # tempo 1 + 0.5 * 0.6 = 1.3
+    np.testing.assert_array_equal(env.desired_trajectory(env.action_to_params(zero))[0],
+                                  plain.desired_trajectory(plain.theta0, *env._start)[0])
+
+    def period(path):
+        x = path[len(path) // 3:, 0] - path[len(path) // 3:, 0].mean()
+        ups = np.flatnonzero(np.diff(np.sign(x)) > 0)
+        return float(np.mean(np.diff(ups))) * env.dt
+
+    base, quick = (period(env.desired_trajectory(env.action_to_params(a))[0]) for a in (zero, faster))
+    assert base == pytest.approx(env.dmp.period, rel=0.05) and quick == pytest.approx(base / 1.3, rel=0.05)
+    assert env.policy_dmp(env.action_to_params(faster)).canonical.tempo == pytest.approx(1.3)
+    with pytest.raises(ValueError, match="scales: tempo must be < 1"):
+        make_blackbox("Swimmer-v5", groups=("periodic", "tempo"), scales={"tempo": 1.0})
+    env.close()
+    plain.close()
+
+
+def test_env_options_reach_the_wrapper_and_an_unknown_one_is_named(tmp_path, capsys):
+    from rdmp_gym.agents.cli import main
+    from rdmp_gym.agents.run_commands import parse_train, train_config
+    from rdmp_gym.agents.tasks import TaskSpec
+    from rdmp_gym.agents.training import TrainConfig
+
+    env = TaskSpec("Swimmer-v5", {"p_gains": 4.0, "duration": 2.0, "ctrl_cost_weight": 0.0}).make()
+    base = env.unwrapped
+    assert isinstance(base, RhythmicBlackBoxWrapper) and base.n_steps == 50
+    np.testing.assert_array_equal(base.controller.p_gains, [4.0, 4.0])
+    assert base.controller.d_gains[0] == 0.5 and base.env.unwrapped._ctrl_cost_weight == 0.0   # default; env keyword
+    env.close()
+    with pytest.raises(ValueError, match="'p_gain' is neither a setting of the rhythmic black-box wrapper"):
+        TrainConfig(agent="cmaes", env_id="Swimmer-v5", env_kwargs={"p_gain": 4.0})
+    command = parse_train(["--agent", "cmaes", "--env", "Swimmer-v5", "--out", str(tmp_path / "run"), "--duration",
+                           "0.4", "--groups", "amplitude", "tempo", "--env-option", "p_gains", "4"])
+    config = train_config(command)
+    assert config.env_kwargs == {"duration": 0.4, "groups": ["amplitude", "tempo"], "p_gains": 4}
+    again = TrainConfig.from_dict(json.loads(json.dumps(config.to_dict()))).task.make().unwrapped
+    assert again.action_space.shape == (3,) and again.n_steps == 10 and again.controller.p_gains[0] == 4.0
+    again.close()
+    capsys.readouterr()
+    assert main(["train", "--agent", "cmaes", "--env", "Swimmer-v5", "--out", str(tmp_path / "bad"),
+                 "--env-option", "p_gain", "3"]) == 2
+    assert "p_gain" in capsys.readouterr().err

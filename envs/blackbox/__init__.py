@@ -20,7 +20,7 @@ import gymnasium as gym
 from .controller import CONTROLLERS, MujocoJoints, PDController, PositionController, VelocityController, make_controller
 from .defaults import BLACKBOX_SCALES, ENV_DEFAULTS, default_demonstration, env_defaults
 from .params import JointParameterMap
-from .wrapper import DEFAULT_GROUPS, RhythmicBlackBoxWrapper, make_blackbox
+from .wrapper import DEFAULT_GROUPS, WRAPPER_SETTINGS, RhythmicBlackBoxWrapper, make_blackbox, split_settings
 
 __all__ = [
     "BLACKBOX_ID",
@@ -28,6 +28,7 @@ __all__ = [
     "CONTROLLERS",
     "DEFAULT_GROUPS",
     "ENV_DEFAULTS",
+    "WRAPPER_SETTINGS",
     "JointParameterMap",
     "MujocoJoints",
     "PDController",
@@ -38,6 +39,7 @@ __all__ = [
     "env_defaults",
     "make_blackbox",
     "make_controller",
+    "split_settings",
 ]
 
 #: the id of :func:`make_blackbox` (``gym.make(BLACKBOX_ID, env_id="Swimmer-v5", ...)``)

@@ -4,6 +4,10 @@
 action dimension per parameter, so ``a = 0`` is the initial DMP. The weights', initial conditions' and amplitude's
 scales are :class:`rdmp_gym.envs.action.ActionMap`'s rules; unlike the wiping task, the ``anchor`` (the posture the
 rhythm is centred on) may be in the action here, scaled by a fraction of each joint's motion in the cycle.
+
+``tempo`` is the wrapper's own group (not one of the DMP's parameters): one last action dimension, the speed factor
+of the rollout (``tempo = 1 + scale * a``, default scale 0.5, so ``a = +1`` runs the cycle 1.5x faster and ``a = -1``
+at half speed; the canonical system's frequency, transient and cycle alike).
 """
 
 from __future__ import annotations
@@ -17,7 +21,10 @@ from rdmp_gym import RhythmicDMP
 
 from .defaults import BLACKBOX_SCALES
 
-__all__ = ["JointParameterMap"]
+__all__ = ["TEMPO", "JointParameterMap"]
+
+#: the wrapper's speed group: one action dimension, ``tempo = 1 + scale * a``
+TEMPO = "tempo"
 
 
 class JointParameterMap:
@@ -26,9 +33,14 @@ class JointParameterMap:
     Args:
         dmp: the initial DMP.
         groups: the parameter groups in the action (``periodic``, ``transient[:k]``, ``initial[:k]``, ``amplitude``,
-            ``anchor``; not ``stop`` or ``sweep``).
+            ``anchor``, and the wrapper's ``tempo``; not ``stop`` or ``sweep``).
         scales: ``{group: frac}`` over :data:`~rdmp_gym.envs.blackbox.defaults.BLACKBOX_SCALES`.
         motion: ``[d]`` each joint's peak-to-peak motion in the initial DMP's cycle (scales the anchor).
+
+    Attributes:
+        dmp_groups: the selected groups of the DMP (``groups`` less ``tempo``).
+        slices: ``{group: slice}`` of the action, ``tempo`` last where selected.
+        theta0, scale: ``[P]`` the initial parameters and the action scales.
     """
 
     def __init__(self, dmp: RhythmicDMP, groups: Iterable[str] | str, scales: Mapping[str, float] | None,
@@ -36,7 +48,11 @@ class JointParameterMap:
         groups = (groups,) if isinstance(groups, str) else tuple(groups)
         if not groups:
             raise ValueError("groups: expected at least one parameter group")
-        names = dmp.layout.resolve(groups)
+        if groups.count(TEMPO) > 1:
+            raise ValueError(f"groups: {TEMPO!r} is given {groups.count(TEMPO)} times, expected once")
+        self.dmp_groups = tuple(group for group in groups if group != TEMPO)
+        self.has_tempo = TEMPO in groups
+        names = dmp.layout.resolve(self.dmp_groups) if self.dmp_groups else []
         bad = [name for name in names if name in ("stop", "sweep")]
         if bad:
             raise ValueError(f"groups: {bad} cannot be in the black-box action (no stop or sweep in joint space)")
@@ -44,13 +60,13 @@ class JointParameterMap:
         for key, value in scales.items():
             if not (isinstance(value, (int, float, np.floating)) and np.isfinite(value) and value > 0):
                 raise ValueError(f"scales: {key} must be a finite number > 0, got {value!r}")
-        allowed = set(names) | {name.split(":")[0] for name in names}
+        allowed = set(names) | {name.split(":")[0] for name in names} | ({TEMPO} if self.has_tempo else set())
         unknown = set(scales) - allowed
         if unknown:
             raise ValueError(f"scales: {sorted(unknown)} are not among the selected groups {sorted(allowed)}")
         self.groups = groups
-        self.slices = dmp.param_slices(groups)
-        self.theta0 = dmp.get_params(groups).astype(np.float64)
+        self.slices = dmp.param_slices(self.dmp_groups) if self.dmp_groups else {}
+        self.theta0 = dmp.get_params(self.dmp_groups).astype(np.float64) if self.dmp_groups else np.zeros(0)
         self.scale = np.zeros_like(self.theta0)
         merged = {**BLACKBOX_SCALES, **scales}
         others = tuple(name for name in self.slices if name != "anchor")
@@ -63,7 +79,23 @@ class JointParameterMap:
             motion = np.asarray(motion, dtype=np.float64)
             span = np.maximum(motion, max(0.25 * float(motion.max()), 1e-6))
             self.scale[self.slices["anchor"]] = float(merged["anchor"]) * span
+        if self.has_tempo:
+            if not float(merged[TEMPO]) < 1.0:
+                raise ValueError(f"scales: tempo must be < 1 (a = -1 runs at speed 1 - scale), got {merged[TEMPO]!r}")
+            self.slices = {**self.slices, TEMPO: slice(self.theta0.size, self.theta0.size + 1)}
+            self.theta0 = np.append(self.theta0, 1.0)
+            self.scale = np.append(self.scale, float(merged[TEMPO]))
         self.size = int(self.theta0.size)
+
+    def split(self, theta: np.ndarray) -> tuple[np.ndarray, float]:
+        """``theta [P]`` taken apart: the DMP's parameters ``[P - 1]`` (``[P]`` without ``tempo``) and the tempo
+        (1.0 without ``tempo``)."""
+        theta = np.asarray(theta, dtype=np.float64)
+        if theta.shape != self.theta0.shape:
+            raise ValueError(f"theta: expected shape {self.theta0.shape}, got {theta.shape}")
+        if not self.has_tempo:
+            return theta, 1.0
+        return theta[:-1], float(theta[-1])
 
     def to_params(self, action: np.ndarray) -> np.ndarray:
         """``theta [P]`` (float64) of an action ``[P]``."""

@@ -23,7 +23,11 @@ controller with ``p_gains``/``d_gains``). It is a :class:`gymnasium.Env` that ho
 
 from __future__ import annotations
 
+import copy
+import importlib
+import inspect
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -36,7 +40,7 @@ from .controller import JointReader, MujocoJoints, TrackingController, make_cont
 from .defaults import default_demonstration, env_defaults
 from .params import JointParameterMap
 
-__all__ = ["DEFAULT_GROUPS", "RhythmicBlackBoxWrapper", "make_blackbox"]
+__all__ = ["DEFAULT_GROUPS", "WRAPPER_SETTINGS", "RhythmicBlackBoxWrapper", "make_blackbox", "split_settings"]
 
 #: the parameter groups in the action by default: the cycle's shape, its amplitude and the posture it is centred on
 DEFAULT_GROUPS = ("periodic", "amplitude", "anchor")
@@ -47,7 +51,8 @@ class RhythmicBlackBoxWrapper(gym.Env):
 
     Args:
         env: a step-based Gymnasium env with a continuous ``Box`` action space (e.g. ``gym.make("Swimmer-v5")``).
-        groups: the DMP parameter groups in the action (:data:`DEFAULT_GROUPS`; also ``transient``, ``initial``).
+        groups: the DMP parameter groups in the action (:data:`DEFAULT_GROUPS`; also ``transient``, ``initial``, and
+            ``tempo``: the cycle's speed as one more action dimension, ``tempo = 1 + 0.5 a``).
         duration: the episode (s); default the env's time limit (``spec.max_episode_steps * dt``). It must fit in the
             time limit and be a whole number of env steps.
         controller: ``"pd"`` (joint torques), ``"position"`` or ``"velocity"`` (joint targets), or a callable
@@ -225,8 +230,31 @@ class RhythmicBlackBoxWrapper(gym.Env):
 
     def action_time_weights(self) -> np.ndarray:
         """How active each action dimension's parameter is at each env step, ``[T, P]`` in [0, 1] (the weights'
-        basis activations at the end of each step; the anchor, the amplitude and the initial conditions: 1)."""
-        return self.dmp.param_time_weights(self.t, groups=self.groups, transient=0)[1:]
+        basis activations at the end of each step; the anchor, the amplitude, the initial conditions and the tempo:
+        1)."""
+        groups = self.param_map.dmp_groups
+        weights = self.dmp.param_time_weights(self.t, groups=groups, transient=0)[1:] if groups \
+            else np.zeros((self.n_steps, 0))
+        if self.param_map.has_tempo:
+            weights = np.hstack([weights, np.ones((self.n_steps, 1))])
+        return weights
+
+    def action_slices(self) -> dict[str, slice]:
+        """``{group: slice}`` of the action (the DMP's groups in its order, then ``tempo`` where selected)."""
+        return dict(self.param_map.slices)
+
+    def policy_dmp(self, theta: np.ndarray) -> RhythmicDMP:
+        """The DMP of parameters ``theta [P]``: the initial DMP with the selected groups set, its canonical system at
+        the tempo of ``theta`` (what :meth:`step` rolls out; ``save_dmp`` keeps the tempo)."""
+        params, tempo = self.param_map.split(theta)
+        moved = self.dmp.with_params(params, self.param_map.dmp_groups) if self.param_map.dmp_groups \
+            else copy.copy(self.dmp)
+        if tempo != moved.canonical.tempo:
+            if not (np.isfinite(tempo) and tempo > 0.0):
+                raise ValueError(f"theta: the tempo must be > 0, got {tempo!r}")
+            moved = copy.copy(moved)
+            moved.canonical = replace(moved.canonical, tempo=tempo)
+        return moved
 
     def _check_action(self, action: Any) -> np.ndarray:
         return checked_action(action, self.action_space.shape)
@@ -253,9 +281,9 @@ class RhythmicBlackBoxWrapper(gym.Env):
                 raise RuntimeError("call reset() first, or pass the start state (q0, qd0)")
             q0 = self._start[0] if q0 is None else q0
             qd0 = self._start[1] if qd0 is None else qd0
-        moved = self.dmp.with_params(np.asarray(theta, dtype=np.float64), self.groups)
+        moved = self.policy_dmp(theta)
         return moved.rollout(self.t, 0, y0=np.asarray(q0, dtype=np.float64), yd0=np.asarray(qd0, dtype=np.float64),
-                             return_velocity=True)
+                             tempo=moved.canonical.tempo, return_velocity=True)
 
     def rollout_path(self, theta: np.ndarray) -> np.ndarray:
         """``[T, d]`` the desired joint path for ``theta [P]`` at the end of each env step, from the last reset."""
@@ -355,3 +383,53 @@ def make_blackbox(env_id: str, *, env_kwargs: Mapping[str, Any] | None = None, r
     except BaseException:
         env.close()
         raise
+
+
+#: the settings of :class:`RhythmicBlackBoxWrapper` (its keywords but ``env``), which :func:`split_settings` takes
+#: out of an env's keywords
+WRAPPER_SETTINGS = tuple(name for name in inspect.signature(RhythmicBlackBoxWrapper.__init__).parameters
+                         if name not in ("self", "env"))
+
+
+def _env_keywords(env_id: str) -> set[str] | None:
+    """The keywords ``gym.make(env_id, ...)`` takes: ``gym.make``'s own and the named parameters of the entry point
+    (for a class: of every ``__init__`` along its MRO); None where they cannot be told (a function with
+    ``**kwargs``)."""
+    module, _, name = env_id.rpartition(":")
+    try:
+        if module:
+            importlib.import_module(module)
+        spec = gym.spec(name)
+    except (gym.error.Error, ModuleNotFoundError) as error:
+        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
+    creator = gym.envs.registration.load_env_creator(spec.entry_point) if isinstance(spec.entry_point, str) \
+        else spec.entry_point
+    own = {key for key in inspect.signature(gym.make).parameters if key not in ("id", "kwargs")}
+    functions = [klass.__dict__["__init__"] for klass in creator.__mro__ if "__init__" in klass.__dict__] \
+        if inspect.isclass(creator) else [creator]
+    names: set[str] = set()
+    for function in functions:
+        try:
+            parameters = inspect.signature(function).parameters.values()
+        except (TypeError, ValueError):
+            continue
+        if not inspect.isclass(creator) and any(p.kind is p.VAR_KEYWORD for p in parameters):
+            return None
+        names |= {p.name for p in parameters if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    return (names - {"self"}) | own | set(spec.kwargs or {})
+
+
+def split_settings(env_id: str, settings: Mapping[str, Any] | None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``settings`` (e.g. ``rdmp-gym train --env-option KEY VALUE`` on a step-based env) taken apart: the black-box
+    wrapper's (names in :data:`WRAPPER_SETTINGS`, e.g. ``p_gains``, ``groups``, ``duration``) and the keywords for
+    ``gym.make(env_id, ...)`` (the rest). A name that is neither a wrapper setting nor a keyword of the env is a
+    ValueError naming it (where the env's keywords can be told from its signature)."""
+    settings = dict(settings or {})
+    wrapper = {key: value for key, value in settings.items() if key in WRAPPER_SETTINGS}
+    env_part = {key: value for key, value in settings.items() if key not in WRAPPER_SETTINGS}
+    known = _env_keywords(env_id)
+    unknown = sorted(set(env_part) - known) if known is not None else []
+    if unknown:
+        raise ValueError(f"env_kwargs: {unknown[0]!r} is neither a setting of the rhythmic black-box wrapper "
+                         f"({', '.join(WRAPPER_SETTINGS)}) nor a keyword of {env_id} ({', '.join(sorted(known))})")
+    return wrapper, env_part
