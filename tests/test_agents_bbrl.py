@@ -91,7 +91,7 @@ def test_the_low_rank_factor_learns_from_its_small_random_start():
     assert _learner().policy.low_rank.shape == (N, 0)           # the default: no factor
 
 
-@pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}])
+@pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}, {"linear": True}])
 def test_resume_is_exact_and_the_state_gives_the_policy(options):
     learner = _learner(**options)
     _run(learner, 3)
@@ -106,6 +106,25 @@ def test_resume_is_exact_and_the_state_gives_the_policy(options):
     np.testing.assert_array_equal(twin.policy_actions(contexts), learner.policy_actions(contexts))
     np.testing.assert_allclose(policy_from_state(learner.state_dict(), contexts), learner.policy_actions(contexts),
                                atol=1e-12)
+
+
+def test_the_linear_part_carries_the_mean_beyond_the_contexts_seen():
+    """Trained on ``s in [-1, 1]^2``, judged on ``|s_i| in [1.2, 1.6]``: the mean with a linear part extrapolates the
+    linear optimum better than the MLP alone (whose tanh units flatten), and fits the seen contexts as well."""
+
+    def losses(linear, seed):
+        learner = _learner(seed=seed, length=0.0, epsilon=0.2, linear=linear)
+        rng = np.random.default_rng(100 + seed)
+        beyond = rng.uniform(1.2, 1.6, (50, 2)) * rng.choice([-1, 1], (50, 2))
+        _, inside, _ = _run(learner, 60, seed=seed)
+        return inside, np.mean(np.sum((learner.policy_actions(beyond) - _target(beyond)) ** 2, axis=1))
+
+    plain = np.array([losses(False, seed) for seed in range(3)])
+    linear = np.array([losses(True, seed) for seed in range(3)])
+    assert linear[:, 1].mean() < 0.95 * plain[:, 1].mean()
+    assert linear[:, 0].mean() < 1.2 * plain[:, 0].mean()
+    with pytest.raises(ValueError, match="linear"):                     # a state of the other mean is refused
+        _learner(linear=True).load_state_dict(_learner().state_dict())
 
 
 def test_bad_options_and_inputs_raise_clear_errors():

@@ -9,7 +9,9 @@ The policy maps the raw context ``s`` (every field, standardised) to a Gaussian 
 ``C_smooth`` the correlation of neighbouring DMP weights (:mod:`.smooth`), the per-dimension scales ``sigma``
 and the low-rank factor ``U [n, r]`` learned, shared by all contexts (``context_scale``: times ``scale(s)^2``, a
 further output of the network); ``L`` is the Cholesky factor of ``C`` and
-``D0`` the initial ``D``, so the network works in whitened coordinates: an optimiser step of equal size
+``D0`` the initial ``D``, so the network works in whitened coordinates (``linear``: plus a linear map
+``W s`` of the context beside the MLP, zero at the start, so that the mean carries beyond the contexts seen as a
+linear policy does, where the MLP's tanh units flatten): an optimiser step of equal size
 in every output is a step shaped like the exploration (smooth), not a rough one. The ``rough`` share keeps ``C``
 well conditioned: under a purely smooth ``C`` a mean step that is not smooth costs a KL divergence of
 thousands (the conditional variances of a smooth block are tiny) and the trust region would forbid it.
@@ -139,10 +141,11 @@ class _Value(torch.nn.Module):
 
 
 class _Policy(torch.nn.Module):
-    """``mu(s) = u0 + MLP(s)`` and ``Sigma = D C D + U U^T`` (see the module docstring)."""
+    """``mu(s) = u0 + D0 L (MLP(s) + W s)`` (``W s`` with ``linear`` only) and ``Sigma = D C D + U U^T`` (see the
+    module docstring)."""
 
     def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: np.ndarray,
-                 rank: int, context_scale: bool = False) -> None:
+                 rank: int, context_scale: bool = False, linear: bool = False) -> None:
         super().__init__()
         n = u0.size
         self.n = n
@@ -151,6 +154,10 @@ class _Policy(torch.nn.Module):
                                        torch.nn.Linear(hidden, n + int(context_scale)))
         torch.nn.init.zeros_(self.net[-1].weight)
         torch.nn.init.zeros_(self.net[-1].bias)
+        #: the linear part of the mean (None without ``linear``): it carries the mean beyond the contexts seen
+        self.linear = torch.nn.Linear(n_context, n, bias=False) if linear else None
+        if self.linear is not None:
+            torch.nn.init.zeros_(self.linear.weight)
         self.register_buffer("u0", torch.as_tensor(u0))
         self.register_buffer("correlation", torch.as_tensor(correlation))
         sigma = torch.as_tensor(np.broadcast_to(sigma, (n,)).copy(), dtype=_DTYPE)
@@ -162,7 +169,10 @@ class _Policy(torch.nn.Module):
 
     def mean(self, contexts: torch.Tensor) -> torch.Tensor:
         """``[K, n]`` means for standardised contexts ``[K, o]``."""
-        return self.u0 + self.net(contexts)[:, : self.n] @ self.shape.T
+        out = self.net(contexts)[:, : self.n]
+        if self.linear is not None:
+            out = out + self.linear(contexts)
+        return self.u0 + out @ self.shape.T
 
     def log_scale(self, contexts: torch.Tensor) -> torch.Tensor:
         """``[K]`` the log exploration scale of each context (0 without ``context_scale``, with no network pass)."""
@@ -228,7 +238,8 @@ class BBRL(Learner):
         correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.active.size)
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
-                              self._initial_sigma(space), self.config.rank, self.config.context_scale)
+                              self._initial_sigma(space), self.config.rank, self.config.context_scale,
+                              self.config.linear)
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         #: the cost-to-go baseline network (``baseline="network"``), else None
         self.value = (_Value(self.center.size, self.config.hidden, self._value_outputs())
@@ -473,7 +484,7 @@ class BBRL(Learner):
         shapes = {name: tuple(value.shape) for name, value in self.policy.state_dict().items()}
         if {name: tuple(value.shape) for name, value in parameters.items()} != shapes:
             raise ValueError("state.parameters: the state's policy network has other shapes than this learner's "
-                             "(hidden, rank, groups or context_scale differ)")
+                             "(hidden, rank, groups, context_scale or linear differ)")
         self.policy.load_state_dict(parameters)
         if self.value is not None:             # a state of the other baseline fails check_state_like's keys
             self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
@@ -502,6 +513,8 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     hidden = np.tanh(hidden @ params["net.2.weight"].T + params["net.2.bias"])
     n = params["u0"].size                                   # a context_scale network has one more output
     out = hidden @ params["net.4.weight"][:n].T + params["net.4.bias"][:n]
+    if "linear.weight" in params:                            # the linear part of the mean
+        out = out + x @ params["linear.weight"].T
     policy = params["u0"] + out @ params["shape"].T
     full = np.repeat(np.asarray(state["fixed"], dtype=np.float64)[None], len(obs), axis=0)
     full[:, np.asarray(state["active"], dtype=np.int64)] = policy

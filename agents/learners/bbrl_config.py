@@ -41,6 +41,9 @@ class BBRLConfig(ContextualSettings):
         context_scale: the network also gives each context a scale ``s(s)`` of the exploration
             (``Sigma(s) = s(s)^2 Sigma``, 1 at the start), fitted with the covariance, so that the exploration can
             stay wide where wide samples pay and narrow where they do not.
+        linear: the mean has a linear part ``W s`` beside the network (zero at the start): it extrapolates to
+            contexts beyond those seen (the largest patches) as a linear policy does, the network bends it where
+            the cost needs it (a cup).
         antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
             context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
             ridge regression on the context; needs an even number of rollouts.
@@ -63,6 +66,7 @@ class BBRLConfig(ContextualSettings):
     replay_size: int = 100
     antithetic: bool = False
     context_scale: bool = False
+    linear: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
