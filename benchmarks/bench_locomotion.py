@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import time
 from pathlib import Path
 from typing import Any
@@ -89,34 +90,37 @@ _ARS = ("Mania, Guy, Recht 2018, Simple random search provides a competitive app
         "checked against the paper text in this study")
 _RAFFIN = ("Raffin, Sigaud, Kober, Albu-Schaeffer, Silverio, Stulp 2024, An Open-Loop Baseline for Reinforcement "
            "Learning Locomotion Tasks, arXiv 2310.05808 (https://arxiv.org/html/2310.05808v3)")
+_CITE_ZOO = "RL Zoo benchmark.md (22e3ff2)"
+_CITE_ARS = "Mania et al. 2018, Table 1 (recalled, not checked)"
+_CITE_RAFFIN = "Raffin et al. 2024 (arXiv 2310.05808)"
 #: Published anchors. ``return`` is the final return (``std`` its spread as published), ``env_steps`` the training
 #: budget; ``episodes_to_threshold`` where the source gives it. None: the source has no such number (or we could not
 #: read it: ``note`` says so).
 ANCHORS: list[dict[str, Any]] = [
     {"env": "Swimmer-v5", "method": "RL Zoo PPO (Swimmer-v3)", "return": 281.561, "std": 9.671,
-     "env_steps": 1_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 1_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "Swimmer-v5", "method": "RL Zoo SAC (Swimmer-v3)", "return": 345.568, "std": 3.084,
-     "env_steps": 1_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 1_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "Swimmer-v5", "method": "RL Zoo ARS (Swimmer-v3)", "return": 355.267, "std": 12.796,
-     "env_steps": 2_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 2_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "HalfCheetah-v5", "method": "RL Zoo PPO (HalfCheetah-v3)", "return": 5819.099, "std": 663.530,
-     "env_steps": 1_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 1_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "HalfCheetah-v5", "method": "RL Zoo SAC (HalfCheetah-v3)", "return": 9535.451, "std": 100.470,
-     "env_steps": 1_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 1_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "HalfCheetah-v5", "method": "RL Zoo ARS (HalfCheetah-v3)", "return": 4815.192, "std": 1340.752,
-     "env_steps": 12_000_000, "source": _BENCHMARK_MD},
+     "env_steps": 12_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "Swimmer-v5", "method": "ARS V1 / V2-t (Swimmer-v1)", "return": None, "threshold": 325.0,
      "episodes_to_threshold": {"ARS V1": 100, "ARS V2-t": 427}, "env_steps_to_threshold": {"ARS V1": 100_000},
-     "source": _ARS},
+     "source": _ARS, "cite": _CITE_ARS},
     {"env": "HalfCheetah-v5", "method": "ARS V1 / V2-t (HalfCheetah-v1)", "return": None, "threshold": 3430.0,
      "episodes_to_threshold": {"ARS V1": 10240, "ARS V2-t": 1707}, "source": _ARS},
     {"env": "Swimmer-v5", "method": "open-loop oscillator, Raffin et al. 2024", "return": None,
      "note": "their table of returns could not be read from the stored text in this study; the row "
              "'oscillator re-run here' is their published Swimmer oscillator (0.62 Hz, phases 0 and 0.95 x 2 pi, PD "
-             "10 / 0.5, unit amplitude) run on Swimmer-v5 by this script", "source": _RAFFIN},
+             "10 / 0.5, unit amplitude) run on Swimmer-v5 by this script", "source": _RAFFIN, "cite": _CITE_RAFFIN},
     {"env": "HalfCheetah-v5", "method": "open-loop oscillator, Raffin et al. 2024", "return": None,
      "note": "their table of returns and their HalfCheetah oscillator parameters could not be read from the stored "
-             "text in this study", "source": _RAFFIN},
+             "text in this study", "source": _RAFFIN, "cite": _CITE_RAFFIN},
 ]
 
 
@@ -274,6 +278,7 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
     venv.close()
     if "test_returns" not in result:
         raise RuntimeError(f"{algo}: the run ended at {model.num_timesteps} env steps without reaching {total}")
+    shutil.rmtree(partial, ignore_errors=True)         # finished: its JSON holds everything
     return {"curve": state["curve"], "test_returns": result["test_returns"], "resumed": resumed,
             "hyperparameters": ZOO[algo][env_id], "hyperparameter_source": _ZOO.format(algo),
             "seconds": round(state["seconds"] + time.perf_counter() - clock[0], 1),
@@ -367,7 +372,9 @@ def markdown(rows: list[dict[str, Any]], reference: list[dict[str, Any]]) -> str
             value = "episodes to " + f"{a['threshold']:g}: " + ", ".join(
                 f"{k} {v}" for k, v in a["episodes_to_threshold"].items())
         steps = "-" if a.get("env_steps") is None else f"{a['env_steps'] / 1e6:g}M"
-        lines.append(f"| {a['env']} | {a['method']} | {value} | {steps} | {a['source'].split(',')[0]} |")
+        if a.get("return") is None and "episodes_to_threshold" not in a:
+            value = "not read here (see the JSON's note)"
+        lines.append(f"| {a['env']} | {a['method']} | {value} | {steps} | {a.get('cite', a['source'])} |")
     return "\n".join(lines)
 
 
@@ -391,9 +398,11 @@ def oscillator_anchor(seeds: np.ndarray) -> dict[str, Any]:
         returns.append(total)
     env.close()
     return {"env": "Swimmer-v5", "method": "open-loop oscillator of Raffin et al. 2024, re-run here",
-            "return": float(np.mean(returns)), "std": float(np.std(returns)), "env_steps": 0,
+            "return": float(np.mean(returns)), "std": float(np.std(returns)), "env_steps": None,
+            "note": f"{len(returns)} test contexts, mean +- std; the authors optimised the oscillator with CMA-ES",
             "source": _RAFFIN + "; parameters from the code on the authors' RLC 2024 slides "
-                                "(https://araffin.github.io/slides/rlc24-open-loop-baseline), run by this script"}
+                                "(https://araffin.github.io/slides/rlc24-open-loop-baseline), run by this script",
+            "cite": "Raffin et al. 2024's slides, run here"}
 
 
 def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
@@ -434,8 +443,8 @@ def plot_curves(document: dict[str, Any], path: Path) -> None:
             axis.plot(x, [p["estimate"] for p in points], color=colour, label=f"{label} ({n} seeds)",
                       marker="o" if len(x) < 5 else None, ms=3)
             axis.fill_between(x, [p["low"] for p in points], [p["high"] for p in points], color=colour, alpha=0.15)
-        for threshold in THRESHOLDS[env_id]:
-            axis.axhline(threshold, color="k", ls=":", lw=0.8)
+        for threshold, style in zip(THRESHOLDS[env_id], (":", "--"), strict=False):
+            axis.axhline(threshold, color="k", ls=style, lw=0.8, label=f"threshold {threshold:g}")
         axis.set_title(f"{env_id}: validation return (IQM over seeds, 95 % CI)", fontsize=9)
         axis.set_xlabel("env steps (thousands)")
         axis.set_ylabel("return")
@@ -447,8 +456,8 @@ def plot_curves(document: dict[str, Any], path: Path) -> None:
 
 
 def filmstrip(document: dict[str, Any], root: Path, path: Path, frames: int = 6) -> dict[str, Any]:
-    """``frames`` frames over the last half of one Swimmer episode of the best rhythmic run's final policy (the
-    learner with the highest IQM, its seed with the highest final return), on the first test context."""
+    """``frames`` frames over the last cycle of one Swimmer episode (tracking camera) of the best rhythmic run's final
+    policy (the learner with the highest IQM, its seed with the highest final return), on the first test context."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -465,11 +474,13 @@ def filmstrip(document: dict[str, Any], root: Path, path: Path, frames: int = 6)
     from rdmp_gym.envs.blackbox import make_blackbox
 
     seed = int(final_test_seeds(1)[0])
-    env = make_blackbox("Swimmer-v5", render_mode="rgb_array", env_kwargs={"width": 320, "height": 240})
+    env = make_blackbox("Swimmer-v5", render_mode="rgb_array",
+                        env_kwargs={"width": 320, "height": 240, "camera_name": "track"})
     observation, _ = env.reset(seed=seed)
     action = trained_actions(RunDirectory(root / "Swimmer-v5" / f"{best['learner']}-{run['seed']}"), config, "last",
                              observation[None], env.action_space.shape[0])[0]
-    picks = set(np.linspace(env.n_steps // 2, env.n_steps - 1, frames).astype(int).tolist())
+    cycle = round(env.dmp.period / env.dt)                   # the last whole cycle of the episode
+    picks = set(np.linspace(env.n_steps - 1 - cycle, env.n_steps - 1, frames, endpoint=False).astype(int).tolist())
     images: list[tuple[int, np.ndarray]] = []
 
     class Grab(gym.Wrapper):
