@@ -1,6 +1,6 @@
 # Two entry points for a fresh clone (Python 3.10+ and pip are all that is needed):
 #   make run    installs everything into .venv and runs the main job
-#   make test   installs everything into .venv and runs the CI test suite
+#   make test   installs everything into .venv and runs the CI test suite (`make test-all`: with the slow tests)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
@@ -10,7 +10,7 @@ export MUJOCO_GL ?= egl
 export OMP_NUM_THREADS ?= 1
 export NO_MKDOCS_2_WARNING ?= 1
 
-.PHONY: install run test docs wheel-check lint bench clean
+.PHONY: install run test test-all docs wheel-check lint bench clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -31,10 +31,19 @@ run: install
 	$(BIN)/rdmp-gym main --out $(RUN_OUT) $(RUN_FLAGS) $$(test -f $(RUN_OUT)/train/config.json && echo --resume)
 
 # The docs build is strict: a broken link, a missing figure or a renamed function in the API reference fails it.
+# pytest runs on every core (pytest-xdist), one test file per worker so that a file's module fixtures are built
+# once; PYTEST_JOBS= runs it in one process. `make test` leaves out the tests marked slow (pyproject's addopts),
+# `make test-all` runs them too (-m '' overrides the marker filter).
+PYTEST_JOBS ?= -n auto --dist loadfile
 test: install
 	$(BIN)/ruff check .
 	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(PYTEST_JOBS)
+
+test-all: install
+	$(BIN)/ruff check .
+	$(BIN)/mkdocs build --strict --quiet --site-dir build/site
+	$(BIN)/python -m pytest -q $(PYTEST_JOBS) -m ''
 
 # The documentation site (MkDocs + mkdocstrings) into site/; open site/index.html.
 docs: install

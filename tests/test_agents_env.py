@@ -52,10 +52,22 @@ def test_imitation_rollouts_wipe_and_are_repeatable():
     np.testing.assert_allclose(-batch.cost_traces.sum(axis=1), batch.returns, atol=1e-6)
 
 
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory, context):
+    """``trained(agent)``: the agent's 5-update run from the shrunk start, trained once per module."""
+    runs = {}
+
+    def run_of(agent):
+        if agent not in runs:
+            runs[agent] = train(_config(context, agent), tmp_path_factory.mktemp("trained") / agent)
+        return runs[agent]
+
+    return run_of
+
+
 @pytest.mark.parametrize("agent", ["pi2", "pibb", "cmaes"])
-def test_learners_improve_the_wipe_from_a_shrunk_start(tmp_path, context, agent):
-    run = train(_config(context, agent), tmp_path / agent)
-    records = run.read_log()
+def test_learners_improve_the_wipe_from_a_shrunk_start(trained, agent):
+    records = trained(agent).read_log()
     start, best = records[0], max(records[1:], key=lambda r: r["eval_return_mean"])
     assert start["eval_coverage"] < 0.85                         # the shrunk pattern misses dirt
     assert best["eval_return_mean"] > start["eval_return_mean"] + 0.03
@@ -63,8 +75,8 @@ def test_learners_improve_the_wipe_from_a_shrunk_start(tmp_path, context, agent)
     assert all(r["valid"] > 0.5 for r in records[1:])
 
 
-def test_evaluating_a_trained_checkpoint(tmp_path, context):
-    run = train(_config(context, updates=2), tmp_path / "run")
+def test_evaluating_a_trained_checkpoint(trained):
+    run = trained("pi2")                  # the run of test_learners_improve_the_wipe_from_a_shrunk_start[pi2]
     for policy in ("best", "last"):
         result = evaluate_run(run.path, 2, policy=policy)
         assert result["trained"]["valid_fraction"] == 1.0 and result["imitation"]["valid_fraction"] == 1.0

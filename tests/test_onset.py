@@ -55,7 +55,9 @@ def test_segmentation_reports_the_first_stroke_after_a_wait() -> None:
     assert abs(seg.rhythm_onset - onset) < 0.5 and abs(seg.rhythm_stop - end) < 0.5
 
 
-@pytest.mark.parametrize("kind", ["wiping", "kitchen", "long"])
+# kitchen and long recordings are twice as long as wiping (13 s of session search each): the same check, slow set
+@pytest.mark.parametrize("kind", ["wiping", pytest.param("kitchen", marks=pytest.mark.slow),
+                                  pytest.param("long", marks=pytest.mark.slow)])
 def test_generated_sessions_start_and_stop_with_their_truth(kind: str) -> None:
     made = multi_session_recording(3, kind, rng=np.random.default_rng(0))
     sessions = find_sessions(to_demonstration(made.recording.t, made.recording.Y))
