@@ -19,10 +19,10 @@ import numpy as np
 import tyro
 
 from rdmp_gym import Demonstration, save_dmp
-from rdmp_gym.pose_io import read_pose_csv
-from rdmp_gym.recording_fit import constant_columns, fit_recording, recording_report
-from rdmp_gym.segmentation.sessions import Session
-from rdmp_gym.signals import despike
+from rdmp_gym.recordings.pose_io import read_pose_csv
+from rdmp_gym.recordings.recording_fit import constant_columns, fit_recording, recording_report
+from rdmp_gym.signals.filters import despike
+from rdmp_gym.signals.segmentation.sessions import Session
 
 from .fit_pose import constant_note, fit_pose_command
 from .fit_sessions import fit_joint_command, fit_pose_sessions_command, fit_sessions_command, several_sessions

@@ -8,16 +8,16 @@ from pathlib import Path
 from types import ModuleType
 
 from rdmp_gym import save_dmp
-from rdmp_gym.pose import PoseDemonstration
-from rdmp_gym.pose_fit import fit_pose_recording, pose_report
-from rdmp_gym.recording_fit import constant_columns
+from rdmp_gym.dmp.pose import PoseDemonstration
+from rdmp_gym.recordings.pose_fit import fit_pose_recording, pose_report
+from rdmp_gym.recordings.recording_fit import constant_columns
 
 __all__ = ["constant_note", "fit_pose_command"]
 
 
 def fit_pose_command(pose: PoseDemonstration, hints: dict, out: Path, plots: ModuleType | None) -> None:
-    """Fit ``pose`` with the fit's ``hints`` (keywords of :func:`~rdmp_gym.recording_fit.fit_recording`); write
-    ``dmp.json``, ``report.json`` (and ``fit.png``: the position) into ``out``."""
+    """Fit ``pose`` with the fit's ``hints`` (keywords of :func:`~rdmp_gym.recordings.recording_fit.fit_recording`);
+    write ``dmp.json``, ``report.json`` (and ``fit.png``: the position) into ``out``."""
     result = fit_pose_recording(pose, **hints)
     out.mkdir(parents=True, exist_ok=True)
     save_dmp(result.dmp, out / "dmp.json")

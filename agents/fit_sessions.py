@@ -13,11 +13,11 @@ from types import ModuleType
 import numpy as np
 
 from rdmp_gym import Demonstration, save_dmp
-from rdmp_gym.pose import ORIENTATION_DIMS, PoseDemonstration
-from rdmp_gym.pose_fit import PoseFit
-from rdmp_gym.recording_fit import RecordingFit, constant_columns
-from rdmp_gym.segmentation.sessions import Session, find_sessions
-from rdmp_gym.session_fit import SessionFit, fit_joint, fit_pose_sessions, fit_sessions, joint_report
+from rdmp_gym.dmp.pose import ORIENTATION_DIMS, PoseDemonstration
+from rdmp_gym.recordings.pose_fit import PoseFit
+from rdmp_gym.recordings.recording_fit import RecordingFit, constant_columns
+from rdmp_gym.recordings.session_fit import SessionFit, fit_joint, fit_pose_sessions, fit_sessions, joint_report
+from rdmp_gym.signals.segmentation.sessions import Session, find_sessions
 
 __all__ = ["fit_joint_command", "fit_pose_sessions_command", "fit_sessions_command", "several_sessions"]
 
@@ -34,7 +34,7 @@ def several_sessions(demo: Demonstration) -> list[Session] | None:
 def fit_sessions_command(demo: Demonstration, sessions: list[Session], hints: dict, out: Path,
                          plots: ModuleType | None) -> None:
     """Fit each of the ``sessions`` of ``demo`` with the fit's ``hints`` (keywords of
-    :func:`~rdmp_gym.recording_fit.fit_recording`, without the hints of one rhythm); write ``dmp-K.json``,
+    :func:`~rdmp_gym.recordings.recording_fit.fit_recording`, without the hints of one rhythm); write ``dmp-K.json``,
     ``report.json`` (and ``fit-K.png``) into ``out``; print what was found. Raises ``ValueError`` when no
     session could be fitted."""
     _write_session_fits(demo.name, fit_sessions(demo, sessions, **hints), out, plots)
@@ -96,8 +96,8 @@ def _reproduce(fit: RecordingFit | PoseFit) -> Callable[[np.ndarray], np.ndarray
 
 def fit_joint_command(demo: Demonstration, sessions: list[Session], hints: dict, out: Path,
                       plots: ModuleType | None) -> None:
-    """Fit one DMP to all the ``sessions`` of ``demo`` (:func:`~rdmp_gym.session_fit.fit_joint`, with the fit's
-    ``hints`` but those of one rhythm and ``ending``); write ``dmp.json`` (at the first session's anchor),
+    """Fit one DMP to all the ``sessions`` of ``demo`` (:func:`~rdmp_gym.recordings.session_fit.fit_joint`, with the
+    fit's ``hints`` but those of one rhythm and ``ending``); write ``dmp.json`` (at the first session's anchor),
     ``report.json`` (each session's anchor, start, tempo and transient, and how well it is reproduced) and
     ``fit-K.png``; print what was found."""
     keywords = {key: value for key, value in hints.items() if key not in ("period", "start", "end", "ending")}

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from rdmp_gym.signals import smooth_derivatives
+from rdmp_gym.signals.filters import smooth_derivatives
 
 __all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison", "plot_recording_fit"]
 

@@ -29,7 +29,7 @@ import numpy as np
 from rdmp_gym.envs.reward import Smoothness
 from scipy import stats
 
-from rdmp_gym.smoothness import integrated_squared_jerk
+from rdmp_gym.synthetic.smoothness import integrated_squared_jerk
 
 from .learners.base import EpisodeBatch
 

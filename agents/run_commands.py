@@ -33,7 +33,7 @@ from typing import Any, Literal
 import numpy as np
 import tyro
 
-from rdmp_gym.figures import write_paper_figures
+from rdmp_gym.figures.paper import write_paper_figures
 
 from .config import Settings
 from .imitation import load_demonstration

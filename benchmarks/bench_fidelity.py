@@ -4,25 +4,25 @@ classic periodic DMP: position, acceleration and jerk at 1 kHz.
 Per part (transient / periodic): position RMSE over the signal's largest range, acceleration RMSE over
 the RMS of the true acceleration, integrated squared jerk over the true signal's, peak acceleration over
 the true peak. References: the noiseless built-in styles at 1 kHz (derivatives by central differences) and
-:class:`rdmp_gym.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
-(``trajectory`` fit, smooth start), :data:`rdmp_gym.fitting.FADE_BEFORE_T` (the environments' fit), the paper's
-settings (:data:`rdmp_gym.fitting.PAPER_SETTINGS`, LWR and ridge, rolled out from the demonstrated start as in the
+:class:`rdmp_gym.synthetic.smoothness.SmoothTestSignal` (analytic derivatives). Models: the defaults
+(``trajectory`` fit, smooth start), :data:`rdmp_gym.dmp.fitting.FADE_BEFORE_T` (the environments' fit), the paper's
+settings (:data:`rdmp_gym.dmp.fitting.PAPER_SETTINGS`, LWR and ridge, rolled out from the demonstrated start as in the
 paper), and the classic periodic DMP.
 Targets (library defaults): acceleration <= 10 % / 15 % (periodic / transient), jerk <= 2x, peak <= 1.3x,
 position < 0.3 % / 0.8 %. Prints a table; writes benchmarks/results/fidelity.json.
 
 The hand-over: signals whose start is a quintic from rest joined to the orbit at T with matching position, velocity
 and acceleration (C2, at an arbitrary phase of an orbit of 1-3 harmonics; every second one with a bump in the
-approach; :func:`rdmp_gym.smoothness.draw_test_demonstrations`), fitted with the defaults (the families fade over
-the ``t_f`` after T, M = 44 transient centres from two spacings before the start, the smoothness penalty relative to
-the pattern and relaxed about T, each family's smoothness and the start velocity's pull towards rest chosen by
+approach; :func:`rdmp_gym.synthetic.smoothness.draw_test_demonstrations`), fitted with the defaults (the families fade
+over the ``t_f`` after T, M = 44 transient centres from two spacings before the start, the smoothness penalty relative
+to the pattern and relaxed about T, each family's smoothness and the start velocity's pull towards rest chosen by
 generalised cross-validation), with one fixed smoothness 0.3 for both families, with a free start velocity, the full
 penalty at T and M = 40 from one spacing before the start ("free start, M 40"), and with
-:data:`rdmp_gym.fitting.FADE_BEFORE_T` (the fade before T, as the environments fit). Per signal
-(:func:`rdmp_gym.smoothness.handover_figures`): acceleration error over the transient and the periodic part, the
-worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it starts, relative to T),
+:data:`rdmp_gym.dmp.fitting.FADE_BEFORE_T` (the fade before T, as the environments fit). Per signal
+(:func:`rdmp_gym.synthetic.smoothness.handover_figures`): acceleration error over the transient and the periodic part,
+the worst 0.2 s window of acceleration error over the signal's RMS acceleration (and where it starts, relative to T),
 jerk ratios, position errors, and the largest peak acceleration from canonical starts off the encoded path over the
-demonstration's peak; targets in :data:`rdmp_gym.smoothness.HANDOVER_TARGETS` (transient acceleration <= 10 %,
+demonstration's peak; targets in :data:`rdmp_gym.synthetic.smoothness.HANDOVER_TARGETS` (transient acceleration <= 10 %,
 periodic <= 5 %, window <= 20 %, jerk <= 1.5x, position < 0.8 % / 0.3 %, off-path peak <= 3x). The figure
 ``handover.png`` shows the acceleration about T on the three signals that the fade before T reproduces worst.
 
@@ -40,8 +40,8 @@ import numpy as np
 from output import add_save_argument, results_dir
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, segment, wiping_demonstration
-from rdmp_gym.fitting import FADE_BEFORE_T, PAPER_SETTINGS
-from rdmp_gym.smoothness import (
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T, PAPER_SETTINGS
+from rdmp_gym.synthetic.smoothness import (
     draw_test_demonstrations,
     finite_derivatives,
     handover_figures,

@@ -5,7 +5,7 @@ Per join:
 
 * ``capacity``: the least acceleration error over the transient that ANY weights and start state give on the fitted
   basis (noise-free samples at 500 Hz, the true T; least squares on the rollout's acceleration, which is linear in
-  both), with the fade before T (:data:`rdmp_gym.fitting.FADE_BEFORE_T`) and with the defaults (fade after T). A
+  both), with the fade before T (:data:`rdmp_gym.dmp.fitting.FADE_BEFORE_T`) and with the defaults (fade after T). A
   large value is a limit of what the mixture (5) can express, which no regression and no noise level can lift.
 * ``true T``: the fade-before-T fit and the default fit given the true T and period instead of the segmentation's
   estimate (the estimated T, and its error).
@@ -38,9 +38,9 @@ from output import add_save_argument, results_dir
 from scipy.interpolate import BSpline
 
 from rdmp_gym import RhythmicDMP, segment
-from rdmp_gym.fitting import FADE_BEFORE_T, fit_rhythmic, trajectory_design
-from rdmp_gym.segmentation import Segmentation
-from rdmp_gym.smoothness import draw_test_demonstrations, handover_figures, motion_metrics
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T, fit_rhythmic, trajectory_design
+from rdmp_gym.signals.segmentation import Segmentation
+from rdmp_gym.synthetic.smoothness import draw_test_demonstrations, handover_figures, motion_metrics
 
 RATE = 500.0
 ORACLE_SMOOTHNESS = tuple(float(value) for value in np.logspace(-3.0, 1.0, 9))

@@ -1,7 +1,7 @@
 """Memory of long rollouts: peak traced allocation of ``RhythmicDMP.rollout`` and of the online stepper.
 
 Setting: 3 DoF, N = M = 40 (D = 80 basis functions), 1 kHz. The forcing term is evaluated in blocks of
-``rdmp_gym.basis.FORCING_BLOCK`` samples; the "unblocked" column sets the block to the whole rollout
+``rdmp_gym.dmp.basis.FORCING_BLOCK`` samples; the "unblocked" column sets the block to the whole rollout
 (the behaviour before blocks). Target: the rollout's peak grows like its ``[T, d]`` output (a constant
 factor), not like the ``[T, D]`` activations; the stepper's memory does not grow with T.
 Peaks are measured with ``tracemalloc`` (numpy's allocations are traced). Prints a table; writes
@@ -26,7 +26,8 @@ from collections.abc import Callable
 import numpy as np
 from output import add_save_argument, results_dir
 
-from rdmp_gym import RhythmicDMP, basis, wiping_demonstration
+from rdmp_gym import RhythmicDMP, wiping_demonstration
+from rdmp_gym.dmp import basis
 
 RATE = 1000.0
 

@@ -6,7 +6,7 @@ outside the wiped circle), with Hoffmann et al.'s steering term (beta = 20/pi) a
 window (the library's default fit, alpha_z = 5): gain 1e4 with lambda = 2 cm, gain 2e4 with lambda = 3 cm
 (the env baseline's setting), and the same with the coupling low-passed over 0.1 s. Then the env baseline with a
 virtual point obstacle on the wiped circle, and the coupling baseline of the agents table (the approach lifted over
-the cup by :class:`~rdmp_gym.coupling.LiftOver`) on ArmarWipe-v1 contexts with a cup (:func:`cup_contexts`).
+the cup by :class:`~rdmp_gym.dmp.coupling.LiftOver`) on ArmarWipe-v1 contexts with a cup (:func:`cup_contexts`).
 Reported on the periodic part (t > 3 s): the smallest clearance
 without and with the coupling, the peak acceleration, the largest change of the path where the free path
 is more than 8 cm from the obstacle, and the integrated squared jerk against the free path.
@@ -23,7 +23,7 @@ import numpy as np
 from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.coupling import ObstacleAvoidance, avoiding_rollout
+from rdmp_gym.dmp.coupling import ObstacleAvoidance, avoiding_rollout
 
 NAME = "obstacle.json"
 DT = 2e-3

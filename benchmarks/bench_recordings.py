@@ -1,25 +1,25 @@
 """Whole-recording fits: segmentation against the truth, cycle error against the recording's own cycle-to-cycle
 variation, start and rest error, peak acceleration ratio, and whether ``rdmp-gym fit --demo`` succeeds.
 
-By default on the realistic recordings of :mod:`rdmp_gym.synthetic` (3 kinds x ``--seeds`` seeds), against the
-generator's truth; with ``--data PATH`` also on the user's own recordings (CSV files ``t,x,y,z`` under PATH, or the
-12-column pose files ``*.txt`` of homogeneous transforms that some datasets ship, read at ``--data-rate`` Hz),
+By default on the realistic recordings of :mod:`rdmp_gym.synthetic.demonstrations` (3 kinds x ``--seeds`` seeds),
+against the generator's truth; with ``--data PATH`` also on the user's own recordings (CSV files ``t,x,y,z`` under PATH,
+or the 12-column pose files ``*.txt`` of homogeneous transforms that some datasets ship, read at ``--data-rate`` Hz),
 against hand labels where a file ``NAME.labels.json`` beside ``NAME.csv`` gives ``{"rhythm_start": s,
 "rhythm_end": s}`` (s from the first time stamp). Third-party data is read, never copied: the user's rows go to
 ``runs/benchmarks/recordings_user.json`` (untracked), the generated ones to ``recordings.json``. Targets: error
 ratio <= 1.5, start and rest error <= 1 cm, acceleration ratio <= 1.5.
 
 With ``--orientation`` also the pose (position and orientation): realistic pose recordings
-(:func:`rdmp_gym.synthetic_pose.realistic_pose_recording`) and the user's files with ``qw, qx, qy, qz`` columns or
+(:func:`rdmp_gym.synthetic.pose.realistic_pose_recording`) and the user's files with ``qw, qx, qy, qz`` columns or
 12-column pose files, with the orientation's cycle error against its cycle-to-cycle variation (degrees) and its
 peak angular acceleration ratio (``recordings_pose.json``).
 
 With ``--sessions`` also the recordings with several sessions: generated ones
-(:func:`rdmp_gym.synthetic_sessions.multi_session_recording`, 3 sessions of each kind) against their truth, and the
+(:func:`rdmp_gym.synthetic.sessions.multi_session_recording`, 3 sessions of each kind) against their truth, and the
 user's files against labels ``{"sessions": [{"rhythm_start": s, "rhythm_end": s}, ...]}`` (or the single-rhythm
 form): sessions found, each one's onset and stop against the labels, period, error and acceleration ratios, the
-joint fit's error ratios (:func:`rdmp_gym.session_fit.fit_joint`; also on 3 sessions of one period of each kind),
-and whether the CLI succeeds (``recordings_sessions.json``, the ``--data`` rows beside the generated ones: the
+joint fit's error ratios (:func:`rdmp_gym.recordings.session_fit.fit_joint`; also on 3 sessions of one period of each
+kind), and whether the CLI succeeds (``recordings_sessions.json``, the ``--data`` rows beside the generated ones: the
 figures of your files, not the files).
 
     python benchmarks/bench_recordings.py [--seeds 3] [--data PATH --data-rate 100] [--orientation] [--sessions]
@@ -40,12 +40,12 @@ from pose_rows import pose_row, print_pose_row, read_orientation, summary
 from rdmp_gym.agents.cli import main as cli_main
 from session_rows import print_session_row, session_row, session_summary
 
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.recording_fit import fit_recording, recording_report
-from rdmp_gym.signals import smooth_derivatives
-from rdmp_gym.synthetic import RECORDING_KINDS, realistic_recording
-from rdmp_gym.synthetic_pose import realistic_pose_recording
-from rdmp_gym.synthetic_sessions import multi_session_pose_recording, multi_session_recording
+from rdmp_gym.recordings.recording_fit import fit_recording, recording_report
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.signals.filters import smooth_derivatives
+from rdmp_gym.synthetic.demonstrations import RECORDING_KINDS, realistic_recording
+from rdmp_gym.synthetic.pose import realistic_pose_recording
+from rdmp_gym.synthetic.sessions import multi_session_pose_recording, multi_session_recording
 
 
 def _row(name: str, demo, truth: dict | None, csv_path: Path, clean=None) -> dict:

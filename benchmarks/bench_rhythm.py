@@ -2,7 +2,7 @@
 
 A partner's hand (x of a 5 cm circle plus a 1 cm second harmonic and 1 mm noise, seeds 0..4) runs in phase
 with the style-1 wiping DMP (period 1.5 s), then its frequency steps by +-30 % at t = 10 s. The DMP follows
-it through :class:`rdmp_gym.frequency.AdaptiveFrequencyStepper` (K = K_Omega = 2/s, k_phi = 1/s, 500 Hz) or
+it through :class:`rdmp_gym.dmp.frequency.AdaptiveFrequencyStepper` (K = K_Omega = 2/s, k_phi = 1/s, 500 Hz) or
 runs at its fixed frequency. Lock-in: the time after the step from which the frequency the DMP follows stays
 within 2 % of the partner's and the phase relation within 0.1 rad of its value before the step. Steady phase
 error: RMS over the last 5 s of the change of that relation (and of the absolute phase difference).
@@ -19,7 +19,7 @@ import numpy as np
 from output import add_save_argument, results_dir
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.frequency import follow_rhythm
+from rdmp_gym.dmp.frequency import follow_rhythm
 
 NAME = "rhythm.json"
 DT, DURATION, STEP = 2e-3, 30.0, 10.0

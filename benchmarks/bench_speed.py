@@ -4,7 +4,7 @@ Setting: 3 DoF, N = M = 40, 10 s at 100 Hz. Targets: one rollout < 2 ms, a batch
 Prints a table (median and best wall time of repeated runs, and the median process CPU time, which
 other jobs on a shared machine disturb less; a target is judged on the CPU time); writes
 benchmarks/results/speed.json. In "weights + initial cond." every rollout follows its own canonical
-path (``rdmp_gym.batched``).
+path (``rdmp_gym.dmp.batched``).
 
     python benchmarks/bench_speed.py
 """

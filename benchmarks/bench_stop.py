@@ -19,9 +19,9 @@ import json
 import numpy as np
 from output import add_save_argument, results_dir
 
-from rdmp_gym.segmentation import segment_ending
-from rdmp_gym.stopping import fit_ending
-from rdmp_gym.synthetic import ending_demonstration
+from rdmp_gym.dmp.stopping import fit_ending
+from rdmp_gym.signals.segmentation import segment_ending
+from rdmp_gym.synthetic.demonstrations import ending_demonstration
 
 NAME = "stop.json"
 H = 1e-3

@@ -18,8 +18,8 @@ from obstacle_baseline import lift_term, lifting_path
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.force_learning import curved_table_scene, period_force_errors
 
-from rdmp_gym.figures import save_figure
-from rdmp_gym.plots import pyplot
+from rdmp_gym.figures.paper import save_figure
+from rdmp_gym.figures.plots import pyplot
 
 __all__ = ["ENV_FIGURES", "write_force_figure", "write_obstacle_figure"]
 

@@ -2,8 +2,8 @@
 integrated online in the :class:`~rdmp_gym.DMPStepper` and run through ``env.run_path``.
 
 :func:`coupling_baseline_scores` is the baseline of the agents table: on ArmarWipe-v1 it lifts the approach
-over the episode's cup (:class:`~rdmp_gym.coupling.LiftOver`: the cup as a cylinder, its radius inflated by the
-sponge's half diagonal, the lift gated to the approach; :class:`~rdmp_gym.coupling.AdaptiveLift`: only as far as
+over the episode's cup (:class:`~rdmp_gym.dmp.coupling.LiftOver`: the cup as a cylinder, its radius inflated by the
+sponge's half diagonal, the lift gated to the approach; :class:`~rdmp_gym.dmp.coupling.AdaptiveLift`: only as far as
 the free approach needs) and runs the plain imitation where there is no cup.
 The planar steering term of Hoffmann et al. (:func:`run_avoiding`, a point obstacle on the sponge's centre in
 the table plane) does not avoid the cup: the sponge and the hand are wider than the detour (see
@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 from rdmp_gym.envs.approach import LIFT_PROFILE
 
-from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
-from rdmp_gym.smoothness import integrated_squared_jerk
+from rdmp_gym.dmp.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
+from rdmp_gym.synthetic.smoothness import integrated_squared_jerk
 
 __all__ = ["avoiding_path", "coupling_baseline_scores", "cup_in_path_frame", "cup_position", "lift_term",
            "lifting_path", "path_jerk_ratio", "run_avoiding", "run_lifting"]
@@ -85,8 +85,8 @@ def _online_path(env, terms: list, substeps: int, smoothing: float = 0.0) -> np.
 def lifting_path(env, substeps: int = 5, adaptive: bool = True, lead: float = 0.3, **term_kwargs: Any
                  ) -> np.ndarray:
     """Sponge path ``[T_ctrl, 3]`` (path frame) of the imitation lifted over the episode's cup, integrated online:
-    by :class:`~rdmp_gym.coupling.AdaptiveLift` (``lead`` s) of :func:`lift_term` (``term_kwargs``), or with
-    ``adaptive=False`` by the conservative :class:`~rdmp_gym.coupling.LiftOver` itself (the full height everywhere
+    by :class:`~rdmp_gym.dmp.coupling.AdaptiveLift` (``lead`` s) of :func:`lift_term` (``term_kwargs``), or with
+    ``adaptive=False`` by the conservative :class:`~rdmp_gym.dmp.coupling.LiftOver` itself (the full height everywhere
     over the footprint); the plain imitation (``rollout_path``) without a cup."""
     inner = env.unwrapped
     if inner.context is None:
@@ -152,7 +152,7 @@ def avoiding_path(env, obstacle_xy: np.ndarray | None = None, gamma: float = 2e4
     """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of the imitation in the env's current context, steered
     in the table plane around a point obstacle at ``obstacle_xy [2]`` (m; default: the context's cup; the plain
     imitation when there is none) by Hoffmann et al.'s term; ``gamma``, ``distance_scale`` and ``smoothing`` as
-    in :class:`~rdmp_gym.coupling.ObstacleAvoidance` and :func:`~rdmp_gym.coupling.avoiding_rollout`."""
+    in :class:`~rdmp_gym.dmp.coupling.ObstacleAvoidance` and :func:`~rdmp_gym.dmp.coupling.avoiding_rollout`."""
     inner = env.unwrapped
     if inner.context is None:
         raise RuntimeError("call reset() before avoiding_path()")

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym import quaternion
-from rdmp_gym.pose import PoseDemonstration
-from rdmp_gym.pose_fit import fit_pose_recording, pose_report, smoothed_peak_angular_acceleration
-from rdmp_gym.pose_io import write_pose_csv
-from rdmp_gym.segmentation.sessions import find_sessions
-from rdmp_gym.session_fit import fit_pose_sessions
+from rdmp_gym.dmp import quaternion
+from rdmp_gym.dmp.pose import PoseDemonstration
+from rdmp_gym.recordings.pose_fit import fit_pose_recording, pose_report, smoothed_peak_angular_acceleration
+from rdmp_gym.recordings.pose_io import write_pose_csv
+from rdmp_gym.recordings.session_fit import fit_pose_sessions
+from rdmp_gym.signals.segmentation.sessions import find_sessions
 
 __all__ = ["pose_row", "print_pose_row", "read_orientation", "summary"]
 

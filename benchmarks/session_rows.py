@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym.session_fit import fit_joint, fit_sessions, joint_report
+from rdmp_gym.recordings.session_fit import fit_joint, fit_sessions, joint_report
 
 
 def session_row(name: str, demo, labels: list[tuple[float, float]] | None, csv_path: Path) -> dict:

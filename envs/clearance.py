@@ -6,7 +6,7 @@ clear of it: the sponge's path alone does not show the collision. :class:`CupCle
 of every control step (forward kinematics of the joint path) and, where a part of the hand comes closer than
 ``margin`` to the cup's side below its top, pushes the sponge's path away from the cup in the table plane by
 what is missing, spread smoothly over the neighbouring steps. It is a coupling term of the executed primitive,
-as an obstacle term is (see :mod:`rdmp_gym.coupling`): the learned parameters are unchanged, the executed path
+as an obstacle term is (see :mod:`rdmp_gym.dmp.coupling`): the learned parameters are unchanged, the executed path
 differs only near the cup.
 """
 

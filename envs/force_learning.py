@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-from rdmp_gym.basis import periodic_width, von_mises
+from rdmp_gym.dmp.basis import periodic_width, von_mises
 
 from .controller import ForceAdaptation, ForceAdaptationSettings
 from .scene import DEFAULT_XML

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP
-from rdmp_gym.fitting import FIT_METHODS
+from rdmp_gym.dmp.fitting import FIT_METHODS
 from rdmp_gym.validation import (
     SettingTypeError,
     check_flag,
@@ -113,7 +113,7 @@ class TaskConfig:
         demonstration: a ``rdmp_gym.Demonstration`` with 3 dimensions (x, y, z in the table frame) to fit (not JSON).
         dmp: a ``dmp.json`` path (or a ``RhythmicDMP``, which is not JSON) used as the imitation without fitting.
         n_periodic, n_transient: basis functions of the fit (integers >= 1).
-        fit_method: one of :data:`rdmp_gym.fitting.FIT_METHODS`.
+        fit_method: one of :data:`rdmp_gym.dmp.fitting.FIT_METHODS`.
         groups: the action's parameter groups (None: the version's default; a name or a tuple of names).
         scales: ``{group: fraction}`` action scales (finite numbers > 0), or None.
         n_periods: periods after the transient (None: the version's default); ``duration`` (s) overrides it.

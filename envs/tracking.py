@@ -22,7 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
-from rdmp_gym.fitting import FADE_BEFORE_T
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T
 
 __all__ = ["TrackingEnv"]
 

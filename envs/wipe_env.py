@@ -40,9 +40,9 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import RhythmicDMP, load_dmp, wiping_demonstration
-from rdmp_gym.demonstrations import check_frame
-from rdmp_gym.fitting import FADE_BEFORE_T
-from rdmp_gym.pose import PoseDMP
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T
+from rdmp_gym.dmp.pose import PoseDMP
+from rdmp_gym.signals.demonstrations import check_frame
 
 from .action import ActionMap, checked_action
 from .approach import approach_direction, lift_profile
@@ -118,7 +118,7 @@ def outcome(stats: Mapping[str, Any], valid: bool, unstable: bool, max_joint_acc
 @lru_cache(maxsize=16)
 def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> RhythmicDMP:
     """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s), fitted with the settings
-    the tasks were published with (:data:`rdmp_gym.fitting.FADE_BEFORE_T`), whatever the library's defaults."""
+    the tasks were published with (:data:`rdmp_gym.dmp.fitting.FADE_BEFORE_T`), whatever the library's defaults."""
     return RhythmicDMP.fit(wiping_demonstration(style=style, rng=0), n_periodic=n_periodic,
                            n_transient=n_transient, method=method, **FADE_BEFORE_T)
 

@@ -3,21 +3,21 @@
 The core (this package) depends on numpy and scipy only: ``import rdmp_gym`` loads neither gymnasium, MuJoCo,
 matplotlib nor torch, and sets no environment variable. ``rdmp_gym.envs`` (gymnasium + MuJoCo) and
 ``rdmp_gym.agents`` (learners) are separate layers; ``import rdmp_gym.envs`` (or
-``gym.register_envs(rdmp_gym.envs)``) registers the environments. The figures (:mod:`rdmp_gym.plots`,
-:mod:`rdmp_gym.figures`) need matplotlib, the ``plots`` extra.
+``gym.register_envs(rdmp_gym.envs)``) registers the environments. The figures (:mod:`rdmp_gym.figures.plots`,
+:mod:`rdmp_gym.figures.paper`) need matplotlib, the ``plots`` extra.
 """
 
-from .basis import BasisSet, Fading
-from .canonical import CanonicalSystem
-from .classic import PeriodicDMP
-from .demonstrations import Demonstration, SyntheticTruth
-from .dmp import DMPStepper, RhythmicDMP, StopRequest, TransientStart
-from .parameters import GROUPS, ParameterLayout
-from .segmentation import Segmentation, phase_shift, segment
-from .serialization import load_dmp, save_dmp
-from .settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
-from .sweep import Sweep
-from .synthetic import multi_transient_demonstrations, wiping_demonstration
+from .dmp.basis import BasisSet, Fading
+from .dmp.canonical import CanonicalSystem
+from .dmp.classic import PeriodicDMP
+from .dmp.parameters import GROUPS, ParameterLayout
+from .dmp.rhythmic import DMPStepper, RhythmicDMP, StopRequest, TransientStart
+from .dmp.serialization import load_dmp, save_dmp
+from .dmp.settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
+from .dmp.sweep import Sweep
+from .signals.demonstrations import Demonstration, SyntheticTruth
+from .signals.segmentation import Segmentation, phase_shift, segment
+from .synthetic.demonstrations import multi_transient_demonstrations, wiping_demonstration
 
 __version__ = "0.1.0"
 

@@ -175,7 +175,7 @@ def test_a_run_whose_first_update_is_all_invalid_stops_with_the_reasons(tmp_path
     from rdmp_gym.agents.tasks import WIPE_ID
 
     from rdmp_gym import wiping_demonstration
-    from rdmp_gym.demonstrations import Demonstration
+    from rdmp_gym.signals.demonstrations import Demonstration
 
     demo = wiping_demonstration(1, rng=0)
     Demonstration(demo.t, demo.Y * 1000.0, name="millimetres").to_csv(tmp_path / "mm.csv")

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from rdmp_gym import CanonicalSystem, Fading, RhythmicDMP, wiping_demonstration
-from rdmp_gym.basis import periodic_width, transient_basis_along_path, transient_times
-from rdmp_gym.fitting import FADE_BEFORE_T
+from rdmp_gym.dmp.basis import periodic_width, transient_basis_along_path, transient_times
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T
 
 
 @pytest.fixture(scope="module")

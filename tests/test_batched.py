@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.basis import NORMALISATION_EPSILON
-from rdmp_gym.batched import batched_forcing
+from rdmp_gym.dmp.basis import NORMALISATION_EPSILON
+from rdmp_gym.dmp.batched import batched_forcing
 
 
 @pytest.fixture(scope="module")

@@ -1,19 +1,14 @@
 """Each concept of the core in one home: one period estimator for every segmentation, one fading gate for the
-start and the stop, no module reading another's private names."""
-
-import ast
-from pathlib import Path
+start and the stop (no module reading another's private names: test_core_layout.py)."""
 
 import numpy as np
 import pytest
 
 from rdmp_gym import Fading, segment, wiping_demonstration
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.ending import StopFading
-from rdmp_gym.segmentation import PERIOD_METHODS, estimate_period, segment_rhythm
-from rdmp_gym.synthetic import realistic_recording
-
-CORE = Path(__file__).resolve().parent.parent / "rdmp_gym"
+from rdmp_gym.dmp.ending import StopFading
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.signals.segmentation import PERIOD_METHODS, estimate_period, segment_rhythm
+from rdmp_gym.synthetic.demonstrations import realistic_recording
 
 
 @pytest.mark.parametrize("method", PERIOD_METHODS)
@@ -45,12 +40,3 @@ def test_the_stop_gates_are_the_start_gates_mirrored() -> None:
     np.testing.assert_array_equal(stop.stop_gate(r), start.periodic_gate(r))
     np.testing.assert_array_equal(stop.periodic_gate(r), start.transient_gate(r))
 
-
-def test_no_core_module_imports_a_private_name_of_another() -> None:
-    found = []
-    for path in sorted(CORE.rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("rdmp_gym")):
-                found += [f"{path.relative_to(CORE)}: {node.module}.{alias.name}" for alias in node.names
-                          if alias.name.startswith("_")]
-    assert not found

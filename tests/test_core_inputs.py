@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, wiping_demonstration
-from rdmp_gym.demonstrations import Demonstration
+from rdmp_gym.signals.demonstrations import Demonstration
 
 
 @pytest.fixture(scope="module")

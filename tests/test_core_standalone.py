@@ -10,7 +10,8 @@ _PROBE = """
 import json, os, sys
 before = dict(os.environ)
 import rdmp_gym
-import rdmp_gym.fitting, rdmp_gym.segmentation, rdmp_gym.stopping, rdmp_gym.plots, rdmp_gym.figures
+import rdmp_gym.dmp.fitting, rdmp_gym.dmp.stopping, rdmp_gym.signals.segmentation
+import rdmp_gym.figures.paper, rdmp_gym.figures.plots
 loaded = sorted({name.split(".")[0] for name in sys.modules} & {"gymnasium", "mujoco", "matplotlib", "torch"})
 print(json.dumps({"loaded": loaded, "environ_changed": dict(os.environ) != before,
                   "envs": "rdmp_gym.envs" in sys.modules}))
@@ -32,8 +33,9 @@ def test_import_rdmp_gym_loads_no_gymnasium_mujoco_matplotlib_or_torch_and_sets_
 
 
 def test_the_figures_load_matplotlib_only_when_drawing(tmp_path):
-    code = ("import sys; from rdmp_gym.plots import plot_canonical_system; from rdmp_gym import CanonicalSystem; "
-            "assert 'matplotlib' not in sys.modules; import matplotlib; matplotlib.use('Agg'); "
+    code = ("import sys; from rdmp_gym.figures.plots import plot_canonical_system; "
+            "from rdmp_gym import CanonicalSystem; assert 'matplotlib' not in sys.modules; "
+            "import matplotlib; matplotlib.use('Agg'); "
             "plot_canonical_system(CanonicalSystem(period=1.0), [(0.0, 0.5)]).savefig(sys.argv[1])")
     result = subprocess.run([sys.executable, "-c", code, str(tmp_path / "fig.png")], capture_output=True, text=True,
                             timeout=120)

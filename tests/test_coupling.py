@@ -1,4 +1,5 @@
-"""Obstacle avoidance coupling (rdmp_gym.coupling): properties of the steering term and a core-only wiping scenario."""
+"""Obstacle avoidance coupling (rdmp_gym.dmp.coupling): properties of the steering term and a core-only wiping
+scenario."""
 
 import numpy as np
 import pytest
@@ -7,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
+from rdmp_gym.dmp.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 
 vectors = st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3).map(np.array)
 

@@ -1,12 +1,12 @@
-"""Tests for rdmp_gym.demonstrations: the container, file I/O and the synthetic wiping demos."""
+"""Tests for rdmp_gym.signals.demonstrations: the container, file I/O and the synthetic wiping demos."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from rdmp_gym.demonstrations import Demonstration, SyntheticTruth
-from rdmp_gym.synthetic import multi_transient_demonstrations, wiping_demonstration
+from rdmp_gym.signals.demonstrations import Demonstration, SyntheticTruth
+from rdmp_gym.synthetic.demonstrations import multi_transient_demonstrations, wiping_demonstration
 
 STYLES = (1, 2, 3, 4)
 

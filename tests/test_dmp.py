@@ -13,7 +13,7 @@ from rdmp_gym import (
     segment,
     wiping_demonstration,
 )
-from rdmp_gym.dmp import PAPER_SETTINGS
+from rdmp_gym.dmp.rhythmic import PAPER_SETTINGS
 
 
 def relative_rmse(Y, reference, mask):
@@ -182,8 +182,8 @@ def test_save_load_round_trip(tmp_path, dmp):
 def test_version_1_files_without_a_mixture_floor_still_load(tmp_path, dmp):
     import json
 
-    from rdmp_gym.basis import NORMALISATION_EPSILON
-    from rdmp_gym.serialization import dmp_to_dict
+    from rdmp_gym.dmp.basis import NORMALISATION_EPSILON
+    from rdmp_gym.dmp.serialization import dmp_to_dict
 
     data = dmp_to_dict(dmp)
     assert data["basis"]["fading"]["floor"] == dmp.basis.fading.floor

@@ -1,5 +1,5 @@
 """The environments' imitation DMPs do not change when the library's fit defaults do: they are fitted with the
-settings the tasks were published with (``rdmp_gym.fitting.FADE_BEFORE_T``)."""
+settings the tasks were published with (``rdmp_gym.dmp.fitting.FADE_BEFORE_T``)."""
 
 from pathlib import Path
 

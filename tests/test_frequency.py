@@ -1,13 +1,13 @@
-"""Following an external rhythm (rdmp_gym.frequency): the adaptive-frequency oscillator drives the DMP's phase."""
+"""Following an external rhythm (rdmp_gym.dmp.frequency): the adaptive-frequency oscillator drives the DMP's phase."""
 
 import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.frequency import AdaptiveFrequencyStepper, _first_order_hold, follow_rhythm
-from rdmp_gym.stopping import fit_ending
-from rdmp_gym.synthetic import ending_demonstration
-from rdmp_gym.transformation import TransformationSystem
+from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper, _first_order_hold, follow_rhythm
+from rdmp_gym.dmp.stopping import fit_ending
+from rdmp_gym.dmp.transformation import TransformationSystem
+from rdmp_gym.synthetic.demonstrations import ending_demonstration
 
 DT = 2e-3
 

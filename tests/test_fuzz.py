@@ -22,8 +22,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rdmp_gym import PeriodicDMP, RhythmicDMP, load_dmp
-from rdmp_gym.demonstrations import Demonstration
-from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
+from rdmp_gym.dmp.serialization import dmp_from_dict, dmp_to_dict
+from rdmp_gym.signals.demonstrations import Demonstration
 
 ROOT = Path(__file__).resolve().parent.parent
 OWN_CODE = tuple(str(ROOT / folder) + os.sep for folder in ("rdmp_gym", "envs", "agents"))

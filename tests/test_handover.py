@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP
-from rdmp_gym.demonstrations import Demonstration
-from rdmp_gym.fitting import (
+from rdmp_gym.dmp.fitting import (
     FADE_BEFORE_T,
     JOIN_FLOOR,
     START_PRIOR,
@@ -17,8 +16,9 @@ from rdmp_gym.fitting import (
     second_differences,
     trajectory_design,
 )
-from rdmp_gym.segmentation import Segmentation
-from rdmp_gym.smoothness import (
+from rdmp_gym.signals.demonstrations import Demonstration
+from rdmp_gym.signals.segmentation import Segmentation
+from rdmp_gym.synthetic.smoothness import (
     HANDOVER_TARGETS,
     draw_test_demonstrations,
     handover_figures,

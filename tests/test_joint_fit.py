@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.serialization import load_dmp
-from rdmp_gym.session_fit import fit_joint, joint_report
-from rdmp_gym.synthetic_sessions import multi_session_recording
+from rdmp_gym.dmp.serialization import load_dmp
+from rdmp_gym.recordings.session_fit import fit_joint, joint_report
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.synthetic.sessions import multi_session_recording
 
 
 @pytest.fixture(scope="module")

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.segmentation import segment_rhythm
-from rdmp_gym.segmentation.onset import rhythm_bounds
-from rdmp_gym.segmentation.sessions import find_sessions
-from rdmp_gym.synthetic_sessions import multi_session_recording
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.signals.segmentation import segment_rhythm
+from rdmp_gym.signals.segmentation.onset import rhythm_bounds
+from rdmp_gym.signals.segmentation.sessions import find_sessions
+from rdmp_gym.synthetic.sessions import multi_session_recording
 
 DT, PERIOD = 0.01, 1.0
 

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym import load_dmp, quaternion, save_dmp
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.dmp import RhythmicDMP
-from rdmp_gym.pose import PoseDemonstration, PoseDMP
-from rdmp_gym.pose_fit import fit_pose_recording, pose_report
-from rdmp_gym.recording_fit import fit_recording
-from rdmp_gym.synthetic_pose import realistic_pose_recording
+from rdmp_gym import load_dmp, save_dmp
+from rdmp_gym.dmp import quaternion
+from rdmp_gym.dmp.pose import PoseDemonstration, PoseDMP
+from rdmp_gym.dmp.rhythmic import RhythmicDMP
+from rdmp_gym.recordings.pose_fit import fit_pose_recording, pose_report
+from rdmp_gym.recordings.recording_fit import fit_recording
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.synthetic.pose import realistic_pose_recording
 
 
 def _fitted(**keywords):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rdmp_gym import quaternion as Q
+from rdmp_gym.dmp import quaternion as Q
 
 
 def _scipy(v: np.ndarray) -> np.ndarray:

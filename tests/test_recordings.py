@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym.demonstrations import to_demonstration
-from rdmp_gym.recording_fit import _cycle_cuts, constant_columns, fit_recording, recording_report
-from rdmp_gym.segmentation import segment_ending, segment_rhythm
-from rdmp_gym.signals import despike
-from rdmp_gym.synthetic import realistic_recording
+from rdmp_gym.recordings.recording_fit import _cycle_cuts, constant_columns, fit_recording, recording_report
+from rdmp_gym.signals.demonstrations import to_demonstration
+from rdmp_gym.signals.filters import despike
+from rdmp_gym.signals.segmentation import segment_ending, segment_rhythm
+from rdmp_gym.synthetic.demonstrations import realistic_recording
 
 
 def _recording(kind: str, seed: int = 0):

@@ -1,4 +1,4 @@
-"""Tests for rdmp_gym.segmentation: period, transient length, anchor and phase shift.
+"""Tests for rdmp_gym.signals.segmentation: period, transient length, anchor and phase shift.
 
 Measured with the default noise (0.3 mm at 100 Hz, 20 seeds per style): period error < 1e-4
 relative, anchor error < 0.04 mm, transient length 0.10-0.25 s early (the last part of a C^3
@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rdmp_gym.demonstrations import Demonstration
-from rdmp_gym.segmentation import Segmentation, phase_shift, segment
-from rdmp_gym.synthetic import multi_transient_demonstrations, wiping_demonstration
+from rdmp_gym.signals.demonstrations import Demonstration
+from rdmp_gym.signals.segmentation import Segmentation, phase_shift, segment
+from rdmp_gym.synthetic.demonstrations import multi_transient_demonstrations, wiping_demonstration
 
 STYLES = (1, 2, 3, 4)
 SEEDS = (0, 1, 2)

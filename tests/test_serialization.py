@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict, load_dmp
+from rdmp_gym.dmp.serialization import dmp_from_dict, dmp_to_dict, load_dmp
 
 
 @pytest.fixture(scope="module")

@@ -7,15 +7,16 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.cli import main as cli_main
 
-from rdmp_gym import load_dmp, quaternion
-from rdmp_gym.demonstrations import Demonstration, to_demonstration
-from rdmp_gym.pose_io import write_pose_csv
-from rdmp_gym.recording_fit import recording_report
-from rdmp_gym.segmentation import segment_rhythm
-from rdmp_gym.segmentation.sessions import find_sessions
-from rdmp_gym.session_fit import SessionFit, fit_sessions
-from rdmp_gym.synthetic import realistic_recording
-from rdmp_gym.synthetic_sessions import multi_session_pose_recording, multi_session_recording
+from rdmp_gym import load_dmp
+from rdmp_gym.dmp import quaternion
+from rdmp_gym.recordings.pose_io import write_pose_csv
+from rdmp_gym.recordings.recording_fit import recording_report
+from rdmp_gym.recordings.session_fit import SessionFit, fit_sessions
+from rdmp_gym.signals.demonstrations import Demonstration, to_demonstration
+from rdmp_gym.signals.segmentation import segment_rhythm
+from rdmp_gym.signals.segmentation.sessions import find_sessions
+from rdmp_gym.synthetic.demonstrations import realistic_recording
+from rdmp_gym.synthetic.sessions import multi_session_pose_recording, multi_session_recording
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The fit's settings are defined once (:mod:`rdmp_gym.settings`): the presets, the keyword form and the typed form
+"""The fit's settings are defined once (:mod:`rdmp_gym.dmp.settings`): the presets, the keyword form and the typed form
 give the same DMP, and every default fit reads :data:`DEFAULT_FIT`."""
 
 import dataclasses
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, wiping_demonstration
-from rdmp_gym.fitting import FADE_BEFORE_T, PAPER_SETTINGS, fit_rhythmic
-from rdmp_gym.settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
-from rdmp_gym.stopping import fit_ending
-from rdmp_gym.synthetic import ending_demonstration
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T, PAPER_SETTINGS, fit_rhythmic
+from rdmp_gym.dmp.settings import DEFAULT_FIT, PAPER_FIT, PUBLISHED_ENV_FIT, FitSettings
+from rdmp_gym.dmp.stopping import fit_ending
+from rdmp_gym.synthetic.demonstrations import ending_demonstration
 
 
 @pytest.fixture(scope="module")

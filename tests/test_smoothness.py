@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, multi_transient_demonstrations, wiping_demonstration
-from rdmp_gym.smoothness import SmoothTestSignal, finite_derivatives, motion_metrics, random_test_signal
+from rdmp_gym.synthetic.smoothness import SmoothTestSignal, finite_derivatives, motion_metrics, random_test_signal
 
 DT = 1e-3
 
@@ -50,7 +50,7 @@ def test_default_fit_reproduces_acceleration_and_jerk(style_fits, style):
 
 
 def test_paper_settings_show_the_ripple_the_defaults_remove():
-    from rdmp_gym.dmp import PAPER_SETTINGS
+    from rdmp_gym.dmp.rhythmic import PAPER_SETTINGS
 
     t, reference = _reference(1)
     demo = wiping_demonstration(1, rng=1)

@@ -1,4 +1,4 @@
-"""The end of the movement (rdmp_gym.stopping): segmentation, fit, rollout(stop_at), DMPStepper.request_stop."""
+"""The end of the movement (rdmp_gym.dmp.stopping): segmentation, fit, rollout(stop_at), DMPStepper.request_stop."""
 
 import json
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from rdmp_gym import RhythmicDMP, load_dmp, save_dmp, wiping_demonstration
-from rdmp_gym.ending import StopRequest, exit_time
-from rdmp_gym.segmentation import segment_ending
-from rdmp_gym.stopping import fit_ending
-from rdmp_gym.synthetic import ending_demonstration
+from rdmp_gym.dmp.ending import StopRequest, exit_time
+from rdmp_gym.dmp.stopping import fit_ending
+from rdmp_gym.signals.segmentation import segment_ending
+from rdmp_gym.synthetic.demonstrations import ending_demonstration
 
 H = 1e-3                                   # evaluation grid (1 kHz)
 
@@ -204,7 +204,7 @@ def test_stop_with_and_without_the_smooth_start(fitted):
     ("length", lambda stop: stop.pop("length")),
 ])
 def test_the_stop_field_is_validated(fitted, field, change):
-    from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
+    from rdmp_gym.dmp.serialization import dmp_from_dict, dmp_to_dict
 
     data = dmp_to_dict(fitted[1])
     change(data["stop"])

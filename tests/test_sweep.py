@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rdmp_gym import RhythmicDMP, Sweep, load_dmp, save_dmp
-from rdmp_gym.ending import StopRequest
-from rdmp_gym.serialization import dmp_from_dict, dmp_to_dict
+from rdmp_gym.dmp.ending import StopRequest
+from rdmp_gym.dmp.serialization import dmp_from_dict, dmp_to_dict
 
 T_FINE = np.linspace(0.0, 6.0, 6001)
 
@@ -147,8 +147,8 @@ def test_sweep_dimensions_must_match(dmp):
 
 
 def test_a_stop_after_the_travel_comes_to_rest_at_its_goal():
-    from rdmp_gym.stopping import fit_ending
-    from rdmp_gym.synthetic import ending_demonstration
+    from rdmp_gym.dmp.stopping import fit_ending
+    from rdmp_gym.synthetic.demonstrations import ending_demonstration
 
     dmp = fit_ending(ending_demonstration(1, rng=1))
     travelling = dmp.with_sweep(Sweep(np.array([1.0, 2.5, 4.0]), np.array([[0.06, 0.0, 0.0], [0.06, 0.05, 0.0]])))

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rdmp_gym.transformation import TransformationSystem
+from rdmp_gym.dmp.transformation import TransformationSystem
 
 
 def _system_and_input():

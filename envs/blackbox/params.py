@@ -1,6 +1,6 @@
 """The affine map between the black-box action ``a in [-1, 1]^n`` and the joint-space DMP's parameters.
 
-``theta = theta0 + scale * a`` over the selected groups in the DMP's own order (:mod:`rdmp_gym.parameters`), one
+``theta = theta0 + scale * a`` over the selected groups in the DMP's own order (:mod:`rdmp_gym.dmp.parameters`), one
 action dimension per parameter, so ``a = 0`` is the initial DMP. The weights', initial conditions' and amplitude's
 scales are :class:`rdmp_gym.envs.action.ActionMap`'s rules; unlike the wiping task, the ``anchor`` (the posture the
 rhythm is centred on) may be in the action here, scaled by a fraction of each joint's motion in the cycle.

@@ -4,7 +4,7 @@ The metronome's phase ``psi(t)`` grows at ``2 pi tempo / 60`` rad/s (tempo in be
 start phase at ``t = 0`` (the count-in is in phase with the movement's start); from the beat at ``change_time`` on
 it grows at the new tempo. A beat is where ``psi`` passes the imitation's strike phase (mod 2 pi), so the imitation
 at a constant tempo strikes on the beat. The DMP hears the beat signal ``u(t) = cos(psi(t) - shift)``
-(:mod:`rdmp_gym.frequency`: the adaptive oscillator locks onto its phase); ``shift`` (rad) lets a policy strike
+(:mod:`rdmp_gym.dmp.frequency`: the adaptive oscillator locks onto its phase); ``shift`` (rad) lets a policy strike
 earlier or later than the beat to make up for the stick's travel and the servos' lag.
 """
 

@@ -2,7 +2,7 @@
 
 The DMP (fitted to :func:`~.demonstration.drumming_demonstration` with a stop) starts at rest beside the drum; its
 transient brings the stick above the membrane, and its phase and frequency follow the metronome's beat signal
-online through the adaptive-frequency oscillator (:class:`rdmp_gym.frequency.AdaptiveFrequencyStepper`, started at
+online through the adaptive-frequency oscillator (:class:`rdmp_gym.dmp.frequency.AdaptiveFrequencyStepper`, started at
 the announced tempo): when the tempo changes, the DMP adapts without a re-plan. After the last beat the DMP is asked
 to stop and its stop transient brings the stick to rest.
 
@@ -30,8 +30,8 @@ import mujoco
 import numpy as np
 
 from rdmp_gym import RhythmicDMP
-from rdmp_gym.frequency import AdaptiveFrequencyStepper
-from rdmp_gym.stopping import fit_ending
+from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper
+from rdmp_gym.dmp.stopping import fit_ending
 
 from ...robots import RobotDescription
 from ...scene import rotation_from_tilt
