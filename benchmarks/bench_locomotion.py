@@ -18,7 +18,8 @@ test return with a 95 % percentile-bootstrap interval (``rdmp_gym.agents.protoco
 until the validation return first reaches the thresholds of :data:`THRESHOLDS` (median over the seeds that reach it,
 and how many do). The published anchors (:data:`ANCHORS`, each with its source) go beside it.
 
-    # everything (about 2.5 h on one core; the jobs run one after the other, the most important first):
+    # everything, one job after the other, the most important first (on one core of a shared 2-core machine:
+    # Swimmer ~45 min, HalfCheetah ~75 min, the 6 SAC runs ~1 h):
     python benchmarks/bench_locomotion.py --save
     # a smoke test (1 seed, 2 updates, 2 PPO marks):
     python benchmarks/bench_locomotion.py --seeds 1 --updates 2 --ppo-steps 20000 --sac-seeds 0 --run-dir /tmp/loco
