@@ -114,7 +114,8 @@ ANCHORS: list[dict[str, Any]] = [
      "episodes_to_threshold": {"ARS V1": 100, "ARS V2-t": 427}, "env_steps_to_threshold": {"ARS V1": 100_000},
      "source": _ARS, "cite": _CITE_ARS},
     {"env": "HalfCheetah-v5", "method": "ARS V1 / V2-t (HalfCheetah-v1)", "return": None, "threshold": 3430.0,
-     "episodes_to_threshold": {"ARS V1": 10240, "ARS V2-t": 1707}, "source": _ARS},
+     "episodes_to_threshold": {"ARS V1": 10240, "ARS V2-t": 1707}, "source": _ARS,
+     "cite": _CITE_ARS},
     {"env": "Swimmer-v5", "method": "open-loop oscillator, Raffin et al. 2024", "return": None,
      "note": "their table of returns could not be read from the stored text in this study; the row "
              "'oscillator re-run here' is their published Swimmer oscillator (0.62 Hz, phases 0 and 0.95 x 2 pi, PD "
