@@ -4,6 +4,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 from field_report import episodes_to, failure_counts, field_summary, hardest_contexts, write
@@ -23,13 +24,20 @@ def _document():
             "settings": {"final_test_seeds": list(range(100, 120)), "env_id": "not-a-solved-env"}}
 
 
+@pytest.fixture(scope="module")
+def summary_of_document():
+    """``field_summary(_document())`` (its bootstrap intervals cost ~2 CPU s), computed once for the tests that read
+    it; ``write`` computes its own."""
+    return field_summary(_document())
+
+
 def test_episodes_to_a_target_is_the_first_evaluation_that_reaches_it():
     curve = [{"episodes": 0, "eval_success": 0.1}, {"episodes": 50, "eval_success": 0.8},
              {"episodes": 100, "eval_success": None}, {"episodes": 150, "eval_success": 0.95}]
     assert episodes_to(curve, 0.5) == 50 and episodes_to(curve, 0.9) == 150 and episodes_to(curve, 0.99) is None
 
 
-def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_target(tmp_path):
+def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_target(tmp_path, summary_of_document):
     summary = write(_document(), tmp_path, "bench", "title")
     good, weak = summary["agents"]["good"], summary["agents"]["weak"]
     assert summary["best"] == "good" and summary["ceiling"] is None
@@ -41,7 +49,7 @@ def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_t
     assert summary["agents"]["good"]["improvement"] == summary["improvement"]
     assert summary["imitation_success"] == 0.25
     assert (tmp_path / "bench_field.json").is_file() and (tmp_path / "bench_field.png").stat().st_size > 10_000
-    assert field_summary(_document())["agents"]["good"]["curve"][-1][0] == 0.95
+    assert summary_of_document["agents"]["good"]["curve"][-1][0] == 0.95
 
 
 def test_hardest_contexts_are_those_most_runs_fail_hardest_first():
@@ -53,13 +61,13 @@ def test_hardest_contexts_are_those_most_runs_fail_hardest_first():
     assert hardest_contexts(success, [10, 11, 12, 13], None)[1]["context"] is None
 
 
-def test_failure_counts_add_each_missed_criterion_over_the_runs_that_name_them():
+def test_failure_counts_add_each_missed_criterion_over_the_runs_that_name_them(summary_of_document):
     runs = [{"test": {"failures": ["", "cup", "cup+coverage"]}}, {"test": {"failures": ["coverage", "", ""]}},
             {"test": {"success": [True]}}]
     counts = failure_counts(runs)
     assert counts == {"runs": 2, "failures": 3, "causes": {"cup": 2, "coverage": 2}}
     assert failure_counts([]) == {"runs": 0, "failures": 0, "causes": {}}
-    assert field_summary(_document())["agents"]["good"]["failure_causes"]["runs"] == 0
+    assert summary_of_document["agents"]["good"]["failure_causes"]["runs"] == 0
 
 
 def test_by_kind_counts_success_and_causes_per_kind_of_test_context():

@@ -55,9 +55,12 @@ def test_segmentation_reports_the_first_stroke_after_a_wait() -> None:
     assert abs(seg.rhythm_onset - onset) < 0.5 and abs(seg.rhythm_stop - end) < 0.5
 
 
-# kitchen and long recordings are twice as long as wiping (13 s of session search each): the same check, slow set
-@pytest.mark.parametrize("kind", ["wiping", pytest.param("kitchen", marks=pytest.mark.slow),
-                                  pytest.param("long", marks=pytest.mark.slow)])
+# Slow set: each case is a 3-session search (wiping 5 CPU s, kitchen and long 13 s each). The default set checks
+# these bounds on generated wiping sessions in test_sessions.py::test_each_session_is_found_with_its_onset_and_stop
+# (seed 1, the recording that file's other tests search), and the onset and stop of single kitchen and long
+# recordings in test_sessions.py::test_onset_and_stop_surround_the_full_size_rhythm.
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["wiping", "kitchen", "long"])
 def test_generated_sessions_start_and_stop_with_their_truth(kind: str) -> None:
     made = multi_session_recording(3, kind, rng=np.random.default_rng(0))
     sessions = find_sessions(to_demonstration(made.recording.t, made.recording.Y))

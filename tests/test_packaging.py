@@ -2,6 +2,7 @@
 and names the extra the other commands need, ``--version``, defaults in every help text, ``--time-column``
 and ``--rate``, a non-episodic ``--env`` is a clear error."""
 
+import json
 import os
 import subprocess
 import sys
@@ -59,37 +60,60 @@ class _Block:
                                    "matplotlib", "filelock", "ray", "tensorboard"}:
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
 sys.meta_path.insert(0, _Block())
+"""
+
+_RUN_EACH = _BLOCK_EXTRAS + """
+import contextlib, io, json, traceback
 from rdmp_gym.agents.cli import main
-sys.exit(main(sys.argv[1:]))
+results = []
+for args in json.loads(sys.argv[1]):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(args)
+        except SystemExit as exit_:          # as the interpreter maps sys.exit's argument to the exit status
+            code = 0 if exit_.code is None else exit_.code if isinstance(exit_.code, int) else 1
+        except BaseException:                # an uncaught error: its traceback and status 1, as the interpreter's
+            traceback.print_exc()
+            code = 1
+    results.append((code, out.getvalue(), err.getvalue()))
+sys.__stdout__.write(json.dumps(results))
 """
 
 
-def _core_only(*args, cwd):
-    """Run the command as on an install without the extras (their modules cannot be imported)."""
-    return subprocess.run([sys.executable, "-c", _BLOCK_EXTRAS, *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=120, env={**os.environ, "PYTHONPATH": ""})
+def _core_only(*commands, cwd):
+    """Run each command (a list of arguments) as on an install without the extras (their modules cannot be
+    imported), in order, in one fresh process (the interpreter's start and the core's import are most of a
+    command's cost): per command ``(exit status, stdout, stderr)``."""
+    result = subprocess.run([sys.executable, "-c", _RUN_EACH, json.dumps([list(c) for c in commands])],
+                            capture_output=True, text=True, cwd=cwd, timeout=240, env={**os.environ, "PYTHONPATH": ""})
+    assert result.returncode == 0, result.stderr[-3000:]
+    return [subprocess.CompletedProcess(command, code, out, err)
+            for command, (code, out, err) in zip(commands, json.loads(result.stdout), strict=True)]
 
 
 def test_core_install_runs_help_and_fit_and_names_the_extra_for_train(tmp_path):
-    help_text = _core_only("--help", cwd=tmp_path)
-    assert help_text.returncode == 0 and "fit" in help_text.stdout and "agents extra" in help_text.stdout
-    assert _core_only("fit", "--help", cwd=tmp_path).returncode == 0
-    fit = _core_only("fit", "--n-periodic", "10", "--n-transient", "10", "--out", str(tmp_path / "fit"), cwd=tmp_path)
-    assert fit.returncode == 0, fit.stderr
-    assert (tmp_path / "fit" / "dmp.json").is_file() and "RMS error" in fit.stdout
     demo = wiping_demonstration(1, rng=0)
     np.savetxt(tmp_path / "rec.csv", np.column_stack([demo.t, demo.Y]), delimiter=",", header="t,x,y,z", comments="")
-    whole = _core_only("fit", "--demo", str(tmp_path / "rec.csv"), "--n-periodic", "12", "--n-transient", "12",
-                       "--out", str(tmp_path / "whole"), cwd=tmp_path)
+    refusals = ("train", "evaluate", "main")
+    help_text, fit_help, fit, whole, plot, *refused = _core_only(
+        ["--help"], ["fit", "--help"],
+        ["fit", "--n-periodic", "10", "--n-transient", "10", "--out", str(tmp_path / "fit")],
+        ["fit", "--demo", str(tmp_path / "rec.csv"), "--n-periodic", "12", "--n-transient", "12",
+         "--out", str(tmp_path / "whole")],
+        ["fit", "--plot", "--out", str(tmp_path / "plot")],
+        *([command, *([str(tmp_path / "run")] if command == "evaluate" else ["--out", str(tmp_path / "run")])]
+          for command in refusals), cwd=tmp_path)
+    assert help_text.returncode == 0 and "fit" in help_text.stdout and "agents extra" in help_text.stdout
+    assert fit_help.returncode == 0
+    assert fit.returncode == 0, fit.stderr
+    assert (tmp_path / "fit" / "dmp.json").is_file() and "RMS error" in fit.stdout
     assert whole.returncode == 0, whole.stderr
     assert (tmp_path / "whole" / "report.json").is_file()
-    plot = _core_only("fit", "--plot", "--out", str(tmp_path / "plot"), cwd=tmp_path)
     assert plot.returncode == 2 and 'pip install "rdmp-gym[plots]"' in plot.stderr and "Traceback" not in plot.stderr
-    for command in ("train", "evaluate", "main"):
-        args = [str(tmp_path / "run")] if command == "evaluate" else ["--out", str(tmp_path / "run")]
-        refused = _core_only(command, *args, cwd=tmp_path)
-        assert refused.returncode == 2 and 'pip install "rdmp-gym[agents]"' in refused.stderr, command
-        assert "Traceback" not in refused.stderr and not (tmp_path / "run").exists()
+    for command, result in zip(refusals, refused, strict=True):
+        assert result.returncode == 2 and 'pip install "rdmp-gym[agents]"' in result.stderr, command
+        assert "Traceback" not in result.stderr and not (tmp_path / "run").exists()
 
 
 def test_version_flag(capsys):

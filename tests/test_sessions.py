@@ -47,8 +47,9 @@ def test_each_session_is_found_with_its_onset_and_stop(fits, three) -> None:
     for item, truth in zip(fits, truths, strict=True):
         session = item.session
         assert session.start <= truth.onset and truth.stop <= session.stop      # the cuts hold the whole session
-        assert abs(session.rhythm_onset - truth.onset) < 1.0
-        assert abs(session.rhythm_stop - truth.stop) < 1.0
+        # test_onset.py's bounds for generated sessions (its seed-0 recordings are in the slow set)
+        assert abs(session.rhythm_onset - truth.onset) < 0.8      # the growth starts while the hand approaches
+        assert abs(session.rhythm_stop - truth.stop) < 0.5
         assert item.fit.segmentation.period == pytest.approx(truth.period, rel=0.05)
     cuts = [(item.session.start, item.session.stop) for item in fits]
     assert cuts[0][0] == 0.0 and cuts[-1][1] == pytest.approx(three[1].t[-1] - three[1].t[0])
@@ -180,7 +181,7 @@ def test_pose_generator_joins_the_orientations_continuously(pose_sessions) -> No
     assert np.allclose(np.abs(np.sum(pose_sessions.Q * clean, axis=1)), 1.0, atol=1e-4)     # q or -q, noisy
 
 
-def test_cli_fits_each_session_of_a_pose_recording(pose_sessions, tmp_path) -> None:
+def test_cli_fits_each_session_of_a_pose_recording(pose_sessions, tmp_path, shared_session_search) -> None:
     path = tmp_path / "pose_sessions.csv"
     pose_sessions.to_csv(path)
     assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
@@ -197,8 +198,10 @@ def test_cli_fits_each_session_of_a_pose_recording(pose_sessions, tmp_path) -> N
     assert cli_main(joint) == 2 and not (tmp_path / "joint").exists()
 
 
-def test_cli_fits_each_session_of_a_pose_recording_held_level(pose_sessions, tmp_path, capsys) -> None:
-    """The same quaternion on every row (a tool held level): every session fits, its orientation named constant."""
+def test_cli_fits_each_session_of_a_pose_recording_held_level(pose_sessions, tmp_path, capsys,
+                                                            shared_session_search) -> None:
+    """The same quaternion on every row (a tool held level): every session fits, its orientation named constant.
+    The position is the previous test's: the session search (by position) is shared with it."""
     path = tmp_path / "held.csv"
     write_pose_csv(path, pose_sessions.t, pose_sessions.Y, np.tile([0.0, 1.0, 0.0, 0.0], (pose_sessions.t.size, 1)))
     assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
