@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import copy
-import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -11,7 +10,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
-from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
+from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, find_spec, learner_defaults
 
 from .imitation import load_demonstration
 
@@ -50,12 +49,9 @@ _EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
 def _own_id(env_id: str) -> bool:
     """Whether ``env_id`` (``"module:id"`` as ``gym.make`` takes it) is an env of this package (unknown ids: True,
     so that ``gym.make`` names the problem)."""
-    module, _, name = env_id.rpartition(":")
     try:
-        if module:
-            importlib.import_module(module)
-        entry = gym.spec(name).entry_point
-    except (gym.error.Error, ModuleNotFoundError):
+        entry = find_spec(env_id).entry_point
+    except ValueError:
         return True
     return not isinstance(entry, str) or entry.startswith("rdmp_gym.")
 

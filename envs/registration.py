@@ -33,6 +33,7 @@ __all__ = [
     "STEP_ID_V3",
     "TRACKING_ID",
     "env_settings",
+    "find_spec",
     "learner_defaults",
     "register_envs",
     "register_task_ids",
@@ -100,6 +101,18 @@ def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
     return copy.deepcopy(dict(defaults))
 
 
+def find_spec(env_id: str) -> gym.envs.registration.EnvSpec:
+    """The registered spec of ``env_id``, also in the ``"module:id"`` form ``gym.make`` takes (the module is imported
+    first: it registers the id). Raises ValueError naming ``env_id`` for an id nobody registers."""
+    module, _, name = env_id.rpartition(":")
+    try:
+        if module:
+            importlib.import_module(module)
+        return gym.spec(name)
+    except (gym.error.Error, ModuleNotFoundError) as error:
+        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
+
+
 def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     """The settings ``gym.make(env_id, **kwargs)`` builds its env with, validated without building it.
 
@@ -110,13 +123,7 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take or a value
     it refuses.
     """
-    module, _, name = env_id.rpartition(":")       # "module:id", as gym.make takes it: the module registers the id
-    try:
-        if module:
-            importlib.import_module(module)
-        spec = gym.spec(name)
-    except (gym.error.Error, ModuleNotFoundError) as error:
-        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
+    spec = find_spec(env_id)
     settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
     if not isinstance(spec.entry_point, str) or not spec.entry_point.startswith("rdmp_gym."):
         if isinstance(spec.entry_point, str):     # another package's env: its keywords, or the black-box wrapper's

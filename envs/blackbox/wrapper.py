@@ -24,7 +24,6 @@ controller with ``p_gains``/``d_gains``). It is a :class:`gymnasium.Env` that ho
 from __future__ import annotations
 
 import copy
-import importlib
 import inspect
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import replace
@@ -36,6 +35,7 @@ import numpy as np
 from rdmp_gym import Demonstration, RhythmicDMP
 
 from ..action import checked_action
+from ..registration import find_spec
 from .controller import JointReader, MujocoJoints, TrackingController, make_controller
 from .defaults import default_demonstration, env_defaults
 from .params import JointParameterMap
@@ -395,13 +395,7 @@ def _env_keywords(env_id: str) -> set[str] | None:
     """The keywords ``gym.make(env_id, ...)`` takes: ``gym.make``'s own and the named parameters of the entry point
     (for a class: of every ``__init__`` along its MRO); None where they cannot be told (a function with
     ``**kwargs``)."""
-    module, _, name = env_id.rpartition(":")
-    try:
-        if module:
-            importlib.import_module(module)
-        spec = gym.spec(name)
-    except (gym.error.Error, ModuleNotFoundError) as error:
-        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
+    spec = find_spec(env_id)
     creator = gym.envs.registration.load_env_creator(spec.entry_point) if isinstance(spec.entry_point, str) \
         else spec.entry_point
     own = {key for key in inspect.signature(gym.make).parameters if key not in ("id", "kwargs")}
