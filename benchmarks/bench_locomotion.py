@@ -8,7 +8,7 @@ evaluated after every update (every 10k env steps) on the validation contexts of
 
 stable-baselines3 PPO and SAC run on the raw step env (``gym.make(env_id)``) with the RL Zoo's hyperparameters
 (:data:`ZOO`), their deterministic policy evaluated by a callback on the same validation contexts at the same env
-step marks. SAC is the expensive one (about 60 env steps/s on one core), so it runs fewer env steps and seeds.
+step marks. SAC is the expensive one (about 70 env steps/s on one core: 100k env steps take ~25 min a run).
 
 Every run's final policy is scored on the test contexts (``final_test_seeds``), which no run trains or selects on.
 Per (env, learner, seed) one JSON under ``--run-dir`` (default ``runs/locomotion/``): a finished run is skipped, an
@@ -19,7 +19,7 @@ until the validation return first reaches the thresholds of :data:`THRESHOLDS` (
 and how many do). The published anchors (:data:`ANCHORS`, each with its source) go beside it.
 
     # everything, one job after the other, the most important first (on one core of a shared 2-core machine:
-    # Swimmer ~45 min, HalfCheetah ~75 min, the 6 SAC runs ~1 h):
+    # Swimmer ~45 min, HalfCheetah ~75 min, the 20 SAC runs ~8 h):
     python benchmarks/bench_locomotion.py --save
     # a smoke test (1 seed, 2 updates, 2 PPO marks):
     python benchmarks/bench_locomotion.py --seeds 1 --updates 2 --ppo-steps 20000 --sac-seeds 0 --run-dir /tmp/loco
@@ -51,13 +51,19 @@ from rdmp_gym.agents.training import TrainConfig, environment_record, train
 
 ROOT = Path(__file__).resolve().parent.parent
 ENVS = ("Swimmer-v5", "HalfCheetah-v5")
-#: label -> (agent, options) of the rhythmic learners
-LEARNERS: dict[str, tuple[str, dict[str, Any]]] = {
-    "cmaes": ("cmaes", {}),
-    "bbrl": ("bbrl", {}),
-    "plain_prior": ("cpi2", {"gain_prior": 10}),
-    "random": ("random", {}),
+#: label -> (agent, options, wrapper settings over the env's defaults) of the rhythmic learners
+LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
+    "cmaes": ("cmaes", {}, {}),
+    "bbrl": ("bbrl", {}, {}),
+    "plain_prior": ("cpi2", {"gain_prior": 10}, {}),
+    "random": ("random", {}, {}),
+    # the amplitude's action scale 1 instead of 0.5: a = +1 doubles the default amplitude (on Swimmer to the 1 rad of
+    # Raffin et al.'s oscillator, which the default range, at most 1.5 x 0.5 rad, cannot reach); opt-in
+    "cmaes_wide": ("cmaes", {}, {"scales": {"amplitude": 1.0}}),
+    "plain_prior_wide": ("cpi2", {"gain_prior": 10}, {"scales": {"amplitude": 1.0}}),
 }
+#: the learners run when --learners is not given
+MAIN_LEARNERS = ("cmaes", "bbrl", "plain_prior", "random", "ppo")
 SB3_ALGOS = ("ppo", "sac")
 EPISODE_STEPS = 1000   # both envs: 1000 env steps per episode, no early termination
 
@@ -130,14 +136,14 @@ ANCHORS: list[dict[str, Any]] = [
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--envs", nargs="+", default=list(ENVS), choices=ENVS)
-    parser.add_argument("--learners", nargs="+", default=[*LEARNERS, "ppo"], choices=[*LEARNERS, *SB3_ALGOS],
+    parser.add_argument("--learners", nargs="+", default=list(MAIN_LEARNERS), choices=[*LEARNERS, *SB3_ALGOS],
                         help="the learners of the main jobs (SAC runs after them, see --sac-seeds)")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 of every main learner")
     parser.add_argument("--updates", type=int, default=10, help="rhythmic learners: updates per run")
     parser.add_argument("--rollouts", type=int, default=10, help="rhythmic learners: episodes per update")
     parser.add_argument("--ppo-steps", type=int, default=None, help="PPO env steps (default: the rhythmic budget)")
-    parser.add_argument("--sac-seeds", type=int, default=3, help="SAC seeds 0..n-1 per env (0: no SAC)")
-    parser.add_argument("--sac-steps", type=int, default=30000, help="SAC env steps per run")
+    parser.add_argument("--sac-seeds", type=int, default=10, help="SAC seeds 0..n-1 per env (0: no SAC)")
+    parser.add_argument("--sac-steps", type=int, default=None, help="SAC env steps (default: the rhythmic budget)")
     parser.add_argument("--eval-episodes", type=int, default=3, help="validation contexts per evaluation")
     parser.add_argument("--test-episodes", type=int, default=10, help="test contexts for the final policy")
     parser.add_argument("--run-dir", default=str(ROOT / "runs" / "locomotion"), help="where the runs live")
@@ -146,8 +152,9 @@ def _parse() -> argparse.Namespace:
                         help="draw locomotion.png (from locomotion.json) and the Swimmer filmstrip; train nothing")
     add_save_argument(parser)
     args = parser.parse_args()
-    if args.ppo_steps is None:
-        args.ppo_steps = args.updates * args.rollouts * EPISODE_STEPS
+    budget = args.updates * args.rollouts * EPISODE_STEPS
+    args.ppo_steps = budget if args.ppo_steps is None else args.ppo_steps
+    args.sac_steps = budget if args.sac_steps is None else args.sac_steps
     return args
 
 
@@ -159,9 +166,10 @@ def _marks(total: int) -> list[int]:
 
 # ---------------------------------------------------------------------------------------------------- rhythmic
 def _rhythmic_config(env_id: str, label: str, seed: int, args: argparse.Namespace) -> TrainConfig:
-    agent, options = LEARNERS[label]
+    agent, options, settings = LEARNERS[label]
     return TrainConfig(agent=agent, env_id=env_id, updates=args.updates, rollouts=args.rollouts, seed=seed,
-                       options=options, eval_every=1, eval_episodes=args.eval_episodes, shared_context=False)
+                       options=options, env_kwargs=dict(settings), eval_every=1, eval_episodes=args.eval_episodes,
+                       shared_context=False)
 
 
 def run_rhythmic(env_id: str, label: str, seed: int, args: argparse.Namespace, folder: Path) -> dict[str, Any]:
@@ -289,9 +297,10 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
 
 # ---------------------------------------------------------------------------------------------------- jobs
 def _jobs(args: argparse.Namespace) -> list[tuple[str, str, int]]:
-    """(env, learner, seed) in the order they run: per env the main learners seed by seed, then SAC."""
+    """(env, learner, seed) in the order they run: per env the main learners seed by seed, then SAC seed by seed,
+    alternating between the envs (so that an interrupted study has SAC seeds on both)."""
     jobs = [(env_id, label, seed) for env_id in args.envs for seed in range(args.seeds) for label in args.learners]
-    jobs += [(env_id, "sac", seed) for env_id in args.envs for seed in range(args.sac_seeds)
+    jobs += [(env_id, "sac", seed) for seed in range(args.sac_seeds) for env_id in args.envs
              if "sac" not in args.learners]
     return jobs
 
@@ -414,7 +423,7 @@ def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
     settings = {key: value for key, value in vars(args).items() if key not in ("summary_only", "figures", "save")}
     settings.update({"thresholds": {k: list(v) for k, v in THRESHOLDS.items()}, "zoo": ZOO,
                      "zoo_source": {a: _ZOO.format(a) for a in SB3_ALGOS}, "cpus": os.cpu_count(),
-                     "learners": {k: {"agent": a, "options": o} for k, (a, o) in LEARNERS.items()}})
+                     "learners": {k: {"agent": a, "options": o, "wrapper": w} for k, (a, o, w) in LEARNERS.items()}})
     curves = {}
     for env_id in dict.fromkeys(r["env"] for r in runs):
         for label in dict.fromkeys(r["learner"] for r in runs if r["env"] == env_id):
