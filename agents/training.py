@@ -98,6 +98,14 @@ def _seed_streams(seed: int) -> dict[str, np.random.Generator]:
     return {name: np.random.default_rng(child) for name, child in zip(names, children, strict=True)}
 
 
+def _theta_slices(base: Any) -> dict[str, slice]:
+    """``{group: slice}`` of the env's parameters ``theta``: its own where it names them (the black-box wrapper, whose
+    ``tempo`` is no DMP group), else its DMP's for its groups."""
+    if hasattr(base, "param_slices"):
+        return dict(base.param_slices())
+    return base.dmp.param_slices(base.groups)
+
+
 def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Generator) -> np.ndarray:
     """``[n]`` the start (see ``TrainConfig.start``), clipped to the action box."""
     action = np.zeros(evaluator.n_actions)
@@ -106,8 +114,8 @@ def _initial_action(config: TrainConfig, evaluator: Evaluator, rng: np.random.Ge
     elif config.start == "shrunk":
         base = evaluator.env.unwrapped
         theta = base.action_to_params(action)
-        for name, part in base.dmp.param_slices(base.groups).items():
-            if not name.startswith("initial"):
+        for name, part in _theta_slices(base).items():
+            if not name.startswith("initial") and name != "tempo":
                 theta[part] *= 1.0 - config.perturbation
         action = np.asarray(base.params_to_action(theta), dtype=np.float64)
     clipped = float(np.mean(np.abs(action) > 1.0))

@@ -405,3 +405,19 @@ def test_env_options_reach_the_wrapper_and_an_unknown_one_is_named(tmp_path, cap
     assert main(["train", "--agent", "cmaes", "--env", "Swimmer-v5", "--out", str(tmp_path / "bad"),
                  "--env-option", "p_gain", "3"]) == 2
     assert "p_gain" in capsys.readouterr().err
+
+
+def test_the_shrunk_start_scales_the_pattern_and_keeps_the_tempo():
+    from types import SimpleNamespace
+
+    from rdmp_gym.agents.training import TrainConfig, _initial_action
+
+    env = wrap(groups=("periodic", "amplitude", "tempo"))
+    config = TrainConfig(agent="cmaes", env_id="Swimmer-v5", start="shrunk", perturbation=0.2)
+    evaluator = SimpleNamespace(env=env, n_actions=env.action_space.shape[0])
+    action = _initial_action(config, evaluator, np.random.default_rng(0))
+    slices = env.param_slices()
+    theta0, theta = env.action_to_params(np.zeros_like(action)), env.action_to_params(action)
+    for name in ("periodic", "amplitude"):
+        np.testing.assert_allclose(theta[slices[name]], 0.8 * theta0[slices[name]], rtol=1e-6, atol=1e-9)
+    assert theta[slices["tempo"]] == pytest.approx(theta0[slices["tempo"]]) and action[slices["tempo"]] == 0.0

@@ -243,6 +243,10 @@ class RhythmicBlackBoxWrapper(gym.Env):
         """``{group: slice}`` of the action (the DMP's groups in its order, then ``tempo`` where selected)."""
         return dict(self.param_map.slices)
 
+    def param_slices(self) -> dict[str, slice]:
+        """``{group: slice}`` of ``theta``; the same layout as the action's (:meth:`action_slices`)."""
+        return self.action_slices()
+
     def policy_dmp(self, theta: np.ndarray) -> RhythmicDMP:
         """The DMP of parameters ``theta [P]``: the initial DMP with the selected groups set, its canonical system at
         the tempo of ``theta`` (what :meth:`step` rolls out; ``save_dmp`` keeps the tempo)."""
