@@ -25,8 +25,6 @@ import os
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
-from .clearance import CupClearance
-from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .registration import (
     DEPRECATED_ENV_ID,
     ENV_ID,
@@ -42,11 +40,13 @@ from .registration import (
     TRACKING_ID,
     register_envs,
 )
-from .reward import TERMS, RewardWeights
-from .scene import TablePose, WipeScene
+from .tasks.wiping.clearance import CupClearance
+from .tasks.wiping.context import CONTEXT_FIELDS, Context, ContextSpec
+from .tasks.wiping.env import ArmarWipeEnv
+from .tasks.wiping.reward import TERMS, RewardWeights
+from .tasks.wiping.scene import TablePose, WipeScene
 from .tracking import TrackingEnv
 from .video import RecordEpisodeVideo
-from .wipe_env import ArmarWipeEnv
 
 __all__ = [
     "CONTEXT_FIELDS",

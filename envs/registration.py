@@ -16,7 +16,7 @@ from typing import Any
 import gymnasium as gym
 
 from .tasks import TASKS
-from .versions import LEARNER_DEFAULTS
+from .tasks.wiping.versions import LEARNER_DEFAULTS
 
 __all__ = [
     "DEPRECATED_ENV_ID",
@@ -42,7 +42,8 @@ __all__ = [
 
 #: The wiping task's first version (the pattern loops in place at the patch centre).
 ENV_ID = "rdmp_gym/ArmarWipe-v1"
-#: The wiping pattern travels across the patch; every drawn context is solvable (:mod:`rdmp_gym.envs.versions`).
+#: The wiping pattern travels across the patch; every drawn context is solvable
+#: (:mod:`rdmp_gym.envs.tasks.wiping.versions`).
 ENV_ID_V2 = "rdmp_gym/ArmarWipe-v2"
 #: Step-based twins (one control step per ``step``) of v1 and v2.
 STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
@@ -65,10 +66,10 @@ ROBOT_ID_NAMES: dict[str, str] = {"armar3": "Armar", "panda": "Panda"}
 
 _RHYTHMIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 _RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
-_WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
-_DEPRECATED = "rdmp_gym.envs.wipe_env:deprecated_v0"
-_STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
-_STEP_TWIN = "rdmp_gym.envs.step_twin:WipeStepEnv"
+_WIPE = "rdmp_gym.envs.tasks.wiping.env:ArmarWipeEnv"
+_DEPRECATED = "rdmp_gym.envs.tasks.wiping.env:deprecated_v0"
+_STEP = "rdmp_gym.envs.tasks.wiping.legacy_step:ArmarWipeStepEnv"
+_STEP_TWIN = "rdmp_gym.envs.tasks.wiping.step:WipeStepEnv"
 
 #: id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
@@ -116,7 +117,8 @@ def find_spec(env_id: str) -> gym.envs.registration.EnvSpec:
 def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     """The settings ``gym.make(env_id, **kwargs)`` builds its env with, validated without building it.
 
-    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.settings.EnvConfig`; the other ids of this
+    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`; the other
+    ids of this
     package give the keywords (registered and given), checked against the env's signature and, for a task of the
     rhythmic face, against its description; ids of other packages give the keywords as they are, checked to be
     keywords of the env or settings of the rhythmic black-box wrapper (:func:`~rdmp_gym.envs.blackbox.split_settings`).
@@ -132,7 +134,7 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
             split_settings(env_id, kwargs)
         return settings
     if spec.entry_point in (_WIPE, _DEPRECATED):
-        from .settings import EnvConfig
+        from .tasks.wiping.settings import EnvConfig
 
         return EnvConfig.from_kwargs(**settings)
     creator = gym.envs.registration.load_env_creator(spec.entry_point)

@@ -34,9 +34,9 @@ from .action import ActionMap, checked_action
 from .controller import JointTargetPlan
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
-from .reward import Smoothness
 from .robots import RobotDescription, get_robot
 from .servo import ServoSimulation
+from .smoothness import Smoothness
 from .task_scene import TaskScene
 from .tasks import get_task
 from .tasks.description import TaskDescription, TaskPlan, ToolPath

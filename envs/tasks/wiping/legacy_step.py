@@ -43,12 +43,13 @@ import numpy as np
 
 from rdmp_gym import DMPStepper
 
+from ...controller import ForceAdaptation
+from ...coupling import axis_shift, coupling_action
 from .context import SIZE as CONTEXT_SIZE
-from .controller import ForceAdaptation
+from .env import ArmarWipeEnv, outcome
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .step_twin import UNSUPPORTED, axis_shift, coupling_action, sponge_position
-from .wipe_env import ArmarWipeEnv, outcome
-from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
+from .simulation import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
+from .step import UNSUPPORTED, sponge_position
 
 __all__ = ["REFUSED", "ArmarWipeStepEnv"]
 

@@ -1,13 +1,15 @@
 """``rdmp_gym/ArmarWipe-v3`` (and v1, v2, ``PandaWipe-v3``): episodic table wiping with a rhythmic DMP.
 
 What each version changes (v2: the travelling pattern, solvable contexts, the smoothness measure, executable
-success; v3: the composed scene of any robot and a smooth-path success) is listed in :mod:`rdmp_gym.envs.versions`;
+success; v3: the composed scene of any robot and a smooth-path success) is listed in
+:mod:`rdmp_gym.envs.tasks.wiping.versions`;
 ``version`` selects it (default 3, the current task).
 
 One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 
 1. the action ``a in [-1, 1]^n`` becomes DMP parameters ``theta = theta_imitation + scale * a`` (plus, for
-   the last dimension, ``approach``, a fixed direction that lifts the approach: :mod:`rdmp_gym.envs.approach`);
+   the last dimension, ``approach``, a fixed direction that lifts the approach:
+   :mod:`rdmp_gym.envs.tasks.wiping.approach`);
 2. the DMP, anchored at the dirt patch centre and started at the sponge start of the context, gives
    the sponge path ``P [T, 3]`` in the table frame (x, y on the table, z above it);
 3. the path is checked (finite, inside the workspace, reachable by the IK with the sponge flat on the
@@ -15,7 +17,7 @@ One ``step`` is one whole DMP rollout (``terminated=True, truncated=False``):
 4. otherwise MuJoCo simulates it at the control rate with differential-IK joint targets and online
    wrist-force adaptation of the pressing depth along the actual table normal (the table height is
    unknown to the controller; its tilt is known from the context); a cup may stand in the approach;
-5. the reward sums the terms of :mod:`rdmp_gym.envs.reward`, all in ``info["reward_terms"]``, and
+5. the reward sums the terms of :mod:`rdmp_gym.envs.tasks.wiping.reward`, all in ``info["reward_terms"]``, and
    ``info["cost_trace"]`` gives the per-control-step cost for PI² (it sums to ``-reward``;
    ``info["cost_terms"]`` splits it by term);
    ``info["is_success"]``: coverage >= 0.95, force in band >= 90 % of the wiping phase, no collision
@@ -44,25 +46,25 @@ from rdmp_gym.dmp.fitting import FADE_BEFORE_T
 from rdmp_gym.dmp.pose import PoseDMP
 from rdmp_gym.signals.demonstrations import check_frame
 
-from .action import ActionMap, checked_action
+from ...action import ActionMap, checked_action
+from ...controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from ...ik import BodyClearance, IKResult, PathIK
+from ...kinematics import ChainKinematics
+from ...recording import SceneRenderer, write_video
+from ...robots import RobotDescription, get_robot
+from ...viewer import HumanViewer
 from .approach import approach_direction, lift_profile
 from .clearance import Cup, CupClearance, HandPoints
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .context import SIZE as CONTEXT_SIZE
-from .controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
-from .ik import BodyClearance, IKResult, PathIK
 from .info import void_statistics
-from .kinematics import ChainKinematics
-from .recording import SceneRenderer, write_video
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
-from .robots import RobotDescription, get_robot
 from .scene import TablePose, WipeScene, dirt_grid
 from .settings import EnvConfig, ForceConfig, RenderConfig, RewardConfig, TaskConfig
+from .simulation import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 from .versions import TASK_VERSIONS, TaskVersion
-from .viewer import HumanViewer
-from .wiping import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 
 __all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes", "outcome"]
 
@@ -129,7 +131,7 @@ def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> Rhyt
     if dmp.sweep is not None:
         if dmp.sweep.n_points != len(COVERING_FIGURE):
             raise ValueError(f"dmp: its sweep has {dmp.sweep.n_points} via points; the env's sweep action needs the "
-                             f"covering sweep's {len(COVERING_FIGURE)} (rdmp_gym.envs.coverage)")
+                             f"covering sweep's {len(COVERING_FIGURE)} (rdmp_gym.envs.tasks.wiping.coverage)")
         return dmp
     if end - SWEEP_END_MARGIN <= transient:
         raise ValueError(f"duration: {end:.3g} s leaves no time for the sweep after the transient ({transient:.3g} s)")
@@ -177,7 +179,8 @@ def _saved_dmp(dmp: str | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray])
 class ArmarWipeEnv(gym.Env):
     """Episodic wiping env; see the module docstring.
 
-    The settings come as one :class:`~rdmp_gym.envs.settings.EnvConfig` (``config``), as keywords (``gym.make``'s
+    The settings come as one :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig` (``config``), as keywords
+    (``gym.make``'s
     way), or both (the keywords change the config); every setting is validated for type and meaning, with an error
     that names it, and :attr:`config` saves to and loads from JSON.
 
@@ -194,8 +197,10 @@ class ArmarWipeEnv(gym.Env):
             smoothest imitation, half the jerk of ``"ridge"``).
         groups: parameter groups in the action (default periodic weights, transient weights, initial condition,
             amplitude, and ``"approach"``: one dimension that raises or lowers the approach as a whole, see
-            :mod:`rdmp_gym.envs.approach`; it needs ``"transient"``; v2 adds ``"sweep"``: the anchor travels
-            over the patch, two action dimensions ``sweep_x``, ``sweep_y``, see :mod:`rdmp_gym.envs.coverage`).
+            :mod:`rdmp_gym.envs.tasks.wiping.approach`; it needs ``"transient"``; v2 adds ``"sweep"``: the anchor
+            travels
+            over the patch, two action dimensions ``sweep_x``, ``sweep_y``, see
+            :mod:`rdmp_gym.envs.tasks.wiping.coverage`).
         scales: per-group action scales (see :mod:`rdmp_gym.envs.action`; ``approach``: lift in m at +1).
         n_periods: periods of the pattern after the transient (default 4 in v1, 7 in v2); ``duration`` (s)
             overrides it.
@@ -204,32 +209,35 @@ class ArmarWipeEnv(gym.Env):
         target_force: normal force to hold while wiping (N) (controller and reward).
         force_band: (min, max) normal force (N) that wipes a cell; the max is also the excess-force limit.
         force_sigma: width (N) of the force-closeness reward.
-        reward_weights: ``{term: weight}`` overrides (see :mod:`rdmp_gym.envs.reward`).
+        reward_weights: ``{term: weight}`` overrides (see :mod:`rdmp_gym.envs.tasks.wiping.reward`).
         adaptation: adapt the pressing depth from the wrist force (``False``: feed-forward preload only).
         admittance_gain: depth rate per newton of force error (m/(N s)).
         force_learning: also learn the pressing depth as a periodic function of the DMP's phase and feed it
-            forward on the next periods (Gams et al. 2010; :mod:`rdmp_gym.envs.force_learning`); ``True`` or a
+            forward on the next periods (Gams et al. 2010; :mod:`rdmp_gym.envs.tasks.wiping.force_learning`); ``True``
+            or a
             ``ForceProfileSettings``.
-        context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.context`).
+        context_ranges: ``{field: (low, high)}`` sampling ranges (see :mod:`rdmp_gym.envs.tasks.wiping.context`).
         obstacle: contexts may put a cup in the approach corridor (``False``: never).
         obstacle_probability: share of drawn contexts with a cup (where one fits).
         cell_size: dirt cell side (m).
-        wear_rate: Preston coefficient of the dirt (1/(Pa m); see :mod:`rdmp_gym.envs.wiping`).
+        wear_rate: Preston coefficient of the dirt (1/(Pa m); see :mod:`rdmp_gym.envs.tasks.wiping.simulation`).
         penetration_limit: penetration (m) of a robot geom into the robot's body or (other than the
             sponge) into the table beyond which the episode is invalid (reason ``"penetration"``).
         limit_margin: distance to a joint limit (rad) that counts as "at the limit".
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
         max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid (default: the robot's).
-        xml_file: a hand-merged scene MJCF (default: the robot's own scene; :class:`~rdmp_gym.envs.scene.WipeScene`).
+        xml_file: a hand-merged scene MJCF (default: the robot's own scene;
+        :class:`~rdmp_gym.envs.tasks.wiping.scene.WipeScene`).
         render_mode: ``None``, ``"rgb_array"`` (RGB frames), ``"depth_array"`` (depth in m) or ``"human"``
             (MuJoCo's viewer, following every control step; needs a display); width, height, camera: of the
             rendered frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how
             many control steps.
-        version: the task version, 1, 2 or 3 (:mod:`rdmp_gym.envs.versions`; default 3, the current task as
+        version: the task version, 1, 2 or 3 (:mod:`rdmp_gym.envs.tasks.wiping.versions`; default 3, the current task as
             ``rdmp_gym/ArmarWipe-v3`` makes it); ``gym.make`` of an id sets its own.
         cup_clearance: execute every path with a clearance term that keeps the hand (fingers, thumb, palm,
-            sponge) this many metres from the cup's side (:class:`~rdmp_gym.envs.clearance.CupClearance`, or one
+            sponge) this many metres from the cup's side (:class:`~rdmp_gym.envs.tasks.wiping.clearance.CupClearance`,
+            or one
             given); ``None`` (default): the path as commanded. The reward and the success criteria are the same;
             ``info["clearance_push"]`` gives the largest push of the path (m).
     """
@@ -239,9 +247,10 @@ class ArmarWipeEnv(gym.Env):
     def __init__(self, config: EnvConfig | None = None, **settings: Any):
         super().__init__()
         config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
-        #: every setting of this env (:class:`~rdmp_gym.envs.settings.EnvConfig`; saves to and loads from JSON)
+        #: every setting of this env (:class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`; saves to and loads from
+        #: JSON)
         self.config = config
-        #: what this task version changes (see :mod:`rdmp_gym.envs.versions`)
+        #: what this task version changes (see :mod:`rdmp_gym.envs.tasks.wiping.versions`)
         self.task_version: TaskVersion = TASK_VERSIONS[config.task.version]
         #: the robot (:mod:`rdmp_gym.envs.robots`)
         self.robot: RobotDescription = get_robot(config.robot)
@@ -400,7 +409,8 @@ class ArmarWipeEnv(gym.Env):
 
     @property
     def simulation_settings(self) -> SimulationSettings:
-        """The simulation core's settings of this env (:class:`~rdmp_gym.envs.wiping.SimulationSettings`)."""
+        """The simulation core's settings of this env
+        (:class:`~rdmp_gym.envs.tasks.wiping.simulation.SimulationSettings`)."""
         return SimulationSettings(limit_margin=self.limit_margin, fine_force=self.fine_force,
                                   cup_from_touch=self.task_version.cup_from_touch)
 
@@ -437,7 +447,7 @@ class ArmarWipeEnv(gym.Env):
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        """Draw a context (``options`` can fix any field; see :mod:`rdmp_gym.envs.context`) and put the
+        """Draw a context (``options`` can fix any field; see :mod:`rdmp_gym.envs.tasks.wiping.context`) and put the
         robot at rest with the sponge at the start position."""
         super().reset(seed=seed)
         if options is not None and not isinstance(options, Mapping):
@@ -505,7 +515,8 @@ class ArmarWipeEnv(gym.Env):
 
     # ------------------------------------------------------------------ episode
     def context_kind(self, observation: np.ndarray) -> str:
-        """The kind of the context ``observation [13]`` (:data:`rdmp_gym.envs.context.CONTEXT_KINDS`: a cup on the
+        """The kind of the context ``observation [13]`` (:data:`rdmp_gym.envs.tasks.wiping.context.CONTEXT_KINDS`: a
+        cup on the
         approach, a cup beside the patch, no cup on one of the largest patches, no cup), for stratified validation."""
         return self.context_spec.kind(Context.from_vector(np.asarray(observation, dtype=np.float64)))
 
@@ -669,7 +680,8 @@ class ArmarWipeEnv(gym.Env):
         return self._finish(info, terms, cost, valid=True, reason="", unstable=trace.unstable)
 
     def statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
-        """The episode's statistics (:mod:`rdmp_gym.envs.info`) from its trace and the smoothness of its path."""
+        """The episode's statistics (:mod:`rdmp_gym.envs.tasks.wiping.info`) from its trace and the smoothness of its
+        path."""
         live = np.arange(self.n_steps) < trace.steps
         per = self.periodic & live
         force = trace.contact_force[per]
