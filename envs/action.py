@@ -12,8 +12,7 @@
   movement can grow or shrink by up to ``frac`` in each dimension (to fit a larger or smaller patch);
 - extra ``directions`` (the env's ``approach``, :mod:`rdmp_gym.envs.tasks.wiping.approach`, and ``sweep_x``/``sweep_y``,
   :mod:`rdmp_gym.envs.tasks.wiping.coverage`): one action dimension each, appended after the parameters, that moves
-  theta
-  along a fixed direction given per unit of its scale (``approach``: metres of lift at ``a = +1``);
+  theta along a fixed direction given per unit of its scale (``approach``: metres of lift at ``a = +1``);
 - ``driven`` groups (the env's ``sweep``): in theta, but without action dimensions of their own; only the
   directions move them. ``to_action`` finds the directions' values from a theta's driven part by least
   squares and puts 0 in the other directions (every other theta is reachable through the parameters).
@@ -38,8 +37,7 @@ __all__ = ["DEFAULT_SCALES", "ActionMap", "checked_action"]
 #: ``approach``: 6 cm of lift at +1, which clears the corridor's 8 cm cup in the nominal context within
 #: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.tasks.wiping.approach`). ``sweep_x``/``sweep_y``: the
 #: covering rectangle's half-extent at +1 (m; :mod:`rdmp_gym.envs.tasks.wiping.coverage`): with the loop (5 cm radius)
-#: and
-#: the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
+#: and the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
 DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06,
                   "sweep_x": 0.06, "sweep_y": 0.06}
 

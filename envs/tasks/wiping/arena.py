@@ -15,7 +15,7 @@ import mujoco
 from ...arena import DIST, FORCE, FOUND, MINDIST, NETFORCE, add_contact_sensor, self_contact_sensors
 from ...robots import RobotDescription
 
-__all__ = ["ARENA_XML", "SPONGE_XML", "compose_scene"]
+__all__ = ["ARENA_XML", "SPONGE_XML", "add_task", "compose_scene"]
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 ARENA_XML = ASSETS / "arena.xml"
@@ -51,11 +51,17 @@ def compose_scene(robot: RobotDescription, prefix: str = "robot/", tool: str = "
     _check_names(robot_spec, robot)
     frame = spec.worldbody.add_frame(pos=list(robot.base_pos), quat=list(robot.base_quat))
     spec.attach(robot_spec, frame=frame, prefix=prefix)
+    add_task(spec, robot, prefix, tool)
+    return spec.compile()
+
+
+def add_task(spec: mujoco.MjSpec, robot: RobotDescription, prefix: str, tool: str) -> None:
+    """Add the wiping task to a scene ``spec`` that has the arena and ``robot`` (names prefixed ``prefix``): the sponge
+    tool on the robot's tool mount (names prefixed ``tool``) and the sensors (see the module docstring)."""
     mount = spec.body(prefix + robot.tool_mount.body).add_frame(pos=list(robot.tool_mount.pos),
                                                                quat=list(robot.tool_mount.quat))
     spec.attach(mujoco.MjSpec.from_file(str(SPONGE_XML)), frame=mount, prefix=tool)
     _add_sensors(spec, robot, prefix, tool)
-    return spec.compile()
 
 
 def _check_names(spec: mujoco.MjSpec, robot: RobotDescription) -> None:

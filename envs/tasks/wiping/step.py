@@ -1,9 +1,9 @@
 """``rdmp_gym/ArmarWipeStep-v3`` and ``rdmp_gym/PandaWipeStep-v3``: the wiping task one control step at a time.
 
 The step twin of the episodic env (as fancy_gym offers one beside each movement-primitive env) runs the same
-simulation core (:class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeSimulation`: admittance law, servo targets,
-physics, wear,
-bookkeeping) on the same scene, context, DMP and plan. Per ``step`` (control step ``k``):
+simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation` with the wiping task's hook
+:class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeSimulation`: admittance law, servo targets, physics, wear,
+bookkeeping) on the same task description, scene, context, DMP and plan. Per ``step`` (control step ``k``):
 
 1. the action ``a in [-1, 1]^3`` is a coupling term ``c = max_shift * alpha_z * beta_z * a`` on the DMP: the path
    is the episodic imitation's path (action 0 of the episodic env) plus the response of the DMP's
