@@ -22,6 +22,7 @@ they published reproduces bit for bit.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, ClassVar
@@ -160,18 +161,21 @@ def _saved_dmp(dmp: str | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray])
     return dmp
 
 
+@dataclass(frozen=True)
 class WipeRecord:
-    """What the wiping task judges of an executed episode beside the tool path: the simulation hook's trace and the
-    smoothness of the commanded motion (:attr:`ToolPath.record <rdmp_gym.envs.tasks.description.ToolPath.record>`).
+    """What the wiping task judges of an executed episode beside the tool path
+    (:attr:`ToolPath.record <rdmp_gym.envs.tasks.description.ToolPath>`).
 
-    Args:
-        trace: the episode's :class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeTrace`.
-        smooth: the commanded path's :class:`~rdmp_gym.envs.smoothness.Smoothness` (the version's jerk measure).
-        penetration_limit: the penetration (m) beyond which the episode is void.
+    Attributes:
+        trace: the episode's :class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeTrace` (the simulation hook's).
+        smooth: the commanded motion's :class:`~rdmp_gym.envs.smoothness.Smoothness` (the version's jerk measure).
+        penetration_limit: the penetration (m) of a robot geom into the robot's body or the table beyond which the
+            episode is void.
     """
 
-    def __init__(self, trace: WipeTrace, smooth: Smoothness, penetration_limit: float):
-        self.trace, self.smooth, self.penetration_limit = trace, smooth, penetration_limit
+    trace: WipeTrace
+    smooth: Smoothness
+    penetration_limit: float
 
 
 class WipingTask(TaskDescription):
