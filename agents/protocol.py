@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from rdmp_gym.envs.reward import Smoothness
+from rdmp_gym.envs.smoothness import Smoothness
 from scipy import stats
 
 from rdmp_gym.synthetic.smoothness import integrated_squared_jerk

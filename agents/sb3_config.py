@@ -15,7 +15,8 @@ them does not import torch.
 * ``batch_size`` 0 means the whole update is one minibatch; ``n_epochs`` passes over it;
 * the learning rate (3e-2) is far above SB3's 3e-4 default because a budget of a few hundred episodes
   gives only tens of updates; it was the best of 3e-3, 1e-2 and 3e-2 on the wiping task (one seed).
-  On ``ArmarWipe-v2`` the task's default is 3e-3 (its learner defaults, ``rdmp_gym.envs.versions.LEARNER_DEFAULTS``):
+  On ``ArmarWipe-v2`` the task's default is 3e-3 (its learner defaults,
+  ``rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS``):
   with smooth actions at 3e-2 one of 2 seeds' policy mean ran far outside the action box (98 % of its latent means
   beyond ±1, up to 85), every weight was executed at a face and the path had 2.7x the imitation's jerk; 3e-3 gave
   test success 0.47 and 1.34x (2 seeds x 2000 episodes);

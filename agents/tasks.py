@@ -20,7 +20,8 @@ __all__ = ["MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS", "MAIN_OPTIONS", "WIPE_ID
 
 #: the first wiping task (the ids are defined in ``rdmp_gym.envs.registration``)
 WIPE_ID = ENV_ID
-#: The wiping task whose pattern travels across the patch (every context solvable); see ``rdmp_gym.envs.versions``.
+#: The wiping task whose pattern travels across the patch (every context solvable); see
+#: ``rdmp_gym.envs.tasks.wiping.versions``.
 WIPE_V2_ID = ENV_ID_V2
 
 #: The defaults of every layer, defined here once: the main job (``rdmp-gym main``), ``rdmp-gym train`` without

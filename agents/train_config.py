@@ -144,7 +144,7 @@ class TrainConfig:
     @property
     def env_settings(self) -> Any:
         """The env's typed, validated settings (:func:`rdmp_gym.envs.registration.env_settings`: the wiping task's
-        :class:`~rdmp_gym.envs.settings.EnvConfig`, else its keywords)."""
+        :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`, else its keywords)."""
         return env_settings(self.env_id, self.env_kwargs)
 
     @property

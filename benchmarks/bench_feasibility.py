@@ -34,7 +34,7 @@ import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.protocol import final_test_seeds, interval
 from rdmp_gym.agents.tasks import WIPE_ID, run_episode
-from rdmp_gym.envs.context import CONTEXT_FIELDS
+from rdmp_gym.envs.tasks.wiping.context import CONTEXT_FIELDS
 
 GRID = (-0.3, 0.0, 0.3, 0.6, 0.9)
 

@@ -27,9 +27,9 @@ import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
-from rdmp_gym.envs import wipe_env as wipe_env_module
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings
-from rdmp_gym.envs.force_learning import (
+from rdmp_gym.envs.tasks.wiping import env as wipe_env_module
+from rdmp_gym.envs.tasks.wiping.force_learning import (
     ForceProfileLearning,
     curved_table_scene,
     period_force_errors,

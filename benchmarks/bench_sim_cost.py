@@ -5,7 +5,7 @@ every control step recorded; then the same targets are replayed on a fresh copy 
 ``mj_step`` calls (one physics step at a time where the episode stepped finely, ``frame_skip`` at once
 elsewhere). Times are the process's CPU time (``time.process_time``), the best of ``--repeats`` runs, so that other
 processes on the machine do not count. Reported per env: the whole ``env.step`` (path, IK, simulation, reward),
-the simulation core alone (:func:`~rdmp_gym.envs.wiping.simulate_wipe`, or for the rhythmic tasks
+the simulation core alone (:func:`~rdmp_gym.envs.tasks.wiping.simulation.simulate_wipe`, or for the rhythmic tasks
 :meth:`~rdmp_gym.envs.servo.ServoSimulation.run`, which steps one physics step at a time to record every sensor at
 500 Hz), the bare replay (``frame_skip`` steps at once where the core allows it), and the ratios.
 
@@ -27,25 +27,26 @@ import mujoco
 import numpy as np
 import rdmp_gym.envs  # registers the ids; its wipe_env module is patched below
 import rdmp_gym.envs.servo as servo
-import rdmp_gym.envs.wiping as wiping
+import rdmp_gym.envs.tasks.wiping.simulation as wiping
 from output import add_save_argument, results_dir
 
 
 class _Recorder:
-    """Wraps ``WipeSimulation.step`` and ``simulate_wipe`` to record the servo targets and time the core."""
+    """Wraps ``WipeSimulation.finish`` (the wiping hook's record of a control step) and ``simulate_wipe`` to record the
+    servo targets and time the core."""
 
     def __init__(self) -> None:
         self.targets: list[np.ndarray] = []
         self.fine: list[bool] = []
         self.core_seconds = 0.0
-        self._step, self._simulate = wiping.WipeSimulation.step, wiping.simulate_wipe
+        self._finish, self._simulate = wiping.WipeSimulation.finish, wiping.simulate_wipe
 
     def __enter__(self) -> _Recorder:
-        recorder, step, simulate = self, self._step, self._simulate
+        recorder, finish, simulate = self, self._finish, self._simulate
 
-        def recording_step(sim: wiping.WipeSimulation, k: int, q_row, ndq_row, engage):
-            fine = sim.first_contact >= 0 and k < sim.first_contact + sim.fine_window
-            stop = step(sim, k, q_row, ndq_row, engage)
+        def recording_finish(sim: wiping.WipeSimulation, k: int) -> bool:
+            fine = sim.first_contact >= 0 and k < sim.first_contact + sim.fine_window   # before this step's contact
+            stop = finish(sim, k)
             recorder.targets.append(sim.scene.data.ctrl.copy())
             recorder.fine.append(fine)
             return stop
@@ -56,13 +57,13 @@ class _Recorder:
             recorder.core_seconds += time.process_time() - start
             return trace
 
-        wiping.WipeSimulation.step = recording_step
-        rdmp_gym.envs.wipe_env.simulate_wipe = timed_simulate
+        wiping.WipeSimulation.finish = recording_finish
+        rdmp_gym.envs.tasks.wiping.env.simulate_wipe = timed_simulate
         return self
 
     def __exit__(self, *exc: object) -> None:
-        wiping.WipeSimulation.step = self._step
-        rdmp_gym.envs.wipe_env.simulate_wipe = self._simulate
+        wiping.WipeSimulation.finish = self._finish
+        rdmp_gym.envs.tasks.wiping.env.simulate_wipe = self._simulate
 
 
 class _ServoRecorder:

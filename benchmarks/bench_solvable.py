@@ -38,7 +38,7 @@ from output import SCRATCH, add_save_argument, results_dir
 from rdmp_gym.agents.protocol import final_test_seeds, interval
 from rdmp_gym.agents.tasks import run_episode
 from rdmp_gym.envs import ENV_ID_V2
-from rdmp_gym.envs.context import CONTEXT_FIELDS
+from rdmp_gym.envs.tasks.wiping.context import CONTEXT_FIELDS
 
 COMPACT = ("amplitude_x", "amplitude_y", "approach", "sweep_x", "sweep_y")
 #: The first episodes of the search: equal amplitudes along both table axes x equal sweep half-extents.

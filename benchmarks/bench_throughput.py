@@ -244,9 +244,11 @@ _PARTS: dict[str, Callable[[str, str], bool]] = {
     "mj_step (physics)": lambda file, name: name == "<built-in method mujoco._functions.mj_step>",
     "DMP rollout": lambda file, name: name == "rollout_batch",
     "path IK (PathIK.solve)": lambda file, name: name == "solve" and file.endswith("ik.py"),
-    "dirt bookkeeping (wear after the loop)": lambda file, name: name == "_removal" and file.endswith("wiping.py"),
+    "dirt bookkeeping (wear after the loop)": lambda file, name: name == "_removal" and file.endswith("simulation.py"),
     "reward": lambda file, name: name == "wipe_reward",
-    "simulation loop, own Python": lambda file, name: name == "simulate_wipe",
+    "simulation loop, own Python": lambda file, name: (
+        (name in ("simulate_wipe", "command", "substeps", "substep", "finish") and file.endswith("simulation.py"))
+        or (name in ("run", "step") and file.endswith("servo.py"))),
 }
 
 
@@ -263,7 +265,7 @@ def episode_profile(env: gym.Env, action: np.ndarray, seed: int, options: dict |
     parts = {name: 0.0 for name in _PARTS}
     total = 0.0
     for (file, _, function), (_, _, tottime, cumtime, _) in stats.items():
-        if function == "step" and file.endswith("wipe_env.py"):
+        if function == "step" and file.endswith(("wiping/env.py", "wiping\\env.py")):
             total = cumtime
         for name, match in _PARTS.items():
             if match(file, function):

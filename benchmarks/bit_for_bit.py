@@ -50,7 +50,7 @@ def fits() -> dict[str, str]:
         demo = wiping_demonstration(style=style, rng=0)
         dmp = RhythmicDMP.fit(demo)
         out[f"fit/default/style{style}"] = _digest(dmp.rollout(demo.t))
-    import rdmp_gym.envs.wipe_env as wipe_env
+    import rdmp_gym.envs.tasks.wiping.task as wipe_env
 
     for style in (1, 2):
         dmp = wipe_env._fit_style(style, 40, 40, "trajectory")

@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 from obstacle_baseline import lift_term, lifting_path
 from rdmp_gym.envs import ENV_ID
-from rdmp_gym.envs.force_learning import curved_table_scene, period_force_errors
+from rdmp_gym.envs.tasks.wiping.force_learning import curved_table_scene, period_force_errors
 
 from rdmp_gym.figures.paper import save_figure
 from rdmp_gym.figures.plots import pyplot

@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from rdmp_gym.envs.approach import LIFT_PROFILE
+from rdmp_gym.envs.tasks.wiping.approach import LIFT_PROFILE
 
 from rdmp_gym.dmp.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 from rdmp_gym.synthetic.smoothness import integrated_squared_jerk

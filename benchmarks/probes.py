@@ -9,7 +9,7 @@ do something cheap instead of wiping: hold still, press and lift on a grid, reac
 from __future__ import annotations
 
 import numpy as np
-from rdmp_gym.envs.wipe_env import ArmarWipeEnv
+from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
 
 __all__ = ["hold_still", "into_the_torso", "press_lift_grid", "wiping_force_at_500hz"]
 

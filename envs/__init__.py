@@ -1,9 +1,10 @@
 """Gymnasium environments of rdmp-gym: rhythmic tasks with a rhythmic DMP, on ARMAR-III or a Franka Panda.
 
-Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points): table wiping,
-the current ``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and
-``-v1``; drumming to a changing beat, ``rdmp_gym/ArmarDrum-v1`` and ``rdmp_gym/PandaDrum-v1`` and their step twins
-(a task of :mod:`rdmp_gym.envs.tasks` on the face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`).
+Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points) of the tasks of
+:mod:`rdmp_gym.envs.tasks`: table wiping (:mod:`rdmp_gym.envs.tasks.wiping`, on its own envs), the current
+``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and ``-v1``;
+drumming to a changing beat, ``rdmp_gym/ArmarDrum-v1`` and ``rdmp_gym/PandaDrum-v1`` and their step twins (on the
+face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`).
 An episodic env's ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``)::
 
     import gymnasium as gym
@@ -25,8 +26,6 @@ import os
 if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
     os.environ["MUJOCO_GL"] = "egl"
 
-from .clearance import CupClearance
-from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .registration import (
     DEPRECATED_ENV_ID,
     ENV_ID,
@@ -42,11 +41,13 @@ from .registration import (
     TRACKING_ID,
     register_envs,
 )
-from .reward import TERMS, RewardWeights
-from .scene import TablePose, WipeScene
+from .tasks.wiping.clearance import CupClearance
+from .tasks.wiping.context import CONTEXT_FIELDS, Context, ContextSpec
+from .tasks.wiping.env import ArmarWipeEnv
+from .tasks.wiping.reward import TERMS, RewardWeights
+from .tasks.wiping.scene import TablePose, WipeScene
 from .tracking import TrackingEnv
 from .video import RecordEpisodeVideo
-from .wipe_env import ArmarWipeEnv
 
 __all__ = [
     "CONTEXT_FIELDS",

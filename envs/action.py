@@ -10,9 +10,9 @@
   ``r0 <= 0`` is an invalid parameter vector (penalised, not simulated);
 - ``amplitude`` (``[d]`` factors about the anchor, 1 in the imitation): ``frac`` itself, so the
   movement can grow or shrink by up to ``frac`` in each dimension (to fit a larger or smaller patch);
-- extra ``directions`` (the env's ``approach``, :mod:`rdmp_gym.envs.approach`, and ``sweep_x``/``sweep_y``,
-  :mod:`rdmp_gym.envs.coverage`): one action dimension each, appended after the parameters, that moves theta
-  along a fixed direction given per unit of its scale (``approach``: metres of lift at ``a = +1``);
+- extra ``directions`` (the env's ``approach``, :mod:`rdmp_gym.envs.tasks.wiping.approach`, and ``sweep_x``/``sweep_y``,
+  :mod:`rdmp_gym.envs.tasks.wiping.coverage`): one action dimension each, appended after the parameters, that moves
+  theta along a fixed direction given per unit of its scale (``approach``: metres of lift at ``a = +1``);
 - ``driven`` groups (the env's ``sweep``): in theta, but without action dimensions of their own; only the
   directions move them. ``to_action`` finds the directions' values from a theta's driven part by least
   squares and puts 0 in the other directions (every other theta is reachable through the parameters).
@@ -35,9 +35,9 @@ __all__ = ["DEFAULT_SCALES", "ActionMap", "checked_action"]
 #: them the path deviates 1.6-3 cm from the imitation and joint speeds stay below 2 rad/s (style 1,
 #: 16 random actions), while coordinated actions still change the pattern's amplitude by ~20 %.
 #: ``approach``: 6 cm of lift at +1, which clears the corridor's 8 cm cup in the nominal context within
-#: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.approach`). ``sweep_x``/``sweep_y``: the
-#: covering rectangle's half-extent at +1 (m; :mod:`rdmp_gym.envs.coverage`): with the loop (5 cm radius) and
-#: the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
+#: ARMAR-III's joint acceleration limit (see :mod:`rdmp_gym.envs.tasks.wiping.approach`). ``sweep_x``/``sweep_y``: the
+#: covering rectangle's half-extent at +1 (m; :mod:`rdmp_gym.envs.tasks.wiping.coverage`): with the loop (5 cm radius)
+#: and the pad, 6 cm reaches well past the largest drawn patch (22 cm a side).
 DEFAULT_SCALES = {"periodic": 0.1, "transient": 0.1, "initial": 0.1, "amplitude": 0.5, "approach": 0.06,
                   "sweep_x": 0.06, "sweep_y": 0.06}
 

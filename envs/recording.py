@@ -1,4 +1,4 @@
-"""Offscreen rendering of the wiping scene (with its dirt cells) and video writing.
+"""Offscreen rendering of a scene (with dirt cells where a task has them) and video writing.
 
 Rendering uses ``mujoco.Renderer``. Headless machines need an OpenGL backend chosen *before*
 ``mujoco`` is imported: ``MUJOCO_GL=egl`` (GPU or Mesa llvmpipe, no extra packages) or
@@ -12,11 +12,10 @@ from __future__ import annotations
 import logging
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
-
-from .scene import WipeScene
 
 __all__ = ["SceneRenderer", "write_video"]
 
@@ -29,12 +28,12 @@ class SceneRenderer:
     """Renders RGB frames ``[H, W, 3]`` uint8 of the scene from a named camera.
 
     Args:
-        scene: the scene to draw.
+        scene: the scene to draw (anything with a MuJoCo ``model`` and ``data``).
         width, height: frame size in pixels (at most the model's offscreen buffer, 1280 x 960).
         camera: camera name in the model (``front``, ``side``, ``top``) or ``None`` for the free camera.
     """
 
-    def __init__(self, scene: WipeScene, width: int = 480, height: int = 480, camera: str | None = "front"):
+    def __init__(self, scene: Any, width: int = 480, height: int = 480, camera: str | None = "front"):
         if int(width) < 1 or int(height) < 1:
             raise ValueError(f"width, height: expected positive sizes, got {width}x{height}")
         model = scene.model

@@ -16,7 +16,8 @@ from typing import Any
 import gymnasium as gym
 
 from .tasks import TASKS
-from .versions import LEARNER_DEFAULTS
+from .tasks.wiping.faces import DEPRECATED as _DEPRECATED
+from .tasks.wiping.faces import EPISODIC as _WIPE
 
 __all__ = [
     "DEPRECATED_ENV_ID",
@@ -42,7 +43,8 @@ __all__ = [
 
 #: The wiping task's first version (the pattern loops in place at the patch centre).
 ENV_ID = "rdmp_gym/ArmarWipe-v1"
-#: The wiping pattern travels across the patch; every drawn context is solvable (:mod:`rdmp_gym.envs.versions`).
+#: The wiping pattern travels across the patch; every drawn context is solvable
+#: (:mod:`rdmp_gym.envs.tasks.wiping.versions`).
 ENV_ID_V2 = "rdmp_gym/ArmarWipe-v2"
 #: Step-based twins (one control step per ``step``) of v1 and v2.
 STEP_ID = "rdmp_gym/ArmarWipeStep-v1"
@@ -65,23 +67,11 @@ ROBOT_ID_NAMES: dict[str, str] = {"armar3": "Armar", "panda": "Panda"}
 
 _RHYTHMIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 _RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
-_WIPE = "rdmp_gym.envs.wipe_env:ArmarWipeEnv"
-_DEPRECATED = "rdmp_gym.envs.wipe_env:deprecated_v0"
-_STEP = "rdmp_gym.envs.step_env:ArmarWipeStepEnv"
-_STEP_TWIN = "rdmp_gym.envs.step_twin:WipeStepEnv"
 
-#: id -> (entry point, keywords)
+#: ids beside the tasks' (the tasks' ids come from :data:`rdmp_gym.envs.tasks.TASKS`): id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
-    ENV_ID: (_WIPE, {"obstacle": True, "version": 1}),
     DEPRECATED_ENV_ID: (_DEPRECATED, {}),
     TRACKING_ID: ("rdmp_gym.envs.tracking:TrackingEnv", {}),
-    STEP_ID: (_STEP, {"version": 1}),
-    ENV_ID_V2: (_WIPE, {"obstacle": True, "version": 2}),
-    STEP_ID_V2: (_STEP, {"version": 2, "max_shift": (0.06, 0.06, 0.02)}),
-    ENV_ID_V3: (_WIPE, {"obstacle": True, "version": 3}),
-    STEP_ID_V3: (_STEP_TWIN, {"version": 3, "max_shift": (0.06, 0.06, 0.02)}),
-    PANDA_ID_V3: (_WIPE, {"obstacle": True, "version": 3, "robot": "panda"}),
-    PANDA_STEP_ID_V3: (_STEP_TWIN, {"version": 3, "max_shift": (0.06, 0.06, 0.02), "robot": "panda"}),
 }
 
 
@@ -92,12 +82,15 @@ def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
         return {}
     spec = gym.registry[env_id]
     kwargs = spec.kwargs or {}
-    if spec.entry_point == _WIPE:
-        defaults = LEARNER_DEFAULTS.get(kwargs.get("version", 1), {})
-    elif spec.entry_point == _RHYTHMIC and kwargs.get("task") in TASKS:
-        defaults = TASKS[kwargs["task"]].learner_defaults()
+    defaults: Mapping[str, Any] = {}
+    if spec.entry_point == _RHYTHMIC and kwargs.get("task") in TASKS:
+        defaults = TASKS[kwargs["task"]].learner_defaults(kwargs.get("version"))
     else:
-        defaults = {}
+        for task, entry in TASKS.items():               # a task on its own faces: its episodic ids
+            for robot in ROBOT_ID_NAMES:
+                for version in entry.versions:
+                    if entry.faces is not None and task_ids(task, robot, version)[0] == env_id:
+                        defaults = entry.learner_defaults(version)
     return copy.deepcopy(dict(defaults))
 
 
@@ -116,8 +109,9 @@ def find_spec(env_id: str) -> gym.envs.registration.EnvSpec:
 def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     """The settings ``gym.make(env_id, **kwargs)`` builds its env with, validated without building it.
 
-    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.settings.EnvConfig`; the other ids of this
-    package give the keywords (registered and given), checked against the env's signature and, for a task of the
+    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`; the other
+    ids of this package give the keywords (registered and given), checked against the env's signature and, for a task of
+    the
     rhythmic face, against its description; ids of other packages give the keywords as they are, checked to be
     keywords of the env or settings of the rhythmic black-box wrapper (:func:`~rdmp_gym.envs.blackbox.split_settings`).
     Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take or a value
@@ -132,7 +126,7 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
             split_settings(env_id, kwargs)
         return settings
     if spec.entry_point in (_WIPE, _DEPRECATED):
-        from .settings import EnvConfig
+        from .tasks.wiping.settings import EnvConfig
 
         return EnvConfig.from_kwargs(**settings)
     creator = gym.envs.registration.load_env_creator(spec.entry_point)
@@ -161,21 +155,27 @@ def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)
     """Register the ids of ``task`` (a name in :data:`rdmp_gym.envs.tasks.TASKS`) on ``robots`` (registered robot
     names) for each of its versions; returns the episodic ids."""
     ids = []
+    entry = TASKS[task]
     for robot in robots:
-        for version in TASKS[task].versions:
+        for version in entry.versions:
             episodic, step = task_ids(task, robot, version)
             kwargs = {"task": task, "robot": robot, "version": version}
-            for env_id, entry_point in ((episodic, _RHYTHMIC), (step, _RHYTHMIC_STEP)):
+            faces = ((_RHYTHMIC, kwargs), (_RHYTHMIC_STEP, kwargs)) if entry.faces is None else entry.face_specs(
+                robot, version)
+            if faces is None:                             # the task has no ids on this robot at this version
+                continue
+            for env_id, (entry_point, face_kwargs) in zip((episodic, step), faces, strict=True):
                 if env_id not in gym.registry:
-                    gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)
+                    gym.register(id=env_id, entry_point=entry_point, kwargs=face_kwargs)
             ids.append(episodic)
     return ids
 
 
 def register_envs() -> None:
-    """Register every rdmp-gym id with Gymnasium (ids already registered are left as they are)."""
+    """Register every rdmp-gym id with Gymnasium (ids already registered are left as they are): every task's on every
+    robot (:data:`rdmp_gym.envs.tasks.TASKS`), the deprecated wiping v0 and the tracking env."""
+    for task in TASKS:
+        register_task_ids(task)
     for env_id, (entry_point, kwargs) in _SPECS.items():
         if env_id not in gym.registry:
             gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)
-    for task in TASKS:
-        register_task_ids(task)

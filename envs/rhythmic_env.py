@@ -34,9 +34,9 @@ from .action import ActionMap, checked_action
 from .controller import JointTargetPlan
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
-from .reward import Smoothness
 from .robots import RobotDescription, get_robot
 from .servo import ServoSimulation
+from .smoothness import Smoothness
 from .task_scene import TaskScene
 from .tasks import get_task
 from .tasks.description import TaskDescription, TaskPlan, ToolPath
@@ -70,6 +70,9 @@ class RhythmicTaskEnv(gym.Env):
                  camera: str = "front", frame_stride: int = 4, **task_settings: Any):
         super().__init__()
         self.task: TaskDescription = get_task(task, **task_settings)
+        if self.task.own_faces is not None:
+            raise ValueError(f"task: {self.task.name!r} runs on its own envs ({self.task.own_faces}), not on the "
+                             f"rhythmic face")
         self.robot: RobotDescription = get_robot(robot)
         if version not in self.task.versions:
             raise ValueError(f"version: the task {self.task.name!r} has the versions {list(self.task.versions)}, "

@@ -27,10 +27,10 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from .reward import Smoothness
+from .coupling import axis_shift, coupling_action, coupling_filter, joint_shift, plan_velocity
 from .rhythmic_env import RhythmicTaskEnv
 from .servo import ServoSimulation
-from .step_twin import axis_shift, coupling_action, coupling_filter, joint_shift, plan_velocity
+from .smoothness import Smoothness
 from .tasks.description import TaskPlan, ToolPath
 
 __all__ = ["RhythmicTaskStepEnv"]

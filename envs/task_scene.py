@@ -18,14 +18,47 @@ from .arena import DIST, FOUND, MINDIST, add_contact_sensor, self_contact_sensor
 from .ik import BodyClearance, PathIK
 from .kinematics import ChainKinematics
 from .robots import RobotDescription, get_robot
-from .scene import read_arm, servo_lead
 from .tasks.description import TaskDescription
 
-__all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "TaskScene", "compose_task_scene"]
+__all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "TaskScene", "compose_task_scene", "read_arm",
+           "rotation_from_tilt", "servo_lead"]
 
 ROOM_XML = Path(__file__).resolve().parent / "assets" / "room.xml"
 #: Prefixes of the robot's and the task tool's names in the scene (the room's, the objects' and the sensors' none).
 ROBOT_PREFIX, TOOL_PREFIX = "robot/", "tool/"
+
+
+def rotation_from_tilt(tilt_x: float, tilt_y: float) -> np.ndarray:
+    """Rotation [3, 3] = R_y(tilt_y) @ R_x(tilt_x)."""
+    cx, sx, cy, sy = np.cos(tilt_x), np.sin(tilt_x), np.cos(tilt_y), np.sin(tilt_y)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    return ry @ rx
+
+
+def read_arm(scene: object, model: mujoco.MjModel, joints: tuple[str, ...], argument: str) -> None:
+    """Set the arm's indices on ``scene`` for the model's ``joints`` (full names, chain order): ``joint_ids``,
+    ``qpos_adr``, ``dof_adr``, ``joint_lower``, ``joint_upper`` and ``actuator_ids`` (each ``[n]``); ValueError
+    naming ``argument`` where a joint has no joint actuator."""
+    joint_ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in joints])
+    actuator_of_joint = {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
+                         if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
+    missing = [n.split("/")[-1] for n, j in zip(joints, joint_ids, strict=True) if int(j) not in actuator_of_joint]
+    if missing:
+        raise ValueError(f"{argument}: no joint actuator for {missing}")
+    scene.joint_ids = joint_ids
+    scene.qpos_adr = model.jnt_qposadr[joint_ids].copy()
+    scene.dof_adr = model.jnt_dofadr[joint_ids].copy()
+    scene.joint_lower = model.jnt_range[joint_ids, 0].copy()
+    scene.joint_upper = model.jnt_range[joint_ids, 1].copy()
+    scene.actuator_ids = np.array([actuator_of_joint[int(j)] for j in joint_ids])
+
+
+def servo_lead(model: mujoco.MjModel, actuator_ids: np.ndarray) -> np.ndarray:
+    """``kv / kp`` of the position servos ``actuator_ids [n]``, ``[n]`` (s): the lag a moving target sees."""
+    kp = model.actuator_gainprm[actuator_ids, 0]
+    kv = -model.actuator_biasprm[actuator_ids, 2]
+    return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
 
 
 def compose_task_scene(robot: RobotDescription, task: TaskDescription) -> mujoco.MjModel:

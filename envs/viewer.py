@@ -7,8 +7,6 @@ import os
 import sys
 from typing import Any
 
-from .scene import WipeScene
-
 __all__ = ["HumanViewer", "display_problem"]
 
 _OFFSCREEN_BACKENDS = ("egl", "osmesa")
@@ -30,7 +28,7 @@ class HumanViewer:
     Raises ``ValueError`` at construction when no window can be opened (see :func:`display_problem`).
     """
 
-    def __init__(self, scene: WipeScene) -> None:
+    def __init__(self, scene: Any) -> None:
         problem = display_problem()
         if problem is not None:
             raise ValueError(f"render_mode: 'human' opens MuJoCo's viewer, but {problem}; use "

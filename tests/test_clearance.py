@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from rdmp_gym.agents.protocol import path_jerk
 from rdmp_gym.envs import ENV_ID_V2
-from rdmp_gym.envs.clearance import Cup, CupClearance
+from rdmp_gym.envs.tasks.wiping.clearance import Cup, CupClearance
 
 CUP = Cup(base=np.zeros(3), radius=0.035, top=0.08)
 DT = 0.01                                      # s per control step of the synthetic paths

@@ -12,7 +12,7 @@ from rdmp_gym.agents.tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OP
 from rdmp_gym.agents.training import TrainConfig
 from rdmp_gym.envs import LATEST_ENV_ID
 from rdmp_gym.envs.registration import env_settings
-from rdmp_gym.envs.settings import EnvConfig, SettingTypeError
+from rdmp_gym.envs.tasks.wiping.settings import EnvConfig, SettingTypeError
 
 _TASK = ("agent", "env_id", "env_kwargs", "options", "start", "perturbation", "seed", "shared_context")
 

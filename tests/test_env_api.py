@@ -217,7 +217,7 @@ def test_bad_constructor_arguments(kwargs, match):
 def test_the_approach_dimension_lifts_the_approach_smoothly(env):
     """The approach dimension at +1 lifts the DMP's own path by the smooth bump (6 cm), leaves the start and
     the wiping untouched and needs no more joint acceleration than ARMAR-III allows (10 rad/s²)."""
-    from rdmp_gym.envs.approach import lift_profile
+    from rdmp_gym.envs.tasks.wiping.approach import lift_profile
 
     u = env.unwrapped
     env.reset(seed=0)

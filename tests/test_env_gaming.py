@@ -139,7 +139,7 @@ def test_knocking_the_cup_loses_and_the_approach_matters(env):
     """Item 8: the imitation's approach knocks the cup in the corridor; raising the approach over it wins.
 
     The raised approach is an action: the ``approach`` dimension at +1 (a smooth 6 cm lift of the DMP's
-    own transient, see ``envs/approach.py``) clears the cup with success, where the imitation fails.
+    own transient, see ``envs/tasks/wiping/approach.py``) clears the cup with success, where the imitation fails.
     It pays for its extra jerk (2.0x the imitation's: -0.17) and wins by 0.76 (1.00 vs 0.24).
     """
     options = {**NOMINAL, "obstacle": 1}

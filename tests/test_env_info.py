@@ -1,10 +1,10 @@
-"""The envs' info keys are the ones rdmp_gym.envs.info defines, for simulated and for voided episodes."""
+"""The envs' info keys are the ones rdmp_gym.envs.tasks.wiping.info defines, for simulated and for voided episodes."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
-from rdmp_gym.envs.info import EPISODE_KEYS, SCALAR_STATISTICS, STEP_KEYS, TRACE_STATISTICS
+from rdmp_gym.envs.tasks.wiping.info import EPISODE_KEYS, SCALAR_STATISTICS, STEP_KEYS, TRACE_STATISTICS
 
 EPISODE = {*SCALAR_STATISTICS, *TRACE_STATISTICS, *EPISODE_KEYS}
 

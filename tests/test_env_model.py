@@ -6,7 +6,7 @@ import pytest
 from rdmp_gym.envs.ik import PathIK
 from rdmp_gym.envs.kinematics import ChainKinematics
 from rdmp_gym.envs.robots import ARMAR3
-from rdmp_gym.envs.scene import TablePose, WipeScene, dirt_grid
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, WipeScene, dirt_grid
 
 ARM_JOINTS = ARMAR3.joints
 

@@ -1,4 +1,5 @@
-"""The wiping env's settings as data (rdmp_gym.envs.settings) and the checks of contexts given to ``reset``."""
+"""The wiping env's settings as data (rdmp_gym.envs.tasks.wiping.settings) and the checks of contexts given to
+``reset``."""
 
 import inspect
 import json
@@ -9,9 +10,9 @@ import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the envs)
 from rdmp_gym.envs import ENV_ID_V2, CupClearance
-from rdmp_gym.envs.context import ContextSpec
-from rdmp_gym.envs.force_learning import ForceProfileSettings
-from rdmp_gym.envs.settings import (
+from rdmp_gym.envs.tasks.wiping.context import ContextSpec
+from rdmp_gym.envs.tasks.wiping.force_learning import ForceProfileSettings
+from rdmp_gym.envs.tasks.wiping.settings import (
     ENV_KWARGS,
     ContextConfig,
     EnvConfig,
@@ -51,7 +52,7 @@ def test_from_kwargs_with_todays_defaults_is_the_default_config():
 
 
 def test_the_defaults_are_the_envs_signature():
-    from rdmp_gym.envs.wipe_env import ArmarWipeEnv
+    from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
 
     params = inspect.signature(ArmarWipeEnv.__init__).parameters
     named = [name for name in ENV_KWARGS if name in params]

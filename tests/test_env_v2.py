@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from rdmp_gym.envs import ENV_ID, ENV_ID_V2, STEP_ID_V2
-from rdmp_gym.envs.coverage import COVERING_FIGURE, covering_sweep, sweep_directions
-from rdmp_gym.envs.reward import Smoothness
-from rdmp_gym.envs.wipe_env import episode_success, failure_causes
+from rdmp_gym.envs.smoothness import Smoothness
+from rdmp_gym.envs.tasks.wiping.coverage import COVERING_FIGURE, covering_sweep, sweep_directions
+from rdmp_gym.envs.tasks.wiping.env import episode_success, failure_causes
 
 from rdmp_gym import Sweep, save_dmp
 

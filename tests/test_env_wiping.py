@@ -10,8 +10,8 @@ import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult, PathIK
-from rdmp_gym.envs.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
-from rdmp_gym.envs.wiping import DirtField, cells_under_sponge, contact_summary, simulate_wipe
+from rdmp_gym.envs.tasks.wiping.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
+from rdmp_gym.envs.tasks.wiping.simulation import DirtField, cells_under_sponge, contact_summary, simulate_wipe
 
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
            "sponge_start": [-0.07, 0.22, 0.12], "obstacle": 0}

@@ -14,7 +14,7 @@ REFERENCE = Path(__file__).parent / "data" / "imitation_rollouts.npz"
 @pytest.mark.parametrize("style", [1, 2, 3, 4])
 def test_wipe_env_imitation_is_unchanged(style):
     """The DMP ArmarWipe-v1/v2 fit at make time (40 + 40 basis functions) rolls out as saved, to 1e-9 m."""
-    from rdmp_gym.envs.wipe_env import _fit_style
+    from rdmp_gym.envs.tasks.wiping.task import _fit_style
 
     dmp = _fit_style(style, 40, 40, "trajectory")
     saved = np.load(REFERENCE)[f"style{style}_n40"]

@@ -1,4 +1,5 @@
-"""Force-profile learning (rdmp_gym.envs.force_learning): a periodic depth profile learned from the force error."""
+"""Force-profile learning (rdmp_gym.envs.tasks.wiping.force_learning): a periodic depth profile learned from the force
+error."""
 
 import gymnasium as gym
 import numpy as np
@@ -6,7 +7,7 @@ import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings
-from rdmp_gym.envs.force_learning import (
+from rdmp_gym.envs.tasks.wiping.force_learning import (
     ForceProfileLearning,
     ForceProfileSettings,
     curved_table_scene,

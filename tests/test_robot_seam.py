@@ -12,7 +12,7 @@ import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from mini_arm import MINI
 from rdmp_gym.envs.robots import ROBOTS, RobotDescription, register_robot
-from rdmp_gym.envs.wipe_env import ArmarWipeEnv
+from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
 
 ENVS = Path(__file__).resolve().parent.parent / "envs"
 

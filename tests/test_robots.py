@@ -14,7 +14,7 @@ import pytest
 from rdmp_gym.envs.robots import ROBOTS, get_robot
 from rdmp_gym.envs.robots import panda as panda_module
 from rdmp_gym.envs.robots.panda import PANDA, TORQUE_LIMIT, franka_assets
-from rdmp_gym.envs.scene import WipeScene
+from rdmp_gym.envs.tasks.wiping.scene import WipeScene
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def scene(assets):
 
 @pytest.fixture(scope="module")
 def env(assets):
-    from rdmp_gym.envs.wipe_env import ArmarWipeEnv
+    from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
 
     return ArmarWipeEnv(robot="panda", version=3, obstacle=True)
 

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
-from rdmp_gym.envs.step_twin import WipeStepEnv, coupling_filter
+from rdmp_gym.envs.tasks.wiping.step import WipeStepEnv, coupling_filter
 
 SHORT = {"n_periods": 2.0}
 

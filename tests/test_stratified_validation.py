@@ -9,7 +9,7 @@ import rdmp_gym.envs  # noqa: F401
 from bench_agents import _cache_key
 from rdmp_gym.agents.protocol import final_test_seeds, stratified_validation_seeds, validation_seeds
 from rdmp_gym.agents.training import TrainConfig
-from rdmp_gym.envs.context import CONTEXT_KINDS
+from rdmp_gym.envs.tasks.wiping.context import CONTEXT_KINDS
 
 
 class _Kinds(gym.Env):

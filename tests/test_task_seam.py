@@ -150,3 +150,56 @@ def test_the_agents_name_no_env_id_and_read_task_defaults_from_the_env_registry(
     assert learner_defaults("rdmp_gym/ArmarWipeStep-v2") == {}
     assert learner_defaults("rdmp_gym/ArmarDrum-v1") == {}                  # no drumming-specific structure
     assert learner_defaults("CartPole-v1") == {}
+
+
+# ------------------------------------------------------------------ the wiping task is a description too
+_WIPING = ROOT / "envs" / "tasks" / "wiping"
+#: the wiping task's objects (the sponge tool, its sensors, the cup) and its own info keys; keys every task's info may
+#: hold (the steps, the path's smoothness, a force trace) are not the wiping task's
+_WIPE_OBJECTS = ("sponge", "sponge_tcp", "sponge_touch", "sponge_table", "wrist_force", "wrist_torque", "obstacle",
+                 "arm_obstacle")
+_SHARED_KEYS = {"steps", "jerk_ratio", "peak_joint_accel", "force_trace"}
+
+
+def _wipe_words() -> tuple[str, ...]:
+    from rdmp_gym.envs.tasks.wiping.info import SCALAR_STATISTICS, TRACE_STATISTICS
+
+    keys = {*SCALAR_STATISTICS, *TRACE_STATISTICS, "cost_terms", "n_cells", "clearance_push", "simulated_coverage",
+            "fine_force_trace", "episode_reward_terms"} - _SHARED_KEYS
+    return (*_WIPE_OBJECTS, *sorted(keys))
+
+
+def test_no_file_of_the_envs_outside_the_wiping_folder_names_its_objects_or_info_keys():
+    pattern = re.compile("[\"'](" + "|".join(_wipe_words()) + ")[\"']")
+    found = [f"{path.relative_to(ROOT)}: {match.group(0)}" for path in _python_files("envs")
+             if _WIPING not in path.parents for match in pattern.finditer(path.read_text())]
+    assert not found
+
+
+def test_the_wiping_task_is_a_registered_description_that_serves_its_published_ids():
+    from rdmp_gym.envs.tasks.wiping.faces import EPISODIC, LEGACY_STEP, STEP
+    from rdmp_gym.envs.tasks.wiping.task import WipingTask
+
+    entry = TASKS["wipe"]
+    assert entry.versions == (1, 2, 3) and entry._factory() is WipingTask and issubclass(WipingTask, TaskDescription)
+    for robot, version, step in (("armar3", 1, LEGACY_STEP), ("armar3", 2, LEGACY_STEP), ("armar3", 3, STEP),
+                                 ("panda", 3, STEP)):
+        episodic_id, step_id = task_ids("wipe", robot, version)
+        assert gym.spec(episodic_id).entry_point == EPISODIC and gym.spec(step_id).entry_point == step
+    assert entry.face_specs("panda", 2) is None and "rdmp_gym/PandaWipe-v2" not in gym.registry
+    assert learner_defaults("rdmp_gym/PandaWipe-v3") == entry.learner_defaults(3) != {}
+    with pytest.raises(ValueError, match="own envs"):
+        RhythmicTaskEnv("wipe", "armar3", version=3)
+
+
+def test_the_wiping_env_reads_its_task_from_the_description():
+    env = gym.make("rdmp_gym/ArmarWipe-v3").unwrapped
+    task = env.task
+    observation, _ = env.reset(seed=3)
+    assert task.name == "Wipe" and task.version == 3 and task.scene is env.scene and task.imitation() is env.dmp
+    low, high = task.context_bounds()
+    assert observation.shape == low.shape and np.all(observation >= low - 1e-6) and np.all(observation <= high + 1e-6)
+    plan = task.plan(env.dmp, env.action_map.theta0, np.zeros(0), env.context, env.times, env.scene.table_frame()[0])
+    assert np.array_equal(plan.path, env.rollout_path(env.action_map.theta0))
+    _, reward, *_, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    assert np.isclose(reward, -info["cost_trace"].sum()) and info["valid"]

@@ -276,7 +276,7 @@ def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
     """
     fields = getattr(base, "context_fields", None)
     if fields is None and hasattr(base, "context_spec"):
-        from rdmp_gym.envs.context import CONTEXT_FIELDS  # the env's package: loaded with the env itself
+        from rdmp_gym.envs.tasks.wiping.context import CONTEXT_FIELDS  # the env's package: loaded with the env itself
         fields = CONTEXT_FIELDS
     return fields
 

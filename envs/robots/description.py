@@ -3,8 +3,8 @@
 A description names the robot's MJCF (the robot alone: bodies, joints, position servos), its controlled joints
 in chain order, where the sponge tool is mounted, the wrist force-sensor site, the geoms that the cup and
 self-collision checks use, the posture the inverse kinematics prefers, the joint limits the task holds it to
-and the box of the table frame it can reach. :mod:`rdmp_gym.envs.arena` composes the scene from it; no other
-module names a robot's bodies or joints.
+and the box of the table frame it can reach. :mod:`rdmp_gym.envs.task_scene` and the wiping task's
+:mod:`rdmp_gym.envs.tasks.wiping.arena` compose the scene from it; no other module names a robot's bodies or joints.
 """
 
 from __future__ import annotations

@@ -21,43 +21,66 @@ __all__ = ["TASKS", "Outcome", "TaskDescription", "TaskEntry", "TaskPlan", "Tool
 @dataclass(frozen=True)
 class TaskEntry:
     """A registered task: ``id_name`` (its part of the env ids), ``versions`` and ``factory`` (a
-    ``"module:attribute"`` string or a callable building the description from its settings)."""
+    ``"module:attribute"`` string or a callable building the description from its settings).
+
+    ``faces`` (a ``"module:attribute"`` string or a callable; default None: the rhythmic face and its step twin)
+    names the envs that serve a task's ids where they are its own: ``faces(robot, version)`` gives
+    ``((episodic entry point, keywords), (step entry point, keywords))``, or None where the task has no ids.
+    """
 
     id_name: str
     versions: tuple[int, ...]
     factory: Any
+    faces: Any = None
 
     def build(self, **settings: Any) -> TaskDescription:
         """The description with ``settings``."""
         return self._factory()(**settings)
 
-    def learner_defaults(self) -> dict[str, dict[str, Any]]:
-        """The task's :attr:`~rdmp_gym.envs.tasks.description.TaskDescription.learner_defaults` (empty where the
-        factory is not a description class)."""
+    def learner_defaults(self, version: int | None = None) -> dict[str, dict[str, Any]]:
+        """The task's learner defaults (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.defaults_for`
+        ``version``, its first without one; empty where the factory is not a description class)."""
         factory = self._factory()
-        defaults = getattr(factory, "learner_defaults", {}) if isinstance(factory, type) else {}
+        if not (isinstance(factory, type) and issubclass(factory, TaskDescription)):
+            return {}
+        defaults = factory.defaults_for(self.versions[0] if version is None else version)
         return {agent: dict(options) for agent, options in defaults.items()}
 
+    def face_specs(self, robot: str, version: int) -> tuple[tuple[str, dict], tuple[str, dict]] | None:
+        """``((episodic entry point, keywords), (step entry point, keywords))`` of the task on ``robot`` at
+        ``version``, or None where it has no ids there (the rhythmic face's for a task without ``faces``)."""
+        if self.faces is None:
+            return None
+        return _load(self.faces)(robot, version)
+
     def _factory(self) -> Any:
-        if isinstance(self.factory, str):
-            module, attribute = self.factory.split(":")
-            return getattr(importlib.import_module(module), attribute)
-        return self.factory
+        return _load(self.factory)
+
+
+def _load(target: Any) -> Any:
+    """``target`` itself, or the attribute a ``"module:attribute"`` string names."""
+    if isinstance(target, str):
+        module, attribute = target.split(":")
+        return getattr(importlib.import_module(module), attribute)
+    return target
 
 
 #: name -> entry of every task on the rhythmic face
 TASKS: dict[str, TaskEntry] = {
+    "wipe": TaskEntry("Wipe", (1, 2, 3), "rdmp_gym.envs.tasks.wiping.task:WipingTask",
+                      faces="rdmp_gym.envs.tasks.wiping.faces:faces"),
     "drum": TaskEntry("Drum", (1,), "rdmp_gym.envs.tasks.drumming:DrumTask"),
 }
 
 
-def register_task(name: str, factory: Any, id_name: str | None = None, versions: tuple[int, ...] = (1,)) -> None:
+def register_task(name: str, factory: Any, id_name: str | None = None, versions: tuple[int, ...] = (1,),
+                  faces: Any = None) -> None:
     """Make a task available by ``name`` (an existing name is replaced); ``factory(**settings)`` builds its
-    description (a class, a callable or a ``"module:attribute"`` string)."""
+    description (a class, a callable or a ``"module:attribute"`` string); ``faces``: see :class:`TaskEntry`."""
     if not (callable(factory) or isinstance(factory, str)):
         raise TypeError(f"factory: expected a TaskDescription class, a callable or 'module:attribute', got "
                         f"{type(factory).__name__}")
-    TASKS[name] = TaskEntry(id_name or name.capitalize(), tuple(versions), factory)
+    TASKS[name] = TaskEntry(id_name or name.capitalize(), tuple(versions), factory, faces)
 
 
 def get_task(task: str | TaskDescription, **settings: Any) -> TaskDescription:

@@ -75,6 +75,7 @@ class ToolPath:
         jerk_ratio: integrated squared jerk of the planned path over the imitation's in the same context.
         peak_joint_accel: largest planned joint acceleration (rad/s²).
         max_joint_accel: the robot's joint acceleration limit (rad/s²).
+        record: what the task's hook on the simulation core recorded (None without a hook).
     """
 
     plan: TaskPlan
@@ -90,6 +91,7 @@ class ToolPath:
     jerk_ratio: float
     peak_joint_accel: float
     max_joint_accel: float
+    record: Any = None
 
 
 @dataclass
@@ -128,6 +130,13 @@ class TaskDescription(ABC):
     control_rate: float = 100.0
     #: settings a learner may read from the task: ``{agent: {option: value}}``
     learner_defaults: Mapping[str, Mapping[str, Any]] = {}
+    #: the envs that run the task where they are its own, not the rhythmic face (None: the rhythmic face)
+    own_faces: ClassVar[str | None] = None
+
+    @classmethod
+    def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
+        """The learner defaults of the task's ``version`` (default: :attr:`learner_defaults` for every version)."""
+        return cls.learner_defaults
 
     @abstractmethod
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:

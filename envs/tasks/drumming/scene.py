@@ -20,7 +20,7 @@ import numpy as np
 
 from ...arena import FORCE, FOUND, NETFORCE, add_contact_sensor
 from ...robots import RobotDescription
-from ...scene import rotation_from_tilt
+from ...task_scene import rotation_from_tilt
 
 __all__ = ["DRUM_PREFIX", "MEMBRANE_RADIUS", "RIM_HEIGHT", "STICK_LENGTH", "add_drum", "add_stick", "place_drum"]
 

@@ -34,7 +34,7 @@ from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper
 from rdmp_gym.dmp.stopping import fit_ending
 
 from ...robots import RobotDescription
-from ...scene import rotation_from_tilt
+from ...task_scene import rotation_from_tilt
 from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
 from .context import DrumContext, DrumContextSpec
 from .demonstration import drumming_demonstration

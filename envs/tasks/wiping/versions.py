@@ -5,7 +5,7 @@ step twins).
                         v1                           v2
 =====================  ===========================  =====================================================
 pattern                 loops in place at the patch  travels across the patch: ``sweep_x``, ``sweep_y``
-                        centre                       action dimensions (:mod:`rdmp_gym.envs.coverage`)
+                        centre                       action dimensions (:mod:`rdmp_gym.envs.tasks.wiping.coverage`)
 periods                 4 after the transient        7 after the transient (wear needs the time)
 cup clearance           1 cm from the patch          the pad's half-diagonal + 1 cm (7.1 cm for the 7 x 10
                                                      cm pad): the pad can wipe the patch edge past the cup
@@ -54,9 +54,9 @@ class TaskVersion:
         executable_success: ``is_success`` also needs the peak joint acceleration within the limit and no
             joint at its limit.
         event_charge: what a collision, a joint at its limit or a joint acceleration above the limit costs as soon
-            as it happens (a share of its weight, :class:`rdmp_gym.envs.reward.RewardSettings`).
+            as it happens (a share of its weight, :class:`rdmp_gym.envs.tasks.wiping.reward.RewardSettings`).
         composed_scene: the scene is composed from the arena, the robot and the sponge tool
-            (:func:`rdmp_gym.envs.arena.compose_scene`); else the robot's hand-merged scene.
+            (:func:`rdmp_gym.envs.tasks.wiping.arena.compose_scene`); else the robot's hand-merged scene.
         max_jerk_ratio: ``is_success`` also needs the path's jerk within this factor of the imitation's (the
             smoothness measure of the version); None: not checked.
         cup_from_touch: the cup's displacement counts from the robot's first touch (a cup that settles untouched

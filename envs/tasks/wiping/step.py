@@ -1,8 +1,9 @@
 """``rdmp_gym/ArmarWipeStep-v3`` and ``rdmp_gym/PandaWipeStep-v3``: the wiping task one control step at a time.
 
 The step twin of the episodic env (as fancy_gym offers one beside each movement-primitive env) runs the same
-simulation core (:class:`~rdmp_gym.envs.wiping.WipeSimulation`: admittance law, servo targets, physics, wear,
-bookkeeping) on the same scene, context, DMP and plan. Per ``step`` (control step ``k``):
+simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation` with the wiping task's hook
+:class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeSimulation`: admittance law, servo targets, physics, wear,
+bookkeeping) on the same task description, scene, context, DMP and plan. Per ``step`` (control step ``k``):
 
 1. the action ``a in [-1, 1]^3`` is a coupling term ``c = max_shift * alpha_z * beta_z * a`` on the DMP: the path
    is the episodic imitation's path (action 0 of the episodic env) plus the response of the DMP's
@@ -32,34 +33,22 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from scipy.linalg import expm
 
+from ...coupling import axis_shift, coupling_action, coupling_filter, joint_shift, plan_velocity
+from ...servo import ServoSimulation
 from .context import SIZE as CONTEXT_SIZE
+from .env import ArmarWipeEnv, outcome
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
 from .scene import WipeScene
-from .wipe_env import ArmarWipeEnv, outcome
-from .wiping import DirtField, WipeSimulation, WipeTrace
+from .simulation import DirtField, WipeSimulation, WipeTrace
 
-__all__ = ["WipeStepEnv", "axis_shift", "coupling_action", "coupling_filter", "joint_shift", "plan_velocity",
-           "sponge_position"]
+__all__ = ["UNSUPPORTED", "WipeStepEnv", "sponge_position"]
 
 _OBS_SIZE = 3 + 3 + 3 + 3 + 1 + CONTEXT_SIZE
 #: Settings of the episodic env that the step twin cannot honour (it does not know the path ahead).
 UNSUPPORTED = {"cup_clearance": "it pushes a whole planned path away from the cup, and the step twin plans one "
                                 "step ahead", "record_frames": "record with the episodic env's record_episode"}
-#: Damping (m) of the joint correction's least squares.
-_DAMPING = 1e-3
 
-
-def coupling_filter(omega: float, alpha_z: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(A [2, 2], B [2])``: the exact discrete step of ``dz = omega (alpha_z (beta_z (0 - y) - z) + c)``,
-    ``dy = omega z`` (``beta_z = alpha_z / 4``) over ``dt`` with ``c`` held: ``(y, z)' = A (y, z) + B c``."""
-    beta_z = alpha_z / 4.0
-    continuous = np.zeros((3, 3))
-    continuous[:2, :2] = omega * np.array([[0.0, 1.0], [-alpha_z * beta_z, -alpha_z]])
-    continuous[1, 2] = omega
-    step = expm(continuous * dt)
-    return step[:2, :2], step[:2, 2]
 
 
 class WipeStepEnv(gym.Env):
@@ -67,7 +56,7 @@ class WipeStepEnv(gym.Env):
 
     Args:
         max_shift: path shift (m) for a full constant action: one number for all three axes or one per axis.
-        **kwargs: the episodic env's keywords (:class:`~rdmp_gym.envs.wipe_env.ArmarWipeEnv`: robot, version,
+        **kwargs: the episodic env's keywords (:class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv`: robot, version,
             style, n_periods, target_force, context_ranges, obstacle, ...); ``cup_clearance`` and
             ``record_frames`` are refused by name.
     """
@@ -107,7 +96,9 @@ class WipeStepEnv(gym.Env):
                          contact_threshold=task.reward_settings.contact_threshold)
         self._adaptation = task.force_adaptation()
         self._simulation = WipeSimulation(scene, task.n_steps, self._adaptation, dirt, task.frame_skip,
-                                          self._normal, task.simulation_settings)
+                                          self._normal, task.simulation_settings, normal_dq=self._ndq,
+                                          heights=self._path[:, 2])
+        self._core = ServoSimulation(scene, task.n_steps, task.frame_skip, hook=self._simulation)
         self._wear = np.zeros(len(task.dirt_cells))
         self._removed = np.zeros(task.n_steps)
         self._shift = np.zeros((2, 3))             # (y, z) of the coupling's response, per axis
@@ -130,7 +121,7 @@ class WipeStepEnv(gym.Env):
         if k + 1 < count:
             self._advance(k + 1, self.coupling_scale * a)
         row = self._q[k] + self._lead * plan_velocity(self._q, k, self.task.dt)
-        diverged = self._simulation.step(k, row, self._ndq[k], float(self._path[k, 2]))
+        diverged = self._core.step(k, row)
         self._wear_step(k, diverged)
         self._k = k + 1
         penetrated = self._simulation.table_penetration > task.penetration_limit or self._self_penetration(k)
@@ -247,57 +238,7 @@ class WipeStepEnv(gym.Env):
         return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)
 
 
-def joint_shift(kinematics: Any, q: np.ndarray, shift: np.ndarray) -> np.ndarray:
-    """Joint change ``[n]`` that moves the chain's site by ``shift [3]`` (world, m) at fixed orientation, by damped
-    least squares on the Jacobian of ``kinematics`` (a :class:`~rdmp_gym.envs.kinematics.ChainKinematics`) at
-    ``q [n]``."""
-    jac_pos, jac_rot = kinematics.forward(q[None]).jacobian()
-    jac = np.vstack([jac_pos[0], jac_rot[0]])
-    rhs = np.r_[shift, np.zeros(3)]
-    return np.linalg.solve(jac.T @ jac + _DAMPING**2 * np.eye(len(q)), jac.T @ rhs)
-
-
-def plan_velocity(q: np.ndarray, k: int, dt: float) -> np.ndarray:
-    """Joint velocity ``[n]`` at step ``k`` of a joint path ``q [T, n]``: ``np.gradient`` of the path (as the
-    episodic plan's feed-forward), for one step, reading only steps ``k - 1 .. k + 1``."""
-    count = len(q)
-    if count == 1:
-        return np.zeros(q.shape[1])
-    if k == 0:
-        return (q[1] - q[0]) / dt
-    if k == count - 1:
-        return (q[k] - q[k - 1]) / dt
-    return (q[k + 1] - q[k - 1]) / (2.0 * dt)
-
-
-def coupling_action(action: Any) -> np.ndarray:
-    """A step twin's action as ``[3]`` float64 clipped to [-1, 1]; ValueError for a wrong shape, NaN or inf."""
-    try:
-        a = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"action: expected a numeric array of shape (3,), got {type(action).__name__}") from error
-    if a.shape != (3,):
-        raise ValueError(f"action: expected shape (3,), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError("action: contains NaN or infinite values")
-    return np.clip(a, -1.0, 1.0)
-
-
 def sponge_position(scene: WipeScene) -> np.ndarray:
     """The sponge's face centre ``[3]`` in the nominal table frame (m)."""
     origin, rot = scene.table_frame(actual=False)
     return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
-
-
-def axis_shift(max_shift: Any) -> np.ndarray:
-    """``max_shift`` (a number or three) as ``[3]`` float64; ValueError unless finite and >= 0."""
-    message = f"max_shift: expected a number >= 0 (m) or three, got {max_shift!r}"
-    if isinstance(max_shift, bool):
-        raise ValueError(message)
-    try:
-        shift = np.broadcast_to(np.asarray(max_shift, dtype=np.float64), (3,)).copy()
-    except (TypeError, ValueError) as error:
-        raise ValueError(message) from error
-    if not (np.all(np.isfinite(shift)) and np.all(shift >= 0.0)):
-        raise ValueError(message)
-    return shift

@@ -38,7 +38,7 @@ from scipy.ndimage import uniform_filter1d
 
 from rdmp_gym.dmp.basis import periodic_width, von_mises
 
-from .controller import ForceAdaptation, ForceAdaptationSettings
+from ...controller import ForceAdaptation, ForceAdaptationSettings
 from .scene import DEFAULT_XML
 
 __all__ = ["ForceProfileLearning", "ForceProfileSettings", "curved_table_scene", "period_force_errors",

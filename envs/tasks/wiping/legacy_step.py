@@ -12,7 +12,8 @@ the same scene (tilted table, Preston dirt, the cup), context, DMP, controller a
 2. differential IK in the v1 control frame (nominal table origin, actual tilt) turns the
    targets into joint targets, with the episodic plan's velocity feed-forward (central difference, using
    the solution for ``y_{k+1}``) and the wrist-force admittance law on the pressing depth; MuJoCo runs
-   ``frame_skip`` steps (one at a time for 0.2 s after the first contact, to catch the impact);
+   ``frame_skip`` steps on the simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation`, with this env as
+   its hook: one physics step at a time for 0.2 s after the first contact, to catch the impact);
 3. the measurements of the step are appended to a :class:`WipeTrace` of the episode so far, and the
    reward is the growth of the episodic reward: ``r_k = R(trace_0..k) - R(trace_0..k-1)`` with
    ``R = sum(wipe_reward(...))``, the v1 reward function itself. The return of an episode is therefore
@@ -38,17 +39,18 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 
 from rdmp_gym import DMPStepper
 
+from ...controller import ForceAdaptation
+from ...coupling import axis_shift, coupling_action
+from ...servo import ServoSimulation
 from .context import SIZE as CONTEXT_SIZE
-from .controller import ForceAdaptation
+from .env import ArmarWipeEnv, outcome
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .step_twin import UNSUPPORTED, axis_shift, coupling_action, sponge_position
-from .wipe_env import ArmarWipeEnv, outcome
-from .wiping import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
+from .simulation import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
+from .step import UNSUPPORTED, sponge_position
 
 __all__ = ["REFUSED", "ArmarWipeStepEnv"]
 
@@ -147,6 +149,8 @@ class ArmarWipeStepEnv(gym.Env):
         self._bias = float(scene.wrist_force_world() @ self._normal)
         self._lead = scene.servo_lead()
         self._measured = 0.0
+        self._depth, self._top, self._before = 0.0, 0.0, 0.0
+        self._core = ServoSimulation(scene, count, task.frame_skip, hook=self)
         self._k = 0
         self._terms = dict.fromkeys(TERMS, 0.0)
         self._done = False
@@ -162,7 +166,7 @@ class ArmarWipeStepEnv(gym.Env):
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
         a = coupling_action(action)
-        task, scene, k = self.task, self.task.scene, self._k
+        task, k = self.task, self._k
         count = task.n_steps
         if k + 1 < count:                                  # the action sets the next target y_{k+1}
             target, _ = self._stepper.step(self.coupling_scale * a)
@@ -174,9 +178,7 @@ class ArmarWipeStepEnv(gym.Env):
         else:                                              # np.gradient of the episodic JointTargetPlan
             lo, hi = max(0, k - 1), min(count - 1, k + 1)
             velocity = (q[hi] - q[lo]) / ((hi - lo) * task.dt)
-        depth = self._adaptation.update(self._measured, float(self._path[k, 2]))
-        scene.data.ctrl[scene.actuator_ids] = q[k] + self._lead * velocity - depth * self._ndq[k]
-        unstable = self._simulate(k, depth)
+        unstable = self._core.step(k, q[k] + self._lead * velocity)
         self._k = k + 1
         penetrated = self._penetration > task.penetration_limit
         terms, info = self._reward(k, unstable, penetrated)
@@ -209,20 +211,36 @@ class ArmarWipeStepEnv(gym.Env):
                                       min_iterations=self.ik_iterations)
         return solution.q[0], solution.normal_dq[0]
 
-    def _simulate(self, k: int, depth: float) -> bool:
-        """Run the physics of control step ``k`` and record it (as ``simulate_wipe``); True if it diverged."""
-        task, scene = self.task, self.task.scene
-        m, d, rec = scene.model, scene.data, self._rec
-        a = scene.sponge_contact_adr
-        before = d.time
+    # ------------------------------------------------------------------ its hook on the simulation core
+    def command(self, k: int, target: np.ndarray) -> None:
+        """The servo targets of control step ``k``: ``target`` (the joints and their feed-forward) less the pressing
+        depth of the admittance law along the normal."""
+        scene = self.task.scene
+        self._before = scene.data.time
+        depth = self._adaptation.update(self._measured, float(self._path[k, 2]))
+        scene.data.ctrl[scene.actuator_ids] = target - depth * self._ndq[k]
+        self._depth = depth
+
+    def substeps(self, k: int) -> bool:
+        """One physics step at a time within the impact window after the first contact."""
         if self._first_contact >= 0 and k < self._first_contact + self._fine_window:
-            top = 0.0
-            for _ in range(task.frame_skip):
-                mujoco.mj_step(m, d)
-                top = max(top, abs(float(d.sensordata[a + 1:a + 4] @ self._table_normal)))
-            rec["peak"][k] = top
-        else:
-            mujoco.mj_step(m, d, task.frame_skip)
+            self._top = 0.0
+            return True
+        return False
+
+    def substep(self, k: int, i: int) -> None:
+        """The peak sponge-table force of the step so far."""
+        a = self.task.scene.sponge_contact_adr
+        self._top = max(self._top, abs(float(self.task.scene.data.sensordata[a + 1:a + 4] @ self._table_normal)))
+
+    def finish(self, k: int) -> bool:
+        """Record control step ``k`` after its physics (as ``simulate_wipe``); True if it diverged."""
+        task, scene = self.task, self.task.scene
+        d, rec = scene.data, self._rec
+        a = scene.sponge_contact_adr
+        before, depth = self._before, self._depth
+        if self._first_contact >= 0 and k < self._first_contact + self._fine_window:
+            rec["peak"][k] = self._top
         sensors = d.sensordata
         if self._first_contact < 0 and sensors[a] > 0:
             self._first_contact = k

@@ -14,8 +14,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from .arena import compose_scene, self_contact_sensors
-from .robots import ARMAR3, RobotDescription, get_robot
+from ...arena import self_contact_sensors
+from ...robots import ARMAR3, RobotDescription, get_robot
+from ...task_scene import read_arm, rotation_from_tilt, servo_lead
+from .arena import compose_scene
 
 __all__ = [
     "DEFAULT_XML",
@@ -23,7 +25,6 @@ __all__ = [
     "WipeScene",
     "dirt_grid",
     "read_arm",
-    "rotation_from_tilt",
     "servo_lead",
 ]
 
@@ -53,39 +54,6 @@ class TablePose:
     tilt_y: float = 0.0
 
 
-def rotation_from_tilt(tilt_x: float, tilt_y: float) -> np.ndarray:
-    """Rotation [3, 3] = R_y(tilt_y) @ R_x(tilt_x)."""
-    cx, sx, cy, sy = np.cos(tilt_x), np.sin(tilt_x), np.cos(tilt_y), np.sin(tilt_y)
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
-    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
-    return ry @ rx
-
-
-def read_arm(scene: object, model: mujoco.MjModel, joints: tuple[str, ...], argument: str) -> None:
-    """Set the arm's indices on ``scene`` for the model's ``joints`` (full names, chain order): ``joint_ids``,
-    ``qpos_adr``, ``dof_adr``, ``joint_lower``, ``joint_upper`` and ``actuator_ids`` (each ``[n]``); ValueError
-    naming ``argument`` where a joint has no joint actuator."""
-    joint_ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in joints])
-    actuator_of_joint = {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
-                         if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}
-    missing = [n.split("/")[-1] for n, j in zip(joints, joint_ids, strict=True) if int(j) not in actuator_of_joint]
-    if missing:
-        raise ValueError(f"{argument}: no joint actuator for {missing}")
-    scene.joint_ids = joint_ids
-    scene.qpos_adr = model.jnt_qposadr[joint_ids].copy()
-    scene.dof_adr = model.jnt_dofadr[joint_ids].copy()
-    scene.joint_lower = model.jnt_range[joint_ids, 0].copy()
-    scene.joint_upper = model.jnt_range[joint_ids, 1].copy()
-    scene.actuator_ids = np.array([actuator_of_joint[int(j)] for j in joint_ids])
-
-
-def servo_lead(model: mujoco.MjModel, actuator_ids: np.ndarray) -> np.ndarray:
-    """``kv / kp`` of the position servos ``actuator_ids [n]``, ``[n]`` (s): the lag a moving target sees."""
-    kp = model.actuator_gainprm[actuator_ids, 0]
-    kv = -model.actuator_biasprm[actuator_ids, 2]
-    return np.where(kp > 0, kv / np.where(kp > 0, kp, 1.0), 0.0)
-
-
 def dirt_grid(centre: np.ndarray, size: np.ndarray, cell: float) -> np.ndarray:
     """Centres [N, 2] (table frame, metres) of a grid of square cells of side ``cell`` over a patch.
 
@@ -111,10 +79,11 @@ class WipeScene:
     Args:
         robot: the robot (a registered name or a :class:`~rdmp_gym.envs.robots.RobotDescription`).
         composed: compose the scene from the arena, the robot and the sponge tool
-            (:func:`~rdmp_gym.envs.arena.compose_scene`); ``False`` loads the robot's hand-merged ``legacy_scene``
+            (:func:`~rdmp_gym.envs.tasks.wiping.arena.compose_scene`); ``False`` loads the robot's hand-merged
+            ``legacy_scene``
             (the scene the task versions 1 and 2 were published with).
         xml_file: a hand-merged scene MJCF instead (with the names of the robot's description, the arena's and
-            the sponge tool's, and the sensors of :mod:`~rdmp_gym.envs.arena`); excludes ``composed``.
+            the sponge tool's, and the sensors of :mod:`~rdmp_gym.envs.tasks.wiping.arena`); excludes ``composed``.
     """
 
     def __init__(self, robot: str | RobotDescription = "armar3", composed: bool = False,

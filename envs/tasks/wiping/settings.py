@@ -1,6 +1,6 @@
 """The wiping env's settings as data: typed, frozen, validated objects that save to and load from JSON.
 
-:class:`EnvConfig` groups the settings of :class:`~rdmp_gym.envs.wipe_env.ArmarWipeEnv` by concern:
+:class:`EnvConfig` groups the settings of :class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv` by concern:
 
 ==================  ==================================================================================
 ``robot``           the robot: its registry name (``"armar3"``) or a ``RobotDescription`` (not JSON)
@@ -19,7 +19,7 @@ margin that puts every step at the limit, a control rate at which no path is rea
 naming the argument and what is expected; a value of the wrong type raises :class:`SettingTypeError` (a
 ``TypeError`` and a ``ValueError``). The defaults are the env's own::
 
-    from rdmp_gym.envs.settings import EnvConfig
+    from rdmp_gym.envs.tasks.wiping.settings import EnvConfig
 
     config = EnvConfig.from_kwargs(version=2, target_force=15.0)   # the env's keyword arguments
     config.save("run/env_config.json")
@@ -29,8 +29,8 @@ naming the argument and what is expected; a value of the wrong type raises :clas
 JSON holds numbers, strings, lists and mappings only: a live ``Demonstration``, ``RhythmicDMP`` or
 ``RobotDescription`` is refused by name (save the DMP with :func:`rdmp_gym.save_dmp` and give its path as ``dmp``;
 register the robot, :func:`rdmp_gym.envs.robots.register_robot`, and give its name); a
-:class:`~rdmp_gym.envs.clearance.CupClearance` or a
-:class:`~rdmp_gym.envs.force_learning.ForceProfileSettings` is stored as the mapping of its fields.
+:class:`~rdmp_gym.envs.tasks.wiping.clearance.CupClearance` or a
+:class:`~rdmp_gym.envs.tasks.wiping.force_learning.ForceProfileSettings` is stored as the mapping of its fields.
 """
 
 from __future__ import annotations
@@ -58,11 +58,11 @@ from rdmp_gym.validation import (
     is_number,
 )
 
+from ...robots import RobotDescription
 from .clearance import CupClearance
 from .context import ContextSpec
 from .force_learning import ForceProfileSettings
 from .reward import COVERAGE_TIMINGS, RewardWeights
-from .robots import RobotDescription
 from .versions import TASK_VERSIONS
 
 __all__ = [
@@ -107,7 +107,8 @@ class TaskConfig:
     """What the task is: its version, the imitation, the action, the episode's length, the dirt and the limits.
 
     Attributes:
-        version: the task version (:mod:`rdmp_gym.envs.versions`; default the current, 3; ``gym.make`` of an id sets
+        version: the task version (:mod:`rdmp_gym.envs.tasks.wiping.versions`; default the current, 3; ``gym.make`` of
+        an id sets
             its own).
         style: synthetic demonstration style 1..4 (used when neither ``demonstration`` nor ``dmp`` is given).
         demonstration: a ``rdmp_gym.Demonstration`` with 3 dimensions (x, y, z in the table frame) to fit (not JSON).
@@ -326,7 +327,8 @@ class RewardConfig:
     """The reward's term weights, and when the per-step cost trace books the coverage.
 
     Attributes:
-        weights: ``{term: weight}`` overrides of :class:`~rdmp_gym.envs.reward.RewardWeights` (finite numbers
+        weights: ``{term: weight}`` overrides of :class:`~rdmp_gym.envs.tasks.wiping.reward.RewardWeights` (finite
+        numbers
             >= 0), or None (the defaults).
         coverage_timing: where ``info["cost_trace"]`` books the coverage term: ``"end"`` (its whole value at the
             last step) or ``"wiped"`` (each step the dirt it removed, as the step twin rewards it). The return is
@@ -355,7 +357,7 @@ class RewardConfig:
 
 @dataclass(frozen=True)
 class ContextConfig:
-    """What ``reset`` draws (:mod:`rdmp_gym.envs.context`).
+    """What ``reset`` draws (:mod:`rdmp_gym.envs.tasks.wiping.context`).
 
     Attributes:
         ranges: ``{field: (low, high)}`` sampling ranges of the drawn fields (each a number or one per component,
@@ -484,7 +486,7 @@ _KWARGS: dict[str, tuple[str | None, str]] = {
     "cup_clearance": ("task", "cup_clearance"),
     "robot": (None, "robot"),
 }
-#: The keyword arguments of :class:`~rdmp_gym.envs.wipe_env.ArmarWipeEnv`, in the order of its signature.
+#: The keyword arguments of :class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv`, in the order of its signature.
 ENV_KWARGS: tuple[str, ...] = tuple(_KWARGS)
 _GROUPS: dict[str, type] = {}            # filled below the class: name -> config class
 

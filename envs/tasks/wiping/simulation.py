@@ -1,10 +1,11 @@
-"""Simulate the sponge along a joint-target plan: contact forces, dirt wear, collisions, the obstacle.
+"""The wiping task on the simulation core: contact forces, dirt wear, collisions, the obstacle.
 
-One call runs a whole wiping episode in MuJoCo at the control rate (``frame_skip`` physics steps per
-control step). The loop does only what must happen online: the wrist-force adaptation of the pressing
-depth, the servo targets, the physics and a copy of the per-step measurements. For 0.2 s after the
-first sponge contact it steps the physics one step at a time to catch the touchdown's peak force (the
-impact). Everything else is evaluated afterwards, vectorised over the episode:
+:class:`WipeSimulation` is the wiping task's hook on the core (:class:`~rdmp_gym.envs.servo.ServoSimulation`,
+``frame_skip`` physics steps per control step); :func:`simulate_wipe` runs a whole episode with it. Per control
+step the hook does only what must happen online: the wrist-force adaptation of the pressing depth on the servo
+targets, and a copy of the per-step measurements; for 0.2 s after the first sponge contact the core steps the
+physics one step at a time for it, to catch the touchdown's peak force (the impact). Everything else is evaluated
+afterwards, vectorised over the episode:
 
 - the sponge–table normal force is the net force of MuJoCo's sponge–table contacts (the model's
   ``sponge_table`` contact sensor, i.e. ``mj_contactForce`` summed over exactly those contacts in C),
@@ -16,7 +17,7 @@ impact). Everything else is evaluated afterwards, vectorised over the episode:
   coverage is the fraction of the dirt removed;
 - an arm collision is a contact of a robot geom other than the sponge with the table; a self-collision
   a contact of the moving arm with a link of the robot's own body (sensors ``arm_<link>``,
-  :mod:`rdmp_gym.envs.arena`); for both the deepest penetration is recorded;
+  :mod:`rdmp_gym.envs.tasks.wiping.arena`); for both the deepest penetration is recorded;
 - the obstacle: whether the arm touches it (sensor ``arm_obstacle``) and how far it has moved.
 """
 
@@ -28,7 +29,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .controller import ForceAdaptation, JointTargetPlan
+from ...controller import ForceAdaptation, JointTargetPlan
+from ...servo import ServoSimulation
 from .scene import WipeScene
 
 __all__ = ["IMPACT_WINDOW", "DirtField", "SimulationSettings", "WipeSimulation", "WipeTrace", "arm_table_penetration",
@@ -240,13 +242,15 @@ def _undispatched(function: Callable) -> Callable:
 
 
 class WipeSimulation:
-    """The simulation core of the wiping task: one control step at a time, and the episode's trace.
+    """The wiping task's hook on the simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation`), and the
+    episode's trace.
 
-    Both envs run it: the episodic env steps it along a whole planned path (:func:`simulate_wipe`), the step twin
-    one control step per ``step``. Per control step it does only what must happen online: the force controller's
-    pressing depth (:class:`~rdmp_gym.envs.controller.ForceAdaptation`, the one home of the admittance law), the
-    servo targets, the physics (one physics step at a time for :data:`IMPACT_WINDOW` after the first sponge
-    contact, to catch the impact) and a copy of the measurements; :meth:`trace` evaluates the rest vectorised.
+    Both envs run the core with it: the episodic env along a whole planned path (:func:`simulate_wipe`), the step
+    twin one control step per ``step``. Per control step it does only what must happen online: the force
+    controller's pressing depth (:class:`~rdmp_gym.envs.controller.ForceAdaptation`, the one home of the admittance
+    law) on the servo targets (:meth:`command`), the physics one physics step at a time for :data:`IMPACT_WINDOW`
+    after the first sponge contact, to catch the impact (:meth:`substeps`, :meth:`substep`), and a copy of the
+    measurements (:meth:`finish`); :meth:`trace` evaluates the rest vectorised.
 
     Args:
         scene: the scene, already reset to rest at the first joint targets with the table and obstacle in place.
@@ -256,10 +260,15 @@ class WipeSimulation:
         frame_skip: physics steps per control step.
         normal: the control normal [3] (world) the pressing depth acts along and the wrist force is read along.
         settings: :class:`SimulationSettings`.
+        normal_dq: joint motion per metre along the normal, per control step ``[T, n]`` (the plan's; the servo
+            targets are ``q - depth * normal_dq``).
+        heights: the commanded sponge height above the nominal surface per control step ``[T]`` (m; read at each
+            step, so that a step twin may change the steps ahead).
     """
 
     def __init__(self, scene: WipeScene, count: int, adaptation: ForceAdaptation, dirt: DirtField,
-                 frame_skip: int, normal: np.ndarray, settings: SimulationSettings | None = None):
+                 frame_skip: int, normal: np.ndarray, settings: SimulationSettings | None = None,
+                 normal_dq: np.ndarray | None = None, heights: np.ndarray | None = None):
         m, d = scene.model, scene.data
         if frame_skip < 1:
             raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
@@ -269,6 +278,8 @@ class WipeSimulation:
         self.scene, self.count, self.adaptation, self.dirt = scene, count, adaptation, dirt
         self.frame_skip, self.normal = frame_skip, normal
         self.settings = SimulationSettings() if settings is None else settings
+        self.normal_dq = None if normal_dq is None else np.ascontiguousarray(normal_dq)
+        self.heights = heights
         self._ctrl_index: slice | np.ndarray = ids
         if np.array_equal(ids, np.arange(ids[0], ids[0] + len(ids))):
             self._ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
@@ -298,44 +309,59 @@ class WipeSimulation:
         self.steps = count
         self.table_penetration = 0.0
         self.first_contact = -1
+        self._depth = 0.0
+        self._top = 0.0
+        self._fine_step = -1
         # MuJoCo resets the data (time back to 0) when accelerations blow up: time that fails to advance
         # signals divergence, as do NaN and excessive wrist forces.
         self._last_time = d.time
 
-    def step(self, k: int, q_row: np.ndarray, ndq_row: np.ndarray, height: float) -> bool:
-        """Control step ``k``: the pressing depth from the force controller (its admittance law fed the last wrist
-        force and the commanded ``height`` above the surface, m), servo targets ``q_row - depth * ndq_row`` ([n]
-        each), the physics, the record. Returns True when the simulation diverged (the episode ends here)."""
-        depth = self.adaptation.update(self.measured, height)
+    # ------------------------------------------------------------------ the hook (StepHook)
+    def command(self, k: int, target: np.ndarray) -> None:
+        """The pressing depth from the force controller (its admittance law fed the last wrist force and the
+        commanded height of step ``k`` above the surface, m) and the servo targets ``target - depth * normal_dq[k]``
+        (``[n]`` each)."""
+        depth = self.adaptation.update(self.measured, float(self.heights[k]))
+        ndq_row = self.normal_dq[k]
         if self._ctrl is None:
-            self.scene.data.ctrl[self._ctrl_index] = q_row - depth * ndq_row
+            self.scene.data.ctrl[self._ctrl_index] = target - depth * ndq_row
         else:
-            mujoco.mju_addScl(self._ctrl, q_row, ndq_row, -depth)   # q - depth ndq, elementwise as numpy rounds it
-        return self._physics(k, depth)
+            mujoco.mju_addScl(self._ctrl, target, ndq_row, -depth)   # q - depth ndq, elementwise as numpy rounds it
+        self._depth = depth
 
-    def _physics(self, k: int, depth: float) -> bool:
-        m, d, scene = self.scene.model, self.scene.data, self.scene
-        sensordata, a, frame_skip = d.sensordata, scene.sponge_contact_adr, self.frame_skip
-        fine = self.fine
-        if fine is not None or (self.first_contact >= 0 and k < self.first_contact + self.fine_window):
-            tn0, tn1, tn2 = self._tn
-            top = 0.0
-            for i in range(frame_skip):
-                mujoco.mj_step(m, d)
-                force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
-                top = max(top, force)
-                if fine is not None:
-                    fine[k * frame_skip + i] = force
-            self.peak[k] = top
-        else:
-            mujoco.mj_step(m, d, frame_skip)
+    def substeps(self, k: int) -> bool:
+        """One physics step at a time within :data:`IMPACT_WINDOW` of the first contact (always with
+        ``fine_force``)."""
+        if self.fine is not None or (self.first_contact >= 0 and k < self.first_contact + self.fine_window):
+            self._top, self._fine_step = 0.0, k
+            return True
+        return False
+
+    def substep(self, k: int, i: int) -> None:
+        """The sponge-table force after physics step ``i`` of control step ``k``: its peak over the step (and every
+        value with ``fine_force``)."""
+        sensordata, a = self.scene.data.sensordata, self.scene.sponge_contact_adr
+        tn0, tn1, tn2 = self._tn
+        force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
+        self._top = max(self._top, force)
+        if self.fine is not None:
+            self.fine[k * self.frame_skip + i] = force
+
+    def finish(self, k: int) -> bool:
+        """Record control step ``k`` (first contact, the wrist force along the normal, the depth, the record row, the
+        arm's penetration into the table); True when the simulation diverged (time that fails to advance, NaN or a
+        wrist force above the limit)."""
+        d, scene = self.scene.data, self.scene
+        sensordata, a = d.sensordata, scene.sponge_contact_adr
+        if self._fine_step == k:
+            self.peak[k] = self._top
         if self.first_contact < 0 and sensordata[a] > 0:
             self.first_contact = k
         dot = self._dot
         measured = self._bias - float(dot(self.normal, dot(self._ft_rot, self._wrist, out=self._rotated)))
         self.measured = measured
         self.wrist_force[k] = measured
-        self.depth[k] = depth
+        self.depth[k] = self._depth
         self._concatenate(self._sources, out=self.record[k])
         if sensordata[scene.robot_contact_adr] - sensordata[a] > 0.5:
             self.table_penetration = max(self.table_penetration, arm_table_penetration(scene))
@@ -429,7 +455,8 @@ class WipeSimulation:
 def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarray, adaptation: ForceAdaptation,
                   dirt: DirtField, frame_skip: int, settings: SimulationSettings | None = None,
                   callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None) -> WipeTrace:
-    """Run a whole joint-target plan from the current simulation state with :class:`WipeSimulation`.
+    """Run a whole joint-target plan from the current simulation state on the simulation core with the hook
+    :class:`WipeSimulation`.
 
     Args:
         scene: the scene, already reset to rest at ``plan.q[0]`` with the table and obstacle in place.
@@ -445,15 +472,14 @@ def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarr
     count = len(plan)
     if path_height.shape != (count,):
         raise ValueError(f"path_height: expected shape ({count},), got {path_height.shape}")
-    simulation = WipeSimulation(scene, count, adaptation, dirt, frame_skip, plan.normal, settings)
-    heights = path_height.tolist()
-    q_rows, ndq_rows = list(np.ascontiguousarray(plan.q)), list(np.ascontiguousarray(plan.normal_dq))
-    step = simulation.step
-    for k in range(count):
-        if step(k, q_rows[k], ndq_rows[k], heights[k]):
-            break
-        if callback is not None:
-            callback(k, lambda k=k: simulation.dirt_left(k))
+    simulation = WipeSimulation(scene, count, adaptation, dirt, frame_skip, plan.normal, settings,
+                                normal_dq=plan.normal_dq, heights=path_height)
+    core = ServoSimulation(scene, count, frame_skip, hook=simulation)
+
+    def after(k: int) -> None:
+        callback(k, lambda k=k: simulation.dirt_left(k))
+
+    core.run(np.ascontiguousarray(plan.q), None if callback is None else after)
     return simulation.trace()
 
 

@@ -1,0 +1,21 @@
+"""The table-wiping task: everything the envs know of wiping, in one folder.
+
+- :mod:`~rdmp_gym.envs.tasks.wiping.arena`, :mod:`~rdmp_gym.envs.tasks.wiping.scene`: the arena (table, cup), the
+  sponge tool and the sensors, composed with a robot; the table pose and the dirt grid;
+- :mod:`~rdmp_gym.envs.tasks.wiping.context`: the context (patch, table pose, sponge start, the cup), drawn and
+  validated, and the observation;
+- :mod:`~rdmp_gym.envs.tasks.wiping.approach`, :mod:`~rdmp_gym.envs.tasks.wiping.coverage`: the task's own action
+  dimensions (the lifted approach, the covering sweep);
+- :mod:`~rdmp_gym.envs.tasks.wiping.simulation`: the wiping task's hook on the simulation core (the wrist-force
+  adaptation of the pressing depth, fine physics steps after the first contact, dirt wear, collisions, the cup);
+- :mod:`~rdmp_gym.envs.tasks.wiping.force_learning`, :mod:`~rdmp_gym.envs.tasks.wiping.clearance`: the learned
+  pressing-depth profile and the cup clearance;
+- :mod:`~rdmp_gym.envs.tasks.wiping.reward`, :mod:`~rdmp_gym.envs.tasks.wiping.info`: the reward terms, the success
+  criteria's statistics and the info keys;
+- :mod:`~rdmp_gym.envs.tasks.wiping.versions`, :mod:`~rdmp_gym.envs.tasks.wiping.settings`: what each version
+  changes, the typed settings and the learner defaults;
+- :mod:`~rdmp_gym.envs.tasks.wiping.env`, :mod:`~rdmp_gym.envs.tasks.wiping.step`,
+  :mod:`~rdmp_gym.envs.tasks.wiping.legacy_step`: the envs of the ids ``rdmp_gym/{Armar,Panda}Wipe{,Step}-v{N}``.
+
+The package imports nothing on its own (the id registry reads its learner defaults without loading MuJoCo).
+"""

@@ -1,0 +1,528 @@
+"""The table-wiping task as one :class:`~rdmp_gym.envs.tasks.description.TaskDescription`, its versions as switches.
+
+:class:`WipingTask` is everything the envs know of wiping: the objects it adds to the arena (the sponge tool on the
+robot's mount and the sensors it reads, :meth:`WipingTask.compose`; the table and the cup stand in the arena), the
+scene of a version (:class:`~rdmp_gym.envs.tasks.wiping.scene.WipeScene`), the context (drawn, validated and
+observed: :mod:`~rdmp_gym.envs.tasks.wiping.context`; the table pose, the cup and the dirt placed for it), the
+imitation DMP and the action layout (its parameter groups, the lifted approach and the covering sweep), the plan
+(the DMP anchored at the patch, started at the sponge), the controller's force adaptation (the wiping hook on the
+simulation core, :mod:`~rdmp_gym.envs.tasks.wiping.simulation`), the judgement (the reward terms of
+:mod:`~rdmp_gym.envs.tasks.wiping.reward`, the statistics and info keys of :mod:`~rdmp_gym.envs.tasks.wiping.info`,
+``is_success`` and its failure causes) and the defaults a learner reads (:data:`LEARNER_DEFAULTS
+<rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS>`). What each version changes is
+:mod:`~rdmp_gym.envs.tasks.wiping.versions`.
+
+The wiping ids run on the wiping face (:class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv`, its step twin
+:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`), which reads the task from this description and runs the
+simulation core with the task's hook: the published versions keep their scene (the arena composed before the robot,
+or the robot's hand-merged scene in v1 and v2), their path checks and their force controller, so that every number
+they published reproduces bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, ClassVar
+
+import mujoco
+import numpy as np
+
+from rdmp_gym import RhythmicDMP, load_dmp, wiping_demonstration
+from rdmp_gym.dmp.fitting import FADE_BEFORE_T
+from rdmp_gym.dmp.pose import PoseDMP
+from rdmp_gym.signals.demonstrations import check_frame
+
+from ...action import ActionMap
+from ...controller import ForceAdaptation, ForceAdaptationSettings
+from ...ik import BodyClearance, IKResult, PathIK
+from ...kinematics import ChainKinematics
+from ...robots import RobotDescription, get_robot
+from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
+from .approach import approach_direction, lift_profile
+from .arena import add_task
+from .clearance import Cup, CupClearance, HandPoints
+from .context import CONTEXT_FIELDS, Context, ContextSpec
+from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
+from .force_learning import ForceProfileLearning, ForceProfileSettings
+from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
+from .scene import TablePose, WipeScene, dirt_grid
+from .settings import EnvConfig, ForceConfig, RewardConfig, TaskConfig
+from .simulation import WipeTrace
+from .versions import LEARNER_DEFAULTS, TASK_VERSIONS, TaskVersion
+
+__all__ = ["DEFAULT_GROUPS", "WipeRecord", "WipingTask", "episode_success", "failure_causes", "outcome"]
+
+#: ``info["is_success"]`` thresholds: coverage, force-in-band fraction, obstacle displacement (m).
+SUCCESS_COVERAGE = 0.95
+SUCCESS_FORCE_IN_BAND = 0.9
+SUCCESS_OBSTACLE_SHIFT = 0.005
+#: The action groups when ``groups`` is not given (``ArmarWipe-v2`` adds ``"sweep"``).
+DEFAULT_GROUPS = ("periodic", "transient", "initial", "amplitude", "approach")
+#: The sweep's last via point (the patch centre) comes this long (s) before the end of the episode.
+SWEEP_END_MARGIN = 0.5
+
+
+def failure_causes(stats: Mapping[str, Any], max_joint_accel: float | None = None,
+                   max_jerk_ratio: float | None = None) -> tuple[str, ...]:
+    """The ``is_success`` criteria that an episode's statistics (``ArmarWipeEnv``'s info) miss, in the order
+    ``"coverage"``, ``"force"``, ``"arm collision"``, ``"self-collision"``, ``"cup"`` (touched or moved), with
+    ``max_joint_accel`` (rad/s², executable success) ``"joint acceleration"`` (the peak above it) and
+    ``"joint limit"``, and with ``max_jerk_ratio`` ``"jerk"`` (the path's jerk ratio above it); empty for a success
+    (validity is checked apart)."""
+    met = {"coverage": stats["coverage"] >= SUCCESS_COVERAGE,
+           "force": stats["force_in_band_fraction"] >= SUCCESS_FORCE_IN_BAND,
+           "arm collision": stats["arm_collision_fraction"] == 0.0,
+           "self-collision": stats["self_collision_fraction"] == 0.0,
+           "cup": stats["obstacle_touch_steps"] == 0 and stats["obstacle_shift"] < SUCCESS_OBSTACLE_SHIFT}
+    if max_joint_accel is not None:
+        met["joint acceleration"] = stats["peak_joint_accel"] <= max_joint_accel
+        met["joint limit"] = stats["joint_limit_fraction"] == 0.0
+    if max_jerk_ratio is not None:
+        met["jerk"] = stats["jerk_ratio"] <= max_jerk_ratio
+    return tuple(name for name, ok in met.items() if not ok)
+
+
+def episode_success(stats: Mapping[str, Any], max_joint_accel: float | None = None,
+                    max_jerk_ratio: float | None = None) -> bool:
+    """Whether an episode's statistics meet the ``is_success`` thresholds: no :func:`failure_causes`."""
+    return not failure_causes(stats, max_joint_accel, max_jerk_ratio)
+
+
+def outcome(stats: Mapping[str, Any], valid: bool, unstable: bool, max_joint_accel: float | None,
+            max_jerk_ratio: float | None = None) -> tuple[bool, tuple[str, ...]]:
+    """``(is_success, causes)`` of an episode: ``("invalid",)`` or ``("unstable",)`` first, else
+    :func:`failure_causes`."""
+    if not valid or unstable:
+        causes: tuple[str, ...] = ("invalid",) if not valid else ("unstable",)
+    else:
+        causes = failure_causes(stats, max_joint_accel, max_jerk_ratio)
+    return not causes, causes
+
+
+@lru_cache(maxsize=16)
+def _fit_style(style: int, n_periodic: int, n_transient: int, method: str) -> RhythmicDMP:
+    """Imitation DMP of a synthetic wiping demonstration (cached: fitting takes ~0.5 s), fitted with the settings
+    the tasks were published with (:data:`rdmp_gym.dmp.fitting.FADE_BEFORE_T`), whatever the library's defaults."""
+    return RhythmicDMP.fit(wiping_demonstration(style=style, rng=0), n_periodic=n_periodic,
+                           n_transient=n_transient, method=method, **FADE_BEFORE_T)
+
+
+def _with_covering_sweep(dmp: RhythmicDMP, transient: float, end: float) -> RhythmicDMP:
+    """``dmp`` with the covering sweep from the end of the transient to :data:`SWEEP_END_MARGIN` s before
+    ``end`` (a DMP that has a sweep keeps it: e.g. a refined ``dmp.json``, whose via points are its imitation)."""
+    if dmp.sweep is not None:
+        if dmp.sweep.n_points != len(COVERING_FIGURE):
+            raise ValueError(f"dmp: its sweep has {dmp.sweep.n_points} via points; the env's sweep action needs the "
+                             f"covering sweep's {len(COVERING_FIGURE)} (rdmp_gym.envs.tasks.wiping.coverage)")
+        return dmp
+    if end - SWEEP_END_MARGIN <= transient:
+        raise ValueError(f"duration: {end:.3g} s leaves no time for the sweep after the transient ({transient:.3g} s)")
+    return dmp.with_sweep(covering_sweep(transient, end - SWEEP_END_MARGIN, dmp.n_dims))
+
+
+def _workspace_excess(path: np.ndarray, workspace: tuple[np.ndarray, np.ndarray]) -> float:
+    """How far (m) ``path [T, 3]`` leaves the ``workspace`` box ``(low [3], high [3])`` at most (0 inside)."""
+    low, high = workspace
+    return float(np.max(np.maximum(low - path, 0.0) + np.maximum(path - high, 0.0)))
+
+
+def _check_reach(spec: ContextSpec, robot: RobotDescription) -> None:
+    """ValueError naming ``context_ranges`` unless every drawable patch (with the pad around its edge) and sponge
+    start lies inside the robot's workspace (the nominal table frame)."""
+    low, high = robot.workspace
+    centre, size = CONTEXT_FIELDS["patch_centre"], CONTEXT_FIELDS["patch_size"]
+    start = CONTEXT_FIELDS["sponge_start"]
+    reach = spec.high[size[0]:size[0] + 2] / 2 + 0.05                       # half the patch + the pad's reach
+    patch_low = spec.low[centre[0]:centre[0] + 2] - reach
+    patch_high = spec.high[centre[0]:centre[0] + 2] + reach
+    starts = slice(start[0], start[0] + 3)
+    if (np.any(patch_low < low[:2]) or np.any(patch_high > high[:2]) or np.any(spec.low[starts] < low)
+            or np.any(spec.high[starts] > high)):
+        raise ValueError(f"context_ranges: the drawn patches {patch_low}..{patch_high} or sponge starts "
+                         f"{spec.low[starts]}..{spec.high[starts]} leave the robot {robot.name!r}'s workspace "
+                         f"{low}..{high} (table frame, m)")
+
+
+def _saved_dmp(dmp: str | RhythmicDMP, workspace: tuple[np.ndarray, np.ndarray]) -> RhythmicDMP:
+    """A 3-D DMP from a ``dmp.json`` path (or as given; of a pose DMP its position), its imitation path checked
+    against ``workspace``."""
+    if not isinstance(dmp, RhythmicDMP):
+        if not Path(dmp).is_file():
+            raise FileNotFoundError(f"dmp: no such file {dmp}")
+        dmp = load_dmp(dmp)
+        dmp = dmp.position if isinstance(dmp, PoseDMP) else dmp
+    if dmp.n_dims != 3:
+        raise ValueError(f"dmp: expected 3 dimensions (x, y, z in the table frame), got {dmp.n_dims}")
+    t = np.arange(0.0, dmp.transients[0].length + 2.0 * dmp.period, 0.01)
+    check_frame(dmp.rollout(t), *workspace, centre_dims=(0, 1), name="dmp")
+    return dmp
+
+
+@dataclass(frozen=True)
+class WipeRecord:
+    """What the wiping task judges of an executed episode beside the tool path
+    (:attr:`ToolPath.record <rdmp_gym.envs.tasks.description.ToolPath>`).
+
+    Attributes:
+        trace: the episode's :class:`~rdmp_gym.envs.tasks.wiping.simulation.WipeTrace` (the simulation hook's).
+        smooth: the commanded motion's :class:`~rdmp_gym.envs.smoothness.Smoothness` (the version's jerk measure).
+        penetration_limit: the penetration (m) of a robot geom into the robot's body or the table beyond which the
+            episode is void.
+    """
+
+    trace: WipeTrace
+    smooth: Smoothness
+    penetration_limit: float
+
+
+class WipingTask(TaskDescription):
+    """Table wiping with a sponge; see the module docstring.
+
+    Args:
+        config: all settings at once (:class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`; default
+            ``EnvConfig()``, the current version).
+        **settings: keywords of the settings (the wiping env's; they change ``config``).
+    """
+
+    name = "Wipe"
+    versions = (1, 2, 3)
+    tool_site = "sponge_tcp"
+    #: the approach and the sweep are action dimensions of the DMP's action map (fixed directions in theta)
+    extras: Mapping[str, float] = {}
+    own_faces = "ArmarWipeEnv, WipeStepEnv and ArmarWipeStepEnv of rdmp_gym.envs.tasks.wiping"
+    #: settings a learner reads, per version (:data:`rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS`)
+    defaults_by_version: ClassVar[Mapping[int, Mapping[str, Mapping[str, Any]]]] = LEARNER_DEFAULTS
+
+    def __init__(self, config: EnvConfig | None = None, **settings: Any):
+        config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
+        #: every setting of the task (saves to and loads from JSON)
+        self.config = config
+        #: what this task version changes (see :mod:`rdmp_gym.envs.tasks.wiping.versions`)
+        self.task_version: TaskVersion = TASK_VERSIONS[config.task.version]
+        self.version = config.task.version
+        #: the robot (:mod:`rdmp_gym.envs.robots`)
+        self.robot: RobotDescription = get_robot(config.robot)
+        self.dmp = self._imitation(config.task)
+        self._set_groups(config.task)
+        #: the scene: the arena, the robot and the task's objects (:meth:`compose`)
+        self.scene = WipeScene(self.robot, composed=self.task_version.composed_scene and config.xml_file is None,
+                               xml_file=config.xml_file)
+        config.check_robot(np.c_[self.scene.joint_lower, self.scene.joint_upper])
+        self._set_timing(config)
+        #: the episode's length (s)
+        self.duration = self.n_steps * self.dt
+        self._set_action(config.task)
+        self.scales = dict(config.task.scales or {})
+        self._set_force_and_reward(config.force, config.reward)
+        self._set_limits(config.task)
+        self.obstacle = config.context.obstacle
+        self.context_spec = ContextSpec(config.context.ranges, table_extent=self.scene.table_extent,
+                                        obstacle=self.obstacle,
+                                        obstacle_probability=config.context.obstacle_probability,
+                                        obstacle_radius=self.scene.obstacle_radius,
+                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
+                                        near_patch=self.task_version.pad_clearance)
+        _check_reach(self.context_spec, self.robot)
+        self.ik = self._path_ik()
+        #: the clearance term that keeps the hand away from the cup (None: off)
+        clearance = config.task.cup_clearance            # validated by TaskConfig: a margin (m), a term or None
+        self.cup_clearance = CupClearance(margin=clearance) if isinstance(clearance, float) else clearance
+        self._hand_points = self._hand() if self.cup_clearance is not None else None
+        self._engage = self.adaptation_settings.engage_height
+        self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
+
+    @classmethod
+    def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
+        """The learner defaults of ``version``."""
+        return cls.defaults_by_version.get(version, {})
+
+    @property
+    def learner_defaults(self) -> Mapping[str, Mapping[str, Any]]:  # type: ignore[override]
+        """The learner defaults of this version."""
+        return self.defaults_for(self.version)
+
+    # ------------------------------------------------------------------ construction stages
+    def _imitation(self, task: TaskConfig) -> RhythmicDMP:
+        """The imitation DMP: a saved one, one fitted to the given demonstration, or the built-in style's."""
+        if task.dmp is not None:
+            return _saved_dmp(task.dmp, self.robot.workspace)
+        if task.demonstration is not None:
+            task.demonstration.check_frame(*self.robot.workspace, centre_dims=(0, 1), name="demonstration")
+            return RhythmicDMP.fit(task.demonstration, n_periodic=task.n_periodic, n_transient=task.n_transient,
+                                   method=task.fit_method, **FADE_BEFORE_T)
+        return _fit_style(task.style, task.n_periodic, task.n_transient, task.fit_method)
+
+    def _set_groups(self, task: TaskConfig) -> None:
+        groups = task.groups
+        if groups is None:
+            groups = DEFAULT_GROUPS + (("sweep",) if self.task_version.sweep else ())
+        #: the DMP parameter groups of theta (the ``approach`` and ``sweep_x``/``sweep_y`` dimensions come after
+        #: them in the action; the ``sweep`` via points have none of their own)
+        self.groups = tuple(group for group in groups if group != "approach")
+        self._approach = "approach" in groups
+        # The demonstrated pattern is centred on its anchor; the env re-anchors it at the patch centre,
+        # keeping the demonstration's height offset of the anchor (0 for a pattern on the surface).
+        self._anchor_z = float(self.dmp.anchor[2])
+
+    def _set_timing(self, config: EnvConfig) -> None:
+        """Physics step, control rate and the episode's control steps."""
+        model, timing, task = self.scene.model, config.timing, config.task
+        if timing.timestep is not None:
+            model.opt.timestep = timing.timestep
+        self.frame_skip = timing.frame_skip_for(model.opt.timestep)
+        self.dt = self.frame_skip * model.opt.timestep
+        self.control_rate = 1.0 / self.dt
+        transient = self.dmp.transients[0].length
+        duration = task.duration
+        if duration is None:
+            n_periods = self.task_version.n_periods if task.n_periods is None else task.n_periods
+            duration = transient + n_periods * self.dmp.period
+        self.n_steps = max(2, round(duration / self.dt))
+        self.times = np.arange(self.n_steps) * self.dt
+        self.periodic = self.times >= transient
+        if not self.periodic.any():
+            raise ValueError(f"duration: {duration} s ends before the transient ({transient:.3g} s)")
+
+    def _set_action(self, task: TaskConfig) -> None:
+        """The action map: the parameter groups, the approach and the covering sweep."""
+        transient = self.dmp.transients[0].length
+        directions = {}
+        if "sweep" in self.groups:
+            self.dmp = _with_covering_sweep(self.dmp, transient, self.times[-1])
+        if self._approach:
+            directions["approach"] = approach_direction(self.dmp, self.groups, self.times, height=1.0)
+        if "sweep" in self.groups:
+            directions.update(sweep_directions(self.dmp, self.groups))
+        self.action_map = ActionMap(self.dmp, self.groups, task.scales, directions, driven=("sweep",) if
+                                    "sweep" in self.groups else ())
+
+    def _set_force_and_reward(self, force: ForceConfig, reward: RewardConfig) -> None:
+        self.force_band = force.force_band
+        self.adaptation_settings = ForceAdaptationSettings(target_force=force.target_force, enabled=force.adaptation,
+                                                           gain=force.admittance_gain)
+        self.force_learning = (ForceProfileSettings() if force.force_learning is True
+                               else force.force_learning or None)
+        self.reward_settings = RewardSettings(target_force=force.target_force,
+                                              max_joint_accel=self.robot.max_joint_accel,
+                                              force_sigma=force.force_sigma, max_force=force.force_band[1],
+                                              event_charge=self.task_version.event_charge,
+                                              coverage_timing=reward.coverage_timing)
+        self.reward_weights = RewardWeights.from_mapping(reward.weights)
+
+    def _set_limits(self, task: TaskConfig) -> None:
+        self.cell_size = task.cell_size
+        self.limit_margin = task.limit_margin
+        self.ik_tolerance = task.ik_tolerance
+        self.max_joint_speed = self.robot.max_joint_speed if task.max_joint_speed is None else task.max_joint_speed
+        self.wear_rate = task.wear_rate
+        self.penetration_limit = task.penetration_limit
+
+    def _path_ik(self) -> PathIK:
+        """The path IK of the robot's chain to the sponge's face centre, with its arm-from-body clearance."""
+        scene, robot = self.scene, self.robot
+        joints = tuple(scene.name("robot", n) for n in robot.joints)
+        geoms = robot.body_clearance
+        bodies = () if geoms is None else tuple(scene.name("robot", n) for n in (geoms.box_body, *geoms.capsule_bodies))
+        kinematics = ChainKinematics(scene.model, scene.name("tool", "sponge_tcp"), joints, bodies=bodies)
+        clearance = None if geoms is None else BodyClearance(
+            scene.model, kinematics, scene.name("robot", geoms.box),
+            tuple(scene.name("robot", n) for n in geoms.capsules))
+        return PathIK(kinematics, robot.posture, robot.mobility, clearance=clearance)
+
+    def hand_points(self) -> HandPoints:
+        """Points on the robot's hand geoms and the sponge, for the cup clearance (built on first use)."""
+        if self._hand_points is None:
+            self._hand_points = self._hand()
+        return self._hand_points
+
+    def _hand(self) -> HandPoints:
+        """Points on the robot's hand geoms and the sponge, for the cup clearance."""
+        scene = self.scene
+        geoms = (*(scene.name("robot", n) for n in self.robot.hand_geoms), scene.name("tool", "sponge"))
+        return HandPoints(scene.model, scene.qpos_adr, geoms)
+
+
+    def force_adaptation(self) -> ForceAdaptation:
+        """A fresh force controller of this env: the admittance law on the pressing depth (with the learned depth
+        profile when ``force_learning`` is on)."""
+        if self.force_learning is None:
+            return ForceAdaptation(self.adaptation_settings, self.dt)
+        return ForceProfileLearning(self.adaptation_settings, self.dt, self.dmp.period, self.dmp.transients[0].phi0,
+                                    self.force_learning)
+
+    @property
+    def success_joint_accel(self) -> float | None:
+        """The peak joint acceleration (rad/s²) that ``is_success`` allows (None: not checked, v1)."""
+        return self.reward_settings.max_joint_accel if self.task_version.executable_success else None
+
+    # ------------------------------------------------------------------ the plan
+    def action_time_weights(self) -> np.ndarray:
+        """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
+        weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)[:, self.action_map.free]
+        if self._approach:                   # the approach dimension acts where it lifts the path
+            lift = lift_profile(self.times, self.dmp.transients[0].length)
+            weights = np.c_[weights, lift / lift.max()]
+        if "sweep" in self.groups:           # sweep_x, sweep_y act where they move the anchor
+            unit = np.c_[COVERING_FIGURE, np.zeros((len(COVERING_FIGURE), self.dmp.n_dims - 2))]
+            moved = np.abs(self.dmp.sweep.offsets(self.times, unit[None])[0, :, :2])
+            weights = np.c_[weights, moved / np.maximum(moved.max(axis=0), 1e-12)]
+        return weights
+
+    def rollout_path(self, theta: np.ndarray, context: Context) -> np.ndarray:
+        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in ``context``.
+
+        The DMP is anchored at the patch centre and starts at the sponge start with ``start_blend``:
+        the offset from the demonstrated start (relative to the anchor) is faded out over the
+        transient, so the path starts where the sponge is, keeps the demonstrated approach's shape
+        and is the DMP's own periodic pattern from the end of the transient on.
+        """
+        anchor = np.array([*context.patch_centre, self._anchor_z])
+        return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
+                                      y0=context.sponge_start, anchor=anchor, start_blend=True)[0]
+
+    def imitation_path(self, context: Context) -> np.ndarray:
+        """The imitation's path ``[T_ctrl, 3]`` in ``context`` (``rollout_path(theta0, context)`` to round-off).
+
+        With the parameters fixed, the rollout is affine in the start and the anchor (a linear transformation
+        system, a start offset blended out linearly), so the env rolls out the imitation once for a reference
+        context and once per unit shift of the 5 context numbers it depends on (start x, y, z; anchor x, y),
+        and each context's path is that affine combination: no DMP rollout per episode.
+        """
+        if self._imitation_paths is None:
+            shifts = np.zeros((6, 5))
+            shifts[1:] = _IMITATION_SHIFT * np.eye(5)
+            anchors = np.c_[shifts[:, 3:], np.full(6, self._anchor_z)]
+            theta = np.broadcast_to(self.action_map.theta0, (6, self.action_map.theta0.size))
+            paths = self.dmp.rollout_batch(theta, self.times, groups=self.groups, y0=shifts[:, :3], anchor=anchors,
+                                           start_blend=True)
+            self._imitation_paths = (paths[0], (paths[1:] - paths[0]) / _IMITATION_SHIFT)
+        base, unit = self._imitation_paths
+        shift = np.r_[context.sponge_start, context.patch_centre]
+        return base + np.tensordot(shift, unit, axes=1)
+
+    def solve_path(self, path: np.ndarray) -> IKResult:
+        """The path IK of a sponge path ``[T, 3]`` (nominal table frame): the joint path the env plans for it."""
+        world = self.scene.to_world(path)
+        weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
+        return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
+
+    def _cup(self) -> Cup | None:
+        """The episode's cup as it stands before the wipe (world frame), or None without one."""
+        if self.context is None or not self.context.obstacle:
+            return None
+        origin, rot = self.scene.table_frame(actual=True)
+        base = origin + rot @ np.r_[self.context.obstacle_position, 0.0]
+        return Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+
+    def cup(self, context: Context | None) -> Cup | None:
+        """The cup of ``context`` as it stands before the wipe (world frame), or None without one."""
+        if context is None or not context.obstacle:
+            return None
+        origin, rot = self.scene.table_frame(actual=True)
+        base = origin + rot @ np.r_[context.obstacle_position, 0.0]
+        return Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+
+    # ------------------------------------------------------------------ the judgement
+    def statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
+        """The episode's statistics (:mod:`rdmp_gym.envs.tasks.wiping.info`) from its trace and the smoothness of its
+        path."""
+        live = np.arange(self.n_steps) < trace.steps
+        per = self.periodic & live
+        force = trace.contact_force[per]
+        low, high = self.force_band
+        target = self.reward_settings.target_force
+        stats = {
+            "coverage": trace.coverage,
+            "force_mean": float(force.mean()) if force.size else 0.0,
+            "force_sd": float(force.std()) if force.size else 0.0,
+            "force_error_mean": float(np.mean(np.abs(force - target))) if force.size else 0.0,
+            "force_in_band_fraction": float(np.mean((force >= low) & (force <= high))) if force.size else 0.0,
+            "contact_fraction": float(np.mean(force >= self.reward_settings.contact_threshold)) if force.size else 0.0,
+            "max_force": float(trace.contact_force[live].max()),
+            "max_wrist_force": float(np.abs(trace.wrist_force[live]).max()),
+            "impact_force": trace.impact_force,
+            "jerk_ratio": smooth.jerk_ratio,
+            "peak_joint_accel": float(smooth.joint_accel.max()),
+            "arm_collision_fraction": float(np.mean(trace.arm_contact[live])),
+            "self_collision_fraction": float(np.mean(trace.self_contact[live])),
+            "penetration": trace.penetration,
+            "obstacle_touch_steps": int(np.sum(trace.obstacle_contact)),
+            "obstacle_shift": float(trace.obstacle_shift.max()),
+            "joint_limit_fraction": float(np.mean(trace.at_limit[live])),
+            "steps": int(trace.steps),
+            "force_trace": trace.contact_force.copy(),
+            "dirt_removed_trace": trace.removed.copy(),
+        }
+        if trace.fine_force is not None:
+            stats["fine_force_trace"] = trace.fine_force.copy()
+        return stats
+
+    # ------------------------------------------------------------------ the description
+    def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
+        """The sponge tool on the robot's tool mount and the sensors the task reads
+        (:func:`~rdmp_gym.envs.tasks.wiping.arena.add_task`); the table and the cup stand in the wiping arena."""
+        add_task(spec, robot, robot_prefix, tool_prefix)
+
+    def imitation(self) -> RhythmicDMP:
+        """The imitation DMP (with the covering sweep where the action has it)."""
+        return self.dmp
+
+    def context_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The observation's bounds ``([13], [13])``."""
+        return self.context_spec.bound_low, self.context_spec.bound_high
+
+    def sample_context(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Context:
+        """A context drawn with ``rng`` (``options`` fix fields; see :mod:`rdmp_gym.envs.tasks.wiping.context`)."""
+        return self.context_spec.sample(rng, options)
+
+    def place(self, model: mujoco.MjModel, context: Context) -> None:
+        """Tilt and raise the table and stand (or park) the cup for ``context`` (the scene's ``model``)."""
+        if model is not self.scene.model:
+            raise ValueError("model: the wiping task places its objects in its own scene's model")
+        self.scene.set_table(TablePose(context.table_height, *context.table_tilt))
+        self.scene.place_obstacle(context.obstacle_position if context.obstacle else None)
+
+    def dirt_cells(self, context: Context) -> np.ndarray:
+        """The dirt cells' centres ``[N, 3]`` (world) of ``context`` on the placed table."""
+        cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
+        origin, rot = self.scene.table_frame(actual=True)
+        return np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
+
+    def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: Context, times: np.ndarray,
+             table_origin: np.ndarray) -> TaskPlan:
+        """The sponge path of ``theta`` in ``context`` (:meth:`rollout_path`, nominal table frame), in the control
+        frame (the nominal table origin, the actual tilt)."""
+        if dmp is not self.dmp or times is not self.times:
+            raise ValueError("dmp, times: the wiping task plans with its own imitation DMP and control times")
+        return TaskPlan(self.rollout_path(theta, context), *self.scene.control_frame())
+
+    def evaluate(self, path: ToolPath, context: Context, sensor: Mapping[str, slice]) -> Outcome:
+        """The reward terms, cost trace, statistics (info) and failure causes of an executed episode, from its
+        :class:`WipeRecord` (``path.record``); an episode in which a robot geom penetrated the robot's body or the
+        table beyond the limit is void (``info["valid"] = False``, reason ``"penetration"``)."""
+        record: WipeRecord = path.record
+        trace, smooth = record.trace, record.smooth
+        info = self.statistics(trace, smooth)
+        traces: dict[str, np.ndarray] = {}
+        info["cost_terms"] = traces
+        valid = trace.penetration <= record.penetration_limit
+        if not valid:
+            terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights, traces)
+            if self.task_version.void_coverage:
+                info["simulated_coverage"], info["coverage"] = info["coverage"], 0.0
+        else:
+            terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
+        info["valid"], info["invalid_reason"] = valid, "" if valid else "penetration"
+        causes = outcome(info, valid, trace.unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)[1]
+        return Outcome(terms, cost, info, causes)
+
+    def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's workspace box (nominal table frame)."""
+        return robot.workspace
+
+
+#: Shift (m) of each context number for the affine basis of :meth:`WipingTask.imitation_path`.
+_IMITATION_SHIFT = 0.1
