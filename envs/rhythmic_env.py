@@ -19,8 +19,8 @@
    per-control-step cost (``info["cost_trace"]``, summing to ``-reward``), ``info["is_success"]``,
    ``info["failure_causes"]`` and the task's own info keys.
 
-The task's own attributes and methods read through the face (``env.unwrapped.task_version`` is
-``env.unwrapped.task.task_version``) where the face has none of that name.
+The task's own attributes and methods read and its attributes write through the face where the face has none of
+that name (``env.unwrapped.task_version`` is ``env.unwrapped.task.task_version``).
 
 Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`TaskDescription.render_overlay`),
 ``"depth_array"`` (depth in m) or ``"human"`` (MuJoCo's viewer, following every control step; needs a display);
@@ -119,6 +119,7 @@ class RhythmicTaskEnv(gym.Env):
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.frames: list[np.ndarray] = []
         self.record_frames = bool(record_frames)
+        self._faced = True                    # from here on the task's own attributes write through the face
         self.context: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
@@ -130,6 +131,16 @@ class RhythmicTaskEnv(gym.Env):
         if task is None or (name.startswith("__") and name.endswith("__")):
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         return getattr(task, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set the task's own attribute ``name`` where the face has none (``env.unwrapped.fine_force = True``), once
+        the face is built; else the face's."""
+        state = self.__dict__
+        if (state.get("_faced") and name not in state and not hasattr(type(self), name)
+                and hasattr(state["task"], name)):
+            setattr(state["task"], name, value)
+        else:
+            super().__setattr__(name, value)
 
     # ------------------------------------------------------------------ action <-> parameters
     def _check_action(self, action: Any) -> np.ndarray:
@@ -156,14 +167,9 @@ class RhythmicTaskEnv(gym.Env):
         return slices
 
     def action_time_weights(self) -> np.ndarray:
-        """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1] (the task's
-        own dimensions act throughout)."""
-        weights = self.dmp.param_time_weights(self.times, groups=self.task.groups, transient=0,
-                                              stop_at=self._nominal_stop())[:, self.action_map.free]
-        return np.c_[weights, np.ones((self.n_steps, len(self.extra_scales)))]
-
-    def _nominal_stop(self) -> float | None:
-        return None if self.dmp.ending is None else self.task.duration - 2.0 * self.dmp.period - 1.0
+        """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1]
+        (:meth:`TaskDescription.action_time_weights`)."""
+        return self.task.action_time_weights(self.dmp, self.times, self.action_map)
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -249,7 +255,10 @@ class RhythmicTaskEnv(gym.Env):
             raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
         plan = self.imitation_plan
         given = TaskPlan(path, plan.origin, plan.rotation, plan.extras)
-        return self._execute(given, {"params": None, "extras": None})
+        info: dict[str, Any] = {"params": None}
+        if len(self.extra_scales):
+            info["extras"] = None
+        return self._execute(given, info)
 
     def solve_plan(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
         """The joint path of ``world [T, 3]``, the tool's axis along the task frame's z (converged: a rhythmic
@@ -257,7 +266,9 @@ class RhythmicTaskEnv(gym.Env):
         return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS, coarse_iterations=150)
 
     def _evaluate(self, theta: np.ndarray, extras: np.ndarray) -> tuple[float, dict]:
-        info: dict[str, Any] = {"params": theta.copy(), "extras": extras.copy()}
+        info: dict[str, Any] = {"params": theta.copy()}
+        if len(self.extra_scales):
+            info["extras"] = extras.copy()
         rejection = self.task.check_params(theta)
         if rejection is not None:
             return self._invalid(info, rejection)

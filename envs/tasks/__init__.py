@@ -56,6 +56,14 @@ class TaskEntry:
             return {}
         return factory.face_settings(robot, version)
 
+    def typed_settings(self, settings: Any) -> Any:
+        """The task's typed record of an env's settings
+        (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.typed_settings`), or None."""
+        factory = self._factory()
+        if not (isinstance(factory, type) and issubclass(factory, TaskDescription)):
+            return None
+        return factory.typed_settings(settings)
+
     def face_specs(self, robot: str, version: int) -> tuple[tuple[str, dict], tuple[str, dict]] | None:
         """``((episodic entry point, keywords), (step entry point, keywords))`` of the task on ``robot`` at
         ``version``, or None where it has no ids there (the rhythmic face's for a task without ``faces``)."""

@@ -201,6 +201,13 @@ class TaskDescription(ABC):
         (default: none; a task whose description depends on the robot or the version takes them here)."""
         return {}
 
+    @classmethod
+    def typed_settings(cls, settings: Mapping[str, Any]) -> Any:
+        """The settings of an env of the task (the face's keywords but ``task``) as the task's typed record, checked
+        without building the task, or None where the task has none (default: its keywords are checked by building
+        the description)."""
+        return None
+
     @abstractmethod
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
         """Add the task to the room ``spec`` (the robot already attached with ``robot_prefix``): its tool on the
@@ -258,6 +265,14 @@ class TaskDescription(ABC):
         n_steps = max(2, round(self.duration / dt))
         return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt,
                      ActionMap(self.imitation(), self.groups, self.scales), scene.path_ik())
+
+    def action_time_weights(self, dmp: RhythmicDMP, times: np.ndarray, action_map: ActionMap) -> np.ndarray:
+        """How active each action dimension is at the control times ``times [T]``, ``[T, n]`` in [0, 1] (default: the
+        DMP's parameter groups, the stop nominally ``2`` periods ``+ 1`` s before the end, then the task's own
+        dimensions acting throughout)."""
+        stop = None if dmp.ending is None else self.duration - 2.0 * dmp.period - 1.0
+        weights = dmp.param_time_weights(times, groups=self.groups, transient=0, stop_at=stop)[:, action_map.free]
+        return np.c_[weights, np.ones((len(times), len(self.extras)))]
 
     def rest_pose(self, context: Any, plan: TaskPlan, face: Any) -> np.ndarray:
         """The joints ``[n]`` the robot rests at when an episode starts in ``context``; ``plan`` is the imitation's

@@ -13,7 +13,7 @@ from typing import Any
 
 __all__ = ["DEPRECATED", "EPISODIC", "LEGACY_STEP", "STEP", "faces"]
 
-EPISODIC = "rdmp_gym.envs.tasks.wiping.env:ArmarWipeEnv"
+EPISODIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 STEP = "rdmp_gym.envs.tasks.wiping.step:WipeStepEnv"
 LEGACY_STEP = "rdmp_gym.envs.tasks.wiping.legacy_step:ArmarWipeStepEnv"
 #: ``rdmp_gym/ArmarWipe-v0``: v1 without the cup, with a DeprecationWarning
@@ -28,7 +28,7 @@ def faces(robot: str, version: int) -> tuple[tuple[str, dict[str, Any]], tuple[s
     if version < 3 and robot != "armar3":
         return None
     on_robot = {} if robot == "armar3" else {"robot": robot}
-    episodic = (EPISODIC, {"obstacle": True, "version": version, **on_robot})
+    episodic = (EPISODIC, {"task": "wipe", "obstacle": True, "version": version, **on_robot})
     shift = {} if version == 1 else {"max_shift": _STEP_SHIFT}
     step = (STEP if version >= 3 else LEGACY_STEP, {"version": version, **shift, **on_robot})
     return episodic, step
