@@ -12,11 +12,15 @@ simulation core, :mod:`~rdmp_gym.envs.tasks.wiping.simulation`), the judgement (
 <rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS>`). What each version changes is
 :mod:`~rdmp_gym.envs.tasks.wiping.versions`.
 
-The wiping ids run on the wiping face (:class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv`, its step twin
-:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`), which reads the task from this description and runs the
-simulation core with the task's hook: the published versions keep their scene (the arena composed before the robot,
-or the robot's hand-merged scene in v1 and v2), their path checks and their force controller, so that every number
-they published reproduces bit for bit.
+The wiping ids' episodic envs are the generic face (:class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`), which runs
+this description's hooks: its stage (the version's scene: the arena composed before the robot, or the robot's
+hand-merged scene in v1 and v2; the action map with the approach and the sweep), the rest pose at the sponge start,
+the amplitude check (``"r0"``), the path checks (the sponge flat within the engage height, the cup clearance), the
+wiping hook on the simulation core, the invalid penalty and the dirt drawn on the frames, so that every number the
+published versions gave reproduces bit for bit. The episode's state the task keeps (:attr:`WipingTask.context`, the
+dirt) is set by :meth:`WipingTask.place`. The step twins are the task's own
+(:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`, v1/v2
+:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`) on that face.
 """
 
 from __future__ import annotations
