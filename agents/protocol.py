@@ -121,11 +121,12 @@ def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] |
     ``ArmarWipe-v2``)."""
     env.reset(seed=int(seed), options=None if options is None else dict(options))
     base = env.unwrapped
-    if hasattr(base, "action_path"):          # an env whose path depends on more than the DMP's parameters
+    if hasattr(base, "executed_path"):        # a task that may change the planned path before executing it
+        path = base.executed_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
+    elif hasattr(base, "action_path"):        # an env whose path depends on more than the DMP's parameters
         path = base.action_path(np.asarray(action, dtype=np.float64))
     else:
-        params = base.action_to_params(np.asarray(action, dtype=np.float64))
-        path = base.executed_path(params) if hasattr(base, "executed_path") else base.rollout_path(params)
+        path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
     dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
     version = getattr(base, "task_version", None)
     if version is not None and version.speed_normalised_jerk:

@@ -164,7 +164,7 @@ def _summary(scores: dict[str, np.ndarray]) -> dict[str, float]:
 def _first_touch(env, seeds: np.ndarray) -> list[float]:
     """Time (s) of the first arm-cup contact of the coupling baseline per seed (-1: none)."""
     from obstacle_baseline import run_lifting
-    from rdmp_gym.envs.tasks.wiping import env as wipe_env
+    from rdmp_gym.envs.tasks.wiping import task as wipe_env
 
     original, times = wipe_env.simulate_wipe, []
 

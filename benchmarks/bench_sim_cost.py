@@ -25,7 +25,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import gymnasium as gym
 import mujoco
 import numpy as np
-import rdmp_gym.envs  # registers the ids; its wipe_env module is patched below
+import rdmp_gym.envs  # registers the ids; the wiping task's module is patched below
 import rdmp_gym.envs.servo as servo
 import rdmp_gym.envs.tasks.wiping.simulation as wiping
 from output import add_save_argument, results_dir
@@ -58,12 +58,12 @@ class _Recorder:
             return trace
 
         wiping.WipeSimulation.finish = recording_finish
-        rdmp_gym.envs.tasks.wiping.env.simulate_wipe = timed_simulate
+        rdmp_gym.envs.tasks.wiping.task.simulate_wipe = timed_simulate
         return self
 
     def __exit__(self, *exc: object) -> None:
         wiping.WipeSimulation.finish = self._finish
-        rdmp_gym.envs.tasks.wiping.env.simulate_wipe = self._simulate
+        rdmp_gym.envs.tasks.wiping.task.simulate_wipe = self._simulate
 
 
 class _ServoRecorder:
@@ -101,7 +101,7 @@ class _ServoRecorder:
 def _start_state(unwrapped: gym.Env, seed: int) -> None:
     """Reset ``unwrapped`` to context ``seed`` with the arm at rest where the imitation's episode starts."""
     unwrapped.reset(seed=seed)
-    if hasattr(unwrapped, "action_path"):          # a rhythmic task: the face solves its plan
+    if not hasattr(unwrapped, "solve_path"):       # a task on the face's own IK: the face solves its plan
         plan = unwrapped.plan(unwrapped.action_map.theta0, np.zeros(len(unwrapped.extra_scales)))
         unwrapped.scene.set_arm_state(unwrapped.solve_plan(plan, plan.world()).q[0])
         return
@@ -130,7 +130,7 @@ def _replay(env: gym.Env, seed: int, targets: list[np.ndarray], fine: list[bool]
 def measure(env_id: str, seeds: list[int], repeats: int) -> dict:
     """Best-of-``repeats`` CPU seconds per episode: env.step, the simulation core, the bare replay."""
     env = gym.make(env_id)
-    recording = _ServoRecorder if hasattr(env.unwrapped, "action_path") else _Recorder
+    recording = _Recorder if hasattr(env.unwrapped, "solve_path") else _ServoRecorder      # the wiping hook's
     rows = []
     for seed in seeds:
         best = {"episode": np.inf, "core": np.inf, "bare": np.inf}

@@ -1,10 +1,10 @@
 """Gymnasium environments of rdmp-gym: rhythmic tasks with a rhythmic DMP, on ARMAR-III or a Franka Panda.
 
 Importing this package registers the ids (:mod:`rdmp_gym.envs.registration`, string entry points) of the tasks of
-:mod:`rdmp_gym.envs.tasks`: table wiping (:mod:`rdmp_gym.envs.tasks.wiping`, on its own envs), the current
-``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3`` and their step twins, the published ``-v2`` and ``-v1``;
-drumming to a changing beat, ``rdmp_gym/ArmarDrum-v1`` and ``rdmp_gym/PandaDrum-v1`` and their step twins (on the
-face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`).
+:mod:`rdmp_gym.envs.tasks`, every episodic id on the face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`:
+table wiping (:mod:`rdmp_gym.envs.tasks.wiping`), the current ``rdmp_gym/ArmarWipe-v3`` and ``rdmp_gym/PandaWipe-v3``
+and their step twins (the task's own), the published ``-v2`` and ``-v1``; drumming to a changing beat,
+``rdmp_gym/ArmarDrum-v1`` and ``rdmp_gym/PandaDrum-v1`` and their step twins.
 An episodic env's ``step`` runs one whole DMP rollout in MuJoCo (``terminated=True``)::
 
     import gymnasium as gym

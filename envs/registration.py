@@ -17,7 +17,6 @@ import gymnasium as gym
 
 from .tasks import TASKS
 from .tasks.wiping.faces import DEPRECATED as _DEPRECATED
-from .tasks.wiping.faces import EPISODIC as _WIPE
 
 __all__ = [
     "DEPRECATED_ENV_ID",
@@ -109,10 +108,11 @@ def find_spec(env_id: str) -> gym.envs.registration.EnvSpec:
 def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     """The settings ``gym.make(env_id, **kwargs)`` builds its env with, validated without building it.
 
-    The wiping task's episodic ids give their typed :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`; the other
-    ids of this package give the keywords (registered and given), checked against the env's signature and, for a task of
-    the
-    rhythmic face, against its description; ids of other packages give the keywords as they are, checked to be
+    The episodic ids of a task with a typed record of its settings give it
+    (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.typed_settings`: the wiping task's
+    :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`, also for the deprecated v0); the other ids of this package
+    give the keywords (registered and given), checked against the env's signature and, for a task of the rhythmic
+    face, against its description; ids of other packages give the keywords as they are, checked to be
     keywords of the env or settings of the rhythmic black-box wrapper (:func:`~rdmp_gym.envs.blackbox.split_settings`).
     Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take or a value
     it refuses.
@@ -125,10 +125,14 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
 
             split_settings(env_id, kwargs)
         return settings
-    if spec.entry_point in (_WIPE, _DEPRECATED):
+    if spec.entry_point == _DEPRECATED:
         from .tasks.wiping.settings import EnvConfig
 
         return EnvConfig.from_kwargs(**settings)
+    if spec.entry_point == _RHYTHMIC and settings.get("task") in TASKS:
+        typed = TASKS[settings["task"]].typed_settings({k: v for k, v in settings.items() if k != "task"})
+        if typed is not None:
+            return typed
     creator = gym.envs.registration.load_env_creator(spec.entry_point)
     try:
         bound = inspect.signature(creator).bind(**settings)

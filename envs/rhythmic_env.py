@@ -8,16 +8,23 @@
    :mod:`rdmp_gym.envs.action`) and the task's own values (its ``extras``, ``scale * a`` each); ``a = 0`` is the
    imitation of the task's demonstration;
 2. the task plans the tool path in this episode's context (:meth:`TaskDescription.plan`);
-3. the path is checked: finite, inside the robot's reach, solvable by the inverse kinematics with the tool's axis
-   along the task frame's, joint speeds within the robot's; an invalid path returns a graded penalty at once
-   (``info["valid"] = False``);
+3. the task checks the path and solves its joints (:meth:`TaskDescription.solve`; by default: finite, inside the
+   robot's reach, solvable by the inverse kinematics with the tool's axis along the task frame's, joint speeds within
+   the robot's); a refused path returns the task's graded penalty at once (:meth:`TaskDescription.invalid`,
+   ``info["valid"] = False``);
 4. the simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation`) executes the joint path with the servos'
-   velocity feed-forward, recording every sensor at every physics step;
+   velocity feed-forward and the task's hook (:meth:`TaskDescription.simulate`; by default the core's own record of
+   every sensor at every physics step);
 5. the task judges the record (:meth:`TaskDescription.evaluate`): the reward terms (``info["reward_terms"]``), the
    per-control-step cost (``info["cost_trace"]``, summing to ``-reward``), ``info["is_success"]``,
    ``info["failure_causes"]`` and the task's own info keys.
 
-Rendering: ``render_mode="rgb_array"``; :meth:`RhythmicTaskEnv.record_episode` writes a video of one episode.
+The task's own attributes and methods read and its attributes write through the face where the face has none of
+that name (``env.unwrapped.task_version`` is ``env.unwrapped.task.task_version``).
+
+Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`TaskDescription.render_overlay`),
+``"depth_array"`` (depth in m) or ``"human"`` (MuJoCo's viewer, following every control step; needs a display);
+:meth:`RhythmicTaskEnv.record_episode` writes a video of one episode.
 """
 
 from __future__ import annotations
@@ -30,23 +37,19 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from .action import ActionMap, checked_action
-from .controller import JointTargetPlan
+from .action import checked_action
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
 from .robots import RobotDescription, get_robot
-from .servo import ServoSimulation
 from .smoothness import Smoothness
-from .task_scene import TaskScene
-from .tasks import get_task
-from .tasks.description import TaskDescription, TaskPlan, ToolPath
+from .tasks import TASKS, get_task
+from .tasks.description import Rejection, TaskDescription, TaskPlan
+from .viewer import HumanViewer
 
 __all__ = ["RhythmicTaskEnv"]
 
 logger = logging.getLogger(__name__)
 
-#: IK residuals (position m, angle rad) beyond which a path is unreachable
-_IK_TOLERANCE = (0.01, 0.1)
 #: IK iterations on the whole path after the coarse pass (12: the joint accelerations have converged)
 _IK_FINE_ITERATIONS = 12
 
@@ -55,20 +58,28 @@ class RhythmicTaskEnv(gym.Env):
     """Episodic rhythmic task on a robot; see the module docstring.
 
     Args:
-        task: a registered task name (``"drum"``) or a :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
+        task: a registered task name (``"drum"``, ``"wipe"``) or a
+            :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
         robot: a registered robot name (``"armar3"``, ``"panda"``) or a ``RobotDescription``.
         version: the task's version (one of its ``versions``; ``gym.make`` of an id sets it).
-        render_mode: ``None`` or ``"rgb_array"``; width, height, camera: of the rendered frames.
-        frame_stride: :meth:`record_episode` keeps a frame every this many control steps.
-        **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``).
+        render_mode: ``None``, ``"rgb_array"``, ``"depth_array"`` or ``"human"``; width, height (default the
+            task's :attr:`~rdmp_gym.envs.tasks.description.TaskDescription.frame_size`), camera: of the rendered
+            frames.
+        record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how many control
+            steps (also :meth:`record_episode`'s).
+        **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``, the wiping
+            task's ``obstacle``).
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
 
     def __init__(self, task: str | TaskDescription = "drum", robot: str | RobotDescription = "armar3",
-                 version: int = 1, render_mode: str | None = None, width: int = 480, height: int = 360,
-                 camera: str = "front", frame_stride: int = 4, **task_settings: Any):
+                 version: int = 1, render_mode: str | None = None, width: int | None = None,
+                 height: int | None = None, camera: str | None = "front", frame_stride: int = 4,
+                 record_frames: bool = False, **task_settings: Any):
         super().__init__()
+        if isinstance(task, str) and task in TASKS:
+            task_settings = {**TASKS[task].face_settings(robot, version), **task_settings}
         self.task: TaskDescription = get_task(task, **task_settings)
         if self.task.own_faces is not None:
             raise ValueError(f"task: {self.task.name!r} runs on its own envs ({self.task.own_faces}), not on the "
@@ -78,39 +89,58 @@ class RhythmicTaskEnv(gym.Env):
             raise ValueError(f"version: the task {self.task.name!r} has the versions {list(self.task.versions)}, "
                              f"got {version!r}")
         self.version = version
-        if render_mode not in (None, "rgb_array"):
-            raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode: expected None or one of {self.metadata['render_modes']}, "
+                             f"got {render_mode!r}")
         self.render_mode = render_mode
-        self.scene = TaskScene(self.robot, self.task)
         self.dmp = self.task.imitation()
-        self._set_timing()
-        self.action_map = ActionMap(self.dmp, self.task.groups, self.task.scales)
+        stage = self.task.stage(self.robot)
+        self.scene = stage.scene
+        self.frame_skip, self.dt, self.n_steps, self.times = stage.frame_skip, stage.dt, stage.n_steps, stage.times
+        self.control_rate = 1.0 / self.dt
+        self.action_map = stage.action_map
         self.extra_scales = np.array(list(self.task.extras.values()), dtype=np.float64)
         size = self.action_map.size + len(self.extra_scales)
         self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
         low, high = self.task.context_bounds()
         self.observation_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
-        self.ik = self.scene.path_ik()
-        self._lead = self.scene.servo_lead()
+        self.ik = stage.ik
+        #: the servos' velocity feed-forward gains ``[n]`` (s)
+        self.servo_lead = self.scene.servo_lead()
         self.workspace = self.task.workspace(self.robot)
         self.frame_stride = int(frame_stride)
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.control_rate / self.frame_stride))}
-        self._renderer = SceneRenderer(self.scene, width, height, camera) if render_mode else None
-        self._render_args = (width, height, camera)
+        default_width, default_height = self.task.frame_size
+        self._render_args = (default_width if width is None else width, default_height if height is None else height,
+                             camera)
+        self._renderer: SceneRenderer | None = None
+        self._viewer = HumanViewer(self.scene) if render_mode == "human" else None
+        if render_mode in ("rgb_array", "depth_array") or record_frames:
+            self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.frames: list[np.ndarray] = []
-        self.record_frames = False
+        self.record_frames = bool(record_frames)
+        self._faced = True                    # from here on the task's own attributes write through the face
         self.context: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
 
-    def _set_timing(self) -> None:
-        model = self.scene.model
-        self.frame_skip = max(1, round(1.0 / (self.task.control_rate * model.opt.timestep)))
-        self.dt = self.frame_skip * model.opt.timestep
-        self.control_rate = 1.0 / self.dt
-        self.n_steps = max(2, round(self.task.duration / self.dt))
-        self.times = np.arange(self.n_steps) * self.dt
+    def __getattr__(self, name: str) -> Any:
+        """The task's own attribute ``name`` where the face has none (``env.unwrapped.task_version``)."""
+        task = self.__dict__.get("task")
+        if task is None or (name.startswith("__") and name.endswith("__")):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        return getattr(task, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set the task's own attribute ``name`` where the face has none (``env.unwrapped.fine_force = True``), once
+        the face is built; else the face's."""
+        state = self.__dict__
+        if (state.get("_faced") and name not in state and not hasattr(type(self), name)
+                and hasattr(state["task"], name)):
+            setattr(state["task"], name, value)
+        else:
+            super().__setattr__(name, value)
 
     # ------------------------------------------------------------------ action <-> parameters
     def _check_action(self, action: Any) -> np.ndarray:
@@ -137,14 +167,9 @@ class RhythmicTaskEnv(gym.Env):
         return slices
 
     def action_time_weights(self) -> np.ndarray:
-        """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1] (the task's
-        own dimensions act throughout)."""
-        weights = self.dmp.param_time_weights(self.times, groups=self.task.groups, transient=0,
-                                              stop_at=self._nominal_stop())[:, self.action_map.free]
-        return np.c_[weights, np.ones((self.n_steps, len(self.extra_scales)))]
-
-    def _nominal_stop(self) -> float | None:
-        return None if self.dmp.ending is None else self.task.duration - 2.0 * self.dmp.period - 1.0
+        """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1]
+        (:meth:`TaskDescription.action_time_weights`)."""
+        return self.task.action_time_weights(self.dmp, self.times, self.action_map)
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -157,8 +182,7 @@ class RhythmicTaskEnv(gym.Env):
         self.task.place(self.scene.model, self.context)
         self.imitation_plan = self.plan(self.action_map.theta0, np.zeros(len(self.extra_scales)))
         self._imitation_jerk = None
-        start = self.solve_plan(self.imitation_plan, self.imitation_plan.world()[:1])
-        self.scene.set_arm_state(start.q[0])
+        self.scene.set_arm_state(self.task.rest_pose(self.context, self.imitation_plan, self))
         self.frames = []
         return self._observation(), {"context": self.context.vector()}
 
@@ -173,27 +197,38 @@ class RhythmicTaskEnv(gym.Env):
         return self._observation(), reward, True, False, info
 
     def render(self) -> np.ndarray | None:
-        """The current state as an RGB frame ``[height, width, 3]`` uint8."""
+        """The current state: RGB frame ``[height, width, 3]`` uint8 (``"rgb_array"``), depth ``[height, width]``
+        float32 in m (``"depth_array"``), or None after updating the viewer (``"human"``)."""
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to the env")
             return None
+        if self._viewer is not None:
+            self._viewer.sync()
+            return None
+        if self.render_mode == "depth_array":
+            if self._renderer is None:
+                self._renderer = SceneRenderer(self.scene, *self._render_args)
+            return self._renderer.render_depth()
         return self._frame()
 
     def close(self) -> None:
-        """Release the renderer (safe to call more than once)."""
+        """Release the renderer and the viewer (safe to call more than once)."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+        if self._viewer is not None:
+            self._viewer.close()
 
     def record_episode(self, action: np.ndarray, path: str | Path, fps: float | None = None
                        ) -> tuple[np.ndarray, float, bool, bool, dict]:
         """``step(action)`` while capturing frames every ``frame_stride`` control steps, then write them to a video
         at ``path`` (``.mp4`` or ``.gif``). Returns the step's result."""
+        recording = self.record_frames
         self.record_frames = True
         try:
             result = self.step(action)
         finally:
-            self.record_frames = False
+            self.record_frames = recording
         write_video(self.frames, path, fps=self.metadata["render_fps"] if fps is None else fps)
         return result
 
@@ -220,7 +255,10 @@ class RhythmicTaskEnv(gym.Env):
             raise ValueError(f"path: expected shape ({self.n_steps}, 3), got {path.shape}")
         plan = self.imitation_plan
         given = TaskPlan(path, plan.origin, plan.rotation, plan.extras)
-        return self._execute(given, {"params": None, "extras": None})
+        info: dict[str, Any] = {"params": None}
+        if len(self.extra_scales):
+            info["extras"] = None
+        return self._execute(given, info)
 
     def solve_plan(self, plan: TaskPlan, world: np.ndarray) -> IKResult:
         """The joint path of ``world [T, 3]``, the tool's axis along the task frame's z (converged: a rhythmic
@@ -228,44 +266,27 @@ class RhythmicTaskEnv(gym.Env):
         return self.ik.solve(world, plan.rotation[:, 2], fine_iterations=_IK_FINE_ITERATIONS, coarse_iterations=150)
 
     def _evaluate(self, theta: np.ndarray, extras: np.ndarray) -> tuple[float, dict]:
-        return self._execute(self.plan(theta, extras), {"params": theta.copy(), "extras": extras.copy()})
+        info: dict[str, Any] = {"params": theta.copy()}
+        if len(self.extra_scales):
+            info["extras"] = extras.copy()
+        rejection = self.task.check_params(theta)
+        if rejection is not None:
+            return self._invalid(info, rejection)
+        return self._execute(self.plan(theta, extras), info)
 
     def _execute(self, plan: TaskPlan, info: dict[str, Any]) -> tuple[float, dict]:
         """Check, simulate and judge a plan (see the module docstring, steps 3 to 5)."""
-        if not np.all(np.isfinite(plan.path)):
-            return self._invalid(info, "nonfinite_path", 1.0)
-        world = plan.world()
-        local = (world - self.scene.table_origin) @ self.scene.table_rotation
-        low, high = self.workspace
-        excess = float(np.max(np.maximum(low - local, 0.0) + np.maximum(local - high, 0.0)))
-        if excess > 0:
-            return self._invalid(info, "workspace", excess / 0.1)
-        solution = self.solve_plan(plan, world)
-        bad = (solution.pos_error > _IK_TOLERANCE[0]) | (solution.rot_error > _IK_TOLERANCE[1])
-        if np.any(bad):
-            severity = 0.5 * np.mean(bad) + 0.5 * min(1.0, float(solution.pos_error.max()) / 0.1)
-            return self._invalid(info, "unreachable", severity)
-        speed = float(np.max(np.abs(np.diff(solution.q, axis=0)))) / self.dt
-        if speed > self.robot.max_joint_speed:
-            return self._invalid(info, "joint_speed", speed / self.robot.max_joint_speed - 1.0)
-        executed = self._simulate(solution)
-        path = ToolPath(plan, solution.q, executed.sensors, executed.qpos, executed.qvel, executed.tip, executed.steps,
-                        executed.unstable, self.dt, self.frame_skip, self.jerk_ratio(plan.path),
-                        float(Smoothness.peak_accel(solution.q, self.dt).max()), self.robot.max_joint_accel)
+        solution = self.task.solve(plan, self)
+        if isinstance(solution, Rejection):
+            return self._invalid(info, solution)
+        info.update(solution.info)
+        capture = self._capture if self.record_frames or self._viewer is not None else None
+        path = self.task.simulate(solution, self, capture)
         outcome = self.task.evaluate(path, self.context, self.scene.sensor)
-        causes = ("unstable",) if executed.unstable else outcome.causes
+        causes = ("unstable",) if path.unstable and outcome.valid else outcome.causes
         info.update(outcome.info)
-        return self._finish(info, outcome.terms, outcome.cost_trace, True, "", executed.unstable, causes)
-
-    def _simulate(self, solution: IKResult) -> ServoSimulation:
-        plan = JointTargetPlan(solution, self.dt, self._lead, self.scene.joint_lower, self.scene.joint_upper)
-        self.scene.set_arm_state(solution.q[0])
-        simulation = ServoSimulation(self.scene, self.n_steps, self.frame_skip)
-        callback = self._capture if self.record_frames else None
-        if callback is not None:
-            self.frames.append(self._frame())
-        simulation.run(plan.q, callback)
-        return simulation
+        return self._finish(info, outcome.terms, outcome.cost_trace, outcome.valid, outcome.reason, path.unstable,
+                            causes)
 
     def jerk_ratio(self, path: np.ndarray) -> float:
         """Integrated squared jerk of ``path [T, 3]`` over the imitation's in this context."""
@@ -273,11 +294,13 @@ class RhythmicTaskEnv(gym.Env):
             self._imitation_jerk = Smoothness.integrated_jerk(self.imitation_plan.path, self.dt)
         return Smoothness.integrated_jerk(path, self.dt) / max(self._imitation_jerk, 1e-12)
 
-    def _invalid(self, info: dict, reason: str, severity: float) -> tuple[float, dict]:
-        """A graded penalty for a plan that is not executed (``8 + 4 min(severity, 5)``, spread evenly)."""
-        cost = np.full(self.n_steps, (8.0 + 4.0 * min(float(severity), 5.0)) / self.n_steps)
-        logger.debug("invalid parameters (%s, severity %.3g)", reason, severity)
-        return self._finish(info, {"invalid": -float(cost.sum())}, cost, False, reason, False, ("invalid",))
+    def _invalid(self, info: dict, rejection: Rejection) -> tuple[float, dict]:
+        """The task's graded penalty for a plan that is not executed (:meth:`TaskDescription.invalid`)."""
+        info.update(rejection.info)
+        outcome = self.task.invalid(rejection.reason, rejection.severity, self.n_steps)
+        info.update(outcome.info)
+        logger.debug("invalid parameters (%s, severity %.3g)", rejection.reason, rejection.severity)
+        return self._finish(info, outcome.terms, outcome.cost_trace, False, rejection.reason, False, outcome.causes)
 
     def _finish(self, info: dict, terms: dict[str, float], cost: np.ndarray, valid: bool, reason: str,
                 unstable: bool, causes: tuple[str, ...]) -> tuple[float, dict]:
@@ -292,9 +315,16 @@ class RhythmicTaskEnv(gym.Env):
     def _frame(self) -> np.ndarray:
         if self._renderer is None:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
-        return self._renderer.render()
+        return self.task.render_overlay(self._renderer)
 
     def _capture(self, k: int) -> None:
-        if (k + 1) % self.frame_stride == 0:
+        """Before the first control step (``k = -1``) the first frame; after control step ``k`` the viewer's update
+        and every ``frame_stride`` steps a frame."""
+        if k < 0:
+            self.frames.append(self._frame())
+            return
+        if self._viewer is not None:
+            self._viewer.sync()
+        if self.record_frames and (k + 1) % self.frame_stride == 0:
             self.frames.append(self._frame())
 

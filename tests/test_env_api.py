@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import DEPRECATED_ENV_ID, ENV_ID, TERMS, ArmarWipeEnv
+from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
+from rdmp_gym.envs.tasks.wiping.task import WipingTask
 
 from rdmp_gym import wiping_demonstration
 
@@ -26,7 +28,7 @@ def test_registered_and_spaces(env):
     assert ENV_ID in gym.registry
     assert gym.registry[ENV_ID].max_episode_steps is None
     u = env.unwrapped
-    assert isinstance(u, ArmarWipeEnv)
+    assert isinstance(u, RhythmicTaskEnv) and isinstance(u.task, WipingTask)
     assert env.action_space.dtype == np.float32
     assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
     # the DMP's parameters plus the one-dimensional approach lift (last)

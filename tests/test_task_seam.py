@@ -177,19 +177,42 @@ def test_no_file_of_the_envs_outside_the_wiping_folder_names_its_objects_or_info
 
 
 def test_the_wiping_task_is_a_registered_description_that_serves_its_published_ids():
+    from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
     from rdmp_gym.envs.tasks.wiping.faces import EPISODIC, LEGACY_STEP, STEP
     from rdmp_gym.envs.tasks.wiping.task import WipingTask
 
     entry = TASKS["wipe"]
     assert entry.versions == (1, 2, 3) and entry._factory() is WipingTask and issubclass(WipingTask, TaskDescription)
+    assert EPISODIC == "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
     for robot, version, step in (("armar3", 1, LEGACY_STEP), ("armar3", 2, LEGACY_STEP), ("armar3", 3, STEP),
                                  ("panda", 3, STEP)):
         episodic_id, step_id = task_ids("wipe", robot, version)
         assert gym.spec(episodic_id).entry_point == EPISODIC and gym.spec(step_id).entry_point == step
+        assert gym.spec(episodic_id).kwargs["task"] == "wipe"
     assert entry.face_specs("panda", 2) is None and "rdmp_gym/PandaWipe-v2" not in gym.registry
     assert learner_defaults("rdmp_gym/PandaWipe-v3") == entry.learner_defaults(3) != {}
-    with pytest.raises(ValueError, match="own envs"):
-        RhythmicTaskEnv("wipe", "armar3", version=3)
+    assert issubclass(ArmarWipeEnv, RhythmicTaskEnv)
+
+
+@pytest.mark.parametrize("robot", ["armar3", "panda"])
+def test_the_wiping_ids_are_made_by_the_generic_face(robot):
+    """``gym.make`` of a wiping id, ``RhythmicTaskEnv("wipe", ...)`` and the kept name ``ArmarWipeEnv`` make the same
+    episodic face and the same episode."""
+    from rdmp_gym.envs.tasks.wiping.env import ArmarWipeEnv
+
+    made = gym.make(task_ids("wipe", robot, 3)[0]).unwrapped
+    direct = RhythmicTaskEnv("wipe", robot, version=3, obstacle=True)
+    kept = ArmarWipeEnv(robot=robot, version=3, obstacle=True)
+    assert type(made) is RhythmicTaskEnv and type(direct) is RhythmicTaskEnv and isinstance(kept, RhythmicTaskEnv)
+    action = 0.3 * np.random.default_rng(0).uniform(-1, 1, made.action_space.shape).astype(np.float32)
+    results = []
+    for env in (made, direct, kept):
+        observation, _ = env.reset(seed=5)
+        _, reward, *_, info = env.step(action)
+        results.append((observation, reward, info["coverage"], info["is_success"]))
+        assert env.task_version is env.task.task_version and env.dirt_cells is env.task.dirt_cells
+    for other in results[1:]:
+        assert np.array_equal(other[0], results[0][0]) and other[1:] == results[0][1:]
 
 
 def test_the_wiping_env_reads_its_task_from_the_description():

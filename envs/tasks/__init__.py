@@ -13,9 +13,10 @@ import importlib
 from dataclasses import dataclass
 from typing import Any
 
-from .description import Outcome, TaskDescription, TaskPlan, ToolPath
+from .description import Outcome, Rejection, Solution, Stage, TaskDescription, TaskPlan, ToolPath
 
-__all__ = ["TASKS", "Outcome", "TaskDescription", "TaskEntry", "TaskPlan", "ToolPath", "get_task", "register_task"]
+__all__ = ["TASKS", "Outcome", "Rejection", "Solution", "Stage", "TaskDescription", "TaskEntry", "TaskPlan", "ToolPath",
+           "get_task", "register_task"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,23 @@ class TaskEntry:
             return {}
         defaults = factory.defaults_for(self.versions[0] if version is None else version)
         return {agent: dict(options) for agent, options in defaults.items()}
+
+    def face_settings(self, robot: Any, version: int) -> dict[str, Any]:
+        """The settings a face adds when it builds the task for ``robot`` at ``version``
+        (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.face_settings`; none where the factory is not a
+        description class)."""
+        factory = self._factory()
+        if not (isinstance(factory, type) and issubclass(factory, TaskDescription)):
+            return {}
+        return factory.face_settings(robot, version)
+
+    def typed_settings(self, settings: Any) -> Any:
+        """The task's typed record of an env's settings
+        (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.typed_settings`), or None."""
+        factory = self._factory()
+        if not (isinstance(factory, type) and issubclass(factory, TaskDescription)):
+            return None
+        return factory.typed_settings(settings)
 
     def face_specs(self, robot: str, version: int) -> tuple[tuple[str, dict], tuple[str, dict]] | None:
         """``((episodic entry point, keywords), (step entry point, keywords))`` of the task on ``robot`` at

@@ -13,6 +13,12 @@ A task description holds everything task-specific, so that one episodic face
 - the **plan** (:meth:`plan`): the tool path of parameters in a context (the DMP rolled out as the task runs it);
 - the **bookkeeping, reward and success** (:meth:`evaluate`): from the simulation's record, the reward terms, the
   per-control-step cost trace, the info keys, ``is_success`` and the failure causes;
+- the **execution** on the faces, each hook with a default that is the faces' own way: what the faces run the task
+  on (:meth:`stage`: scene, timing, action layout, inverse kinematics), where the robot rests at ``reset``
+  (:meth:`rest_pose`), the parameters the task refuses before planning (:meth:`check_params`), the inverse kinematics
+  and path checks (:meth:`solve`: the joint plan, or a rejection with its reason and severity), the simulation with
+  the task's hook on the core (:meth:`simulate`), the penalty of a rejected path (:meth:`invalid`) and the rendered
+  frame with the task's overlay (:meth:`render_overlay`);
 - the **learner defaults** (:attr:`learner_defaults`): settings a learner may read from the task, by agent name.
 
 Adding a task is one folder with its description and one line in :data:`rdmp_gym.envs.tasks.TASKS` (or a call of
@@ -22,7 +28,7 @@ Adding a task is one folder with its description and one line in :data:`rdmp_gym
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -33,9 +39,12 @@ if TYPE_CHECKING:          # the registry imports this module without MuJoCo (st
 
     from rdmp_gym import RhythmicDMP
 
+    from ..action import ActionMap
+    from ..ik import IKResult, PathIK
+    from ..recording import SceneRenderer
     from ..robots import RobotDescription
 
-__all__ = ["Outcome", "TaskDescription", "TaskPlan", "ToolPath"]
+__all__ = ["Outcome", "Rejection", "Solution", "Stage", "TaskDescription", "TaskPlan", "ToolPath"]
 
 
 @dataclass(frozen=True)
@@ -103,12 +112,58 @@ class Outcome:
         cost_trace: per-control-step cost ``[T]`` (sums to minus the reward).
         info: the task's info keys.
         causes: the success criteria missed (empty for a success).
+        valid: whether the episode counts (False: void, e.g. the task's limits broken during the simulation).
+        reason: why it is void (``info["invalid_reason"]``; empty where valid).
     """
 
     terms: dict[str, float]
     cost_trace: np.ndarray
     info: dict[str, Any]
     causes: tuple[str, ...]
+    valid: bool = True
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class Stage:
+    """What the faces run a task on (:meth:`TaskDescription.stage`).
+
+    Attributes:
+        scene: the scene (``model``, ``data``, the arm's actuators and joint limits, the tool's ``tip_site``, the
+            nominal ``table_origin``, ``sensor`` names, ``set_arm_state``, ``servo_lead``).
+        frame_skip, dt: physics steps per control step, control period (s).
+        n_steps, times: control steps of an episode and their times ``[T]`` (s).
+        action_map: the DMP parameters in the action (:class:`~rdmp_gym.envs.action.ActionMap`).
+        ik: the path inverse kinematics of the tool (:class:`~rdmp_gym.envs.ik.PathIK`).
+    """
+
+    scene: Any
+    frame_skip: int
+    dt: float
+    n_steps: int
+    times: np.ndarray
+    action_map: ActionMap
+    ik: PathIK
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A path the task accepts (:meth:`TaskDescription.solve`): the ``plan`` to execute (as planned, or as the task
+    changed it), its joint path ``joints`` and the info keys of the check."""
+
+    plan: TaskPlan
+    joints: IKResult
+    info: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """A path the task refuses without simulating it: ``reason`` (``info["invalid_reason"]``), ``severity`` (how
+    far it is from acceptable, >= 0; the penalty grows with it) and the info keys of the check."""
+
+    reason: str
+    severity: float
+    info: Mapping[str, Any] = field(default_factory=dict)
 
 
 class TaskDescription(ABC):
@@ -132,11 +187,26 @@ class TaskDescription(ABC):
     learner_defaults: Mapping[str, Mapping[str, Any]] = {}
     #: the envs that run the task where they are its own, not the rhythmic face (None: the rhythmic face)
     own_faces: ClassVar[str | None] = None
+    #: the rendered frames' default size (width, height) in pixels
+    frame_size: ClassVar[tuple[int, int]] = (480, 360)
 
     @classmethod
     def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
         """The learner defaults of the task's ``version`` (default: :attr:`learner_defaults` for every version)."""
         return cls.learner_defaults
+
+    @classmethod
+    def face_settings(cls, robot: str | RobotDescription, version: int) -> dict[str, Any]:
+        """The settings a face adds to the task's own when it builds the task by name for ``robot`` at ``version``
+        (default: none; a task whose description depends on the robot or the version takes them here)."""
+        return {}
+
+    @classmethod
+    def typed_settings(cls, settings: Mapping[str, Any]) -> Any:
+        """The settings of an env of the task (the face's keywords but ``task``) as the task's typed record, checked
+        without building the task, or None where the task has none (default: its keywords are checked by building
+        the description)."""
+        return None
 
     @abstractmethod
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
@@ -179,3 +249,93 @@ class TaskDescription(ABC):
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         """The box ``(low [3], high [3])`` of the table frame the tool tip may be commanded in."""
         return robot.workspace
+
+    # ------------------------------------------------------------------ execution on the faces
+    def stage(self, robot: RobotDescription) -> Stage:
+        """What the faces run the task on with ``robot`` (default: the room composed with the robot and the task,
+        :class:`~rdmp_gym.envs.task_scene.TaskScene`; :attr:`control_rate` and :attr:`duration` in its physics
+        steps; the action map of :attr:`groups` and :attr:`scales`; the scene's path inverse kinematics)."""
+        from ..action import ActionMap
+        from ..task_scene import TaskScene
+
+        scene = TaskScene(robot, self)
+        timestep = scene.model.opt.timestep
+        frame_skip = max(1, round(1.0 / (self.control_rate * timestep)))
+        dt = frame_skip * timestep
+        n_steps = max(2, round(self.duration / dt))
+        return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt,
+                     ActionMap(self.imitation(), self.groups, self.scales), scene.path_ik())
+
+    def action_time_weights(self, dmp: RhythmicDMP, times: np.ndarray, action_map: ActionMap) -> np.ndarray:
+        """How active each action dimension is at the control times ``times [T]``, ``[T, n]`` in [0, 1] (default: the
+        DMP's parameter groups, the stop nominally ``2`` periods ``+ 1`` s before the end, then the task's own
+        dimensions acting throughout)."""
+        stop = None if dmp.ending is None else self.duration - 2.0 * dmp.period - 1.0
+        weights = dmp.param_time_weights(times, groups=self.groups, transient=0, stop_at=stop)[:, action_map.free]
+        return np.c_[weights, np.ones((len(times), len(self.extras)))]
+
+    def rest_pose(self, context: Any, plan: TaskPlan, face: Any) -> np.ndarray:
+        """The joints ``[n]`` the robot rests at when an episode starts in ``context``; ``plan`` is the imitation's
+        (default: the face's inverse kinematics of the plan's first point)."""
+        return face.solve_plan(plan, plan.world()[:1]).q[0]
+
+    def check_params(self, theta: np.ndarray) -> Rejection | None:
+        """A rejection of DMP parameters ``theta [P]`` before they are planned, or None (default: none)."""
+        return None
+
+    def solve(self, plan: TaskPlan, face: Any) -> Solution | Rejection:
+        """The joint path of ``plan`` on the ``face`` (its scene, inverse kinematics, robot, control period), or why
+        it is refused. Default: the path is finite, inside the robot's reach (:meth:`workspace`), solvable by the
+        inverse kinematics with the tool's axis along the task frame's z, joint speeds within the robot's."""
+        if not np.all(np.isfinite(plan.path)):
+            return Rejection("nonfinite_path", 1.0)
+        world = plan.world()
+        local = (world - face.scene.table_origin) @ face.scene.table_rotation
+        low, high = face.workspace
+        excess = float(np.max(np.maximum(low - local, 0.0) + np.maximum(local - high, 0.0)))
+        if excess > 0:
+            return Rejection("workspace", excess / 0.1)
+        solution = face.solve_plan(plan, world)
+        bad = (solution.pos_error > _IK_TOLERANCE[0]) | (solution.rot_error > _IK_TOLERANCE[1])
+        if np.any(bad):
+            severity = 0.5 * np.mean(bad) + 0.5 * min(1.0, float(solution.pos_error.max()) / 0.1)
+            return Rejection("unreachable", severity)
+        speed = float(np.max(np.abs(np.diff(solution.q, axis=0)))) / face.dt
+        if speed > face.robot.max_joint_speed:
+            return Rejection("joint_speed", speed / face.robot.max_joint_speed - 1.0)
+        return Solution(plan, solution)
+
+    def simulate(self, solution: Solution, face: Any, capture: Callable[[int], None] | None) -> ToolPath:
+        """Execute ``solution`` on the ``face``'s simulation core and return what it executed; ``capture(k)`` (where
+        not None) after control step ``k``, and ``capture(-1)`` before the first. Default: the core's own record
+        (every sensor at every physics step) along the joint targets with the servos' velocity feed-forward."""
+        from ..controller import JointTargetPlan
+        from ..servo import ServoSimulation
+        from ..smoothness import Smoothness
+
+        joints = solution.joints
+        scene = face.scene
+        plan = JointTargetPlan(joints, face.dt, face.servo_lead, scene.joint_lower, scene.joint_upper)
+        scene.set_arm_state(joints.q[0])
+        simulation = ServoSimulation(scene, face.n_steps, face.frame_skip)
+        if capture is not None:
+            capture(-1)
+        simulation.run(plan.q, capture)
+        return ToolPath(solution.plan, joints.q, simulation.sensors, simulation.qpos, simulation.qvel, simulation.tip,
+                        simulation.steps, simulation.unstable, face.dt, face.frame_skip,
+                        face.jerk_ratio(solution.plan.path), float(Smoothness.peak_accel(joints.q, face.dt).max()),
+                        face.robot.max_joint_accel)
+
+    def invalid(self, reason: str, severity: float, n_steps: int) -> Outcome:
+        """The penalty and info of a path refused for ``reason`` with ``severity`` over ``n_steps`` control steps
+        (default: ``8 + 4 min(severity, 5)``, spread evenly, in the term ``"invalid"``)."""
+        cost = np.full(n_steps, (8.0 + 4.0 * min(float(severity), 5.0)) / n_steps)
+        return Outcome({"invalid": -float(cost.sum())}, cost, {}, ("invalid",), valid=False, reason=reason)
+
+    def render_overlay(self, renderer: SceneRenderer) -> np.ndarray:
+        """The scene's current frame with what the task draws on it (default: nothing, the scene as it is)."""
+        return renderer.render()
+
+
+#: IK residuals (position m, angle rad) beyond which a path is unreachable (:meth:`TaskDescription.solve`)
+_IK_TOLERANCE = (0.01, 0.1)

@@ -1,11 +1,12 @@
 """The envs that serve the wiping task's ids (strings only: registering the ids imports no MuJoCo).
 
-The wiping task runs on its own faces, which read it from its description
-(:class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`) and run the simulation core with its hook: the episodic
-:class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv` for every version, the step twin
-:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv` from v3 on and the v1/v2 step env
-:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`. v1 and v2 were published on ARMAR-III only.
-"""
+The episodic ids of every version are the generic face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv` of the
+task ``"wipe"`` (its hooks: :class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`). The step twins are the task's
+own, on that face: :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv` from v3 on and the v1/v2 step env
+:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`; their observation (the canonical state, the
+sponge's pose and velocity, the wrist force), their reward terms grown step by step and their end on a penetration
+are the published step interface of the task, which the generic step twin's (the tool tip, a reward judged every
+few steps) is not. v1 and v2 were published on ARMAR-III only."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from typing import Any
 
 __all__ = ["DEPRECATED", "EPISODIC", "LEGACY_STEP", "STEP", "faces"]
 
-EPISODIC = "rdmp_gym.envs.tasks.wiping.env:ArmarWipeEnv"
+EPISODIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 STEP = "rdmp_gym.envs.tasks.wiping.step:WipeStepEnv"
 LEGACY_STEP = "rdmp_gym.envs.tasks.wiping.legacy_step:ArmarWipeStepEnv"
 #: ``rdmp_gym/ArmarWipe-v0``: v1 without the cup, with a DeprecationWarning
@@ -28,7 +29,7 @@ def faces(robot: str, version: int) -> tuple[tuple[str, dict[str, Any]], tuple[s
     if version < 3 and robot != "armar3":
         return None
     on_robot = {} if robot == "armar3" else {"robot": robot}
-    episodic = (EPISODIC, {"obstacle": True, "version": version, **on_robot})
+    episodic = (EPISODIC, {"task": "wipe", "obstacle": True, "version": version, **on_robot})
     shift = {} if version == 1 else {"max_shift": _STEP_SHIFT}
     step = (STEP if version >= 3 else LEGACY_STEP, {"version": version, **shift, **on_robot})
     return episodic, step

@@ -1,8 +1,10 @@
 """``rdmp_gym/ArmarWipeStep-v1``: the wiping task one control step at a time (residual RL on a DMP).
 
 The step-based sibling of ``ArmarWipe-v1``, as fancy_gym offers one beside each movement-primitive env:
-the same scene (tilted table, Preston dirt, the cup), context, DMP, controller and reward terms; an
-:class:`ArmarWipeEnv` inside provides them. Per ``step`` (control step ``k``):
+the same scene (tilted table, Preston dirt, the cup), context, DMP, controller and reward terms; the
+generic episodic face of the wiping task inside (:class:`ArmarWipeEnv`) provides them. It keeps its own class
+(not the generic step twin) because its online DMP, observation and per-step reward are the published v1/v2 step
+interface. Per ``step`` (control step ``k``):
 
 1. the DMP runs online (``RhythmicDMP.start(start_blend=True)`` -> :class:`rdmp_gym.DMPStepper`, anchored at
    the dirt patch, started at the sponge start), driven by the **coupling term**

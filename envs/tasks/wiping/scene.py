@@ -262,6 +262,18 @@ class WipeScene:
         actual table orientation (the tilt is in the context, so the sponge follows the actual normal)."""
         return self.nominal_table_pos.copy(), self.table_frame(actual=True)[1]
 
+    @property
+    def table_origin(self) -> np.ndarray:
+        """The nominal table frame's origin in the world ``[3]`` (its axes are the world's before the tilt)."""
+        return self.nominal_table_pos.copy()
+
+    @property
+    def sensor(self) -> dict[str, slice]:
+        """Sensor name -> its columns of ``data.sensordata``."""
+        m = self.model
+        return {m.sensor(i).name: slice(int(m.sensor_adr[i]), int(m.sensor_adr[i] + m.sensor_dim[i]))
+                for i in range(m.nsensor)}
+
     def table_frame(self, actual: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """(origin [3], rotation [3, 3]) of the actual (or nominal) table frame in the world."""
         if not actual:

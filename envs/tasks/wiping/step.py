@@ -25,6 +25,12 @@ step's info has the episodic statistics, ``is_success``, ``failure_causes`` and 
 Observation (float32, 26): ``cos phi, sin phi, r`` of the canonical system, the sponge position (nominal table
 frame, m), its face normal (table frame), its velocity (m/s), the wrist force along the control normal (N / target
 force) and the context (the episodic observation).
+
+This twin is the wiping task's own, not the generic step twin
+(:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`): its observation, its reward terms grown at every step,
+its target kept in the workspace and its end on a penetration are the task's published step interface, which the
+generic twin (the tool tip, a reward judged every few steps) does not have; it runs on the generic episodic face
+(``self.task``, a :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv` of the wiping task).
 """
 
 from __future__ import annotations

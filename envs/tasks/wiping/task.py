@@ -12,16 +12,21 @@ simulation core, :mod:`~rdmp_gym.envs.tasks.wiping.simulation`), the judgement (
 <rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS>`). What each version changes is
 :mod:`~rdmp_gym.envs.tasks.wiping.versions`.
 
-The wiping ids run on the wiping face (:class:`~rdmp_gym.envs.tasks.wiping.env.ArmarWipeEnv`, its step twin
-:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`), which reads the task from this description and runs the
-simulation core with the task's hook: the published versions keep their scene (the arena composed before the robot,
-or the robot's hand-merged scene in v1 and v2), their path checks and their force controller, so that every number
-they published reproduces bit for bit.
+The wiping ids' episodic envs are the generic face (:class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`), which runs
+this description's hooks: its stage (the version's scene: the arena composed before the robot, or the robot's
+hand-merged scene in v1 and v2; the action map with the approach and the sweep), the rest pose at the sponge start,
+the amplitude check (``"r0"``), the path checks (the sponge flat within the engage height, the cup clearance), the
+wiping hook on the simulation core, the invalid penalty and the dirt drawn on the frames, so that every number the
+published versions gave reproduces bit for bit. The episode's state the task keeps (:attr:`WipingTask.context`, the
+dirt) is set by :meth:`WipingTask.place`. The step twins are the task's own
+(:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`, v1/v2
+:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`) on that face.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import logging
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -36,24 +41,28 @@ from rdmp_gym.dmp.pose import PoseDMP
 from rdmp_gym.signals.demonstrations import check_frame
 
 from ...action import ActionMap
-from ...controller import ForceAdaptation, ForceAdaptationSettings
+from ...controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from ...ik import BodyClearance, IKResult, PathIK
 from ...kinematics import ChainKinematics
+from ...recording import SceneRenderer
 from ...robots import RobotDescription, get_robot
-from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
+from ..description import Outcome, Rejection, Solution, Stage, TaskDescription, TaskPlan, ToolPath
 from .approach import approach_direction, lift_profile
 from .arena import add_task
 from .clearance import Cup, CupClearance, HandPoints
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
+from .info import void_statistics
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
 from .scene import TablePose, WipeScene, dirt_grid
 from .settings import EnvConfig, ForceConfig, RewardConfig, TaskConfig
-from .simulation import WipeTrace
+from .simulation import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 from .versions import LEARNER_DEFAULTS, TASK_VERSIONS, TaskVersion
 
 __all__ = ["DEFAULT_GROUPS", "WipeRecord", "WipingTask", "episode_success", "failure_causes", "outcome"]
+
+logger = logging.getLogger(__name__)
 
 #: ``info["is_success"]`` thresholds: coverage, force-in-band fraction, obstacle displacement (m).
 SUCCESS_COVERAGE = 0.95
@@ -192,7 +201,8 @@ class WipingTask(TaskDescription):
     tool_site = "sponge_tcp"
     #: the approach and the sweep are action dimensions of the DMP's action map (fixed directions in theta)
     extras: Mapping[str, float] = {}
-    own_faces = "ArmarWipeEnv, WipeStepEnv and ArmarWipeStepEnv of rdmp_gym.envs.tasks.wiping"
+    #: the frames are square by default
+    frame_size: ClassVar[tuple[int, int]] = (480, 480)
     #: settings a learner reads, per version (:data:`rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS`)
     defaults_by_version: ClassVar[Mapping[int, Mapping[str, Mapping[str, Any]]]] = LEARNER_DEFAULTS
 
@@ -233,11 +243,31 @@ class WipingTask(TaskDescription):
         self._hand_points = self._hand() if self.cup_clearance is not None else None
         self._engage = self.adaptation_settings.engage_height
         self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
+        #: the episode's context (set by :meth:`place`; the methods that take a context default to it)
+        self.context: Context | None = None
+        #: the dirt cells' centres on the actual table, ``[N, 3]`` (world), placed with the context
+        self.dirt_cells = np.zeros((0, 3))
+        #: dirt left per cell ``[N]`` in [0, 1] (after the last episode; what the frames show)
+        self.dirt_left = np.zeros(0)
+        #: record the sponge-table force at every physics step into ``info["fine_force_trace"]``
+        self.fine_force = False
+        self._imitation_jerk: float | None = None
+        self._live_dirt: Callable[[], np.ndarray] | None = None
 
     @classmethod
     def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
         """The learner defaults of ``version``."""
         return cls.defaults_by_version.get(version, {})
+
+    @classmethod
+    def face_settings(cls, robot: str | RobotDescription, version: int) -> dict[str, Any]:
+        """The robot and the version are the task's settings (its scene, plan and judgement depend on them)."""
+        return {"robot": robot, "version": version}
+
+    @classmethod
+    def typed_settings(cls, settings: Mapping[str, Any]) -> EnvConfig:
+        """The settings as one :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig` (each checked by name)."""
+        return EnvConfig.from_kwargs(**settings)
 
     @property
     def learner_defaults(self) -> Mapping[str, Mapping[str, Any]]:  # type: ignore[override]
@@ -345,6 +375,13 @@ class WipingTask(TaskDescription):
         return HandPoints(scene.model, scene.qpos_adr, geoms)
 
 
+    @property
+    def simulation_settings(self) -> SimulationSettings:
+        """The simulation core's settings of this task
+        (:class:`~rdmp_gym.envs.tasks.wiping.simulation.SimulationSettings`)."""
+        return SimulationSettings(limit_margin=self.limit_margin, fine_force=self.fine_force,
+                                  cup_from_touch=self.task_version.cup_from_touch)
+
     def force_adaptation(self) -> ForceAdaptation:
         """A fresh force controller of this env: the admittance law on the pressing depth (with the learned depth
         profile when ``force_learning`` is on)."""
@@ -359,8 +396,10 @@ class WipingTask(TaskDescription):
         return self.reward_settings.max_joint_accel if self.task_version.executable_success else None
 
     # ------------------------------------------------------------------ the plan
-    def action_time_weights(self) -> np.ndarray:
-        """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]."""
+    def action_time_weights(self, dmp: RhythmicDMP | None = None, times: np.ndarray | None = None,
+                            action_map: ActionMap | None = None) -> np.ndarray:
+        """How active each action dimension's parameter is at each control step, ``[T_ctrl, n_action]`` in [0, 1]
+        (of the task's own DMP, control times and action map, which the faces run)."""
         weights = self.dmp.param_time_weights(self.times, groups=self.groups, transient=0)[:, self.action_map.free]
         if self._approach:                   # the approach dimension acts where it lifts the path
             lift = lift_profile(self.times, self.dmp.transients[0].length)
@@ -371,20 +410,23 @@ class WipingTask(TaskDescription):
             weights = np.c_[weights, moved / np.maximum(moved.max(axis=0), 1e-12)]
         return weights
 
-    def rollout_path(self, theta: np.ndarray, context: Context) -> np.ndarray:
-        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in ``context``.
+    def rollout_path(self, theta: np.ndarray, context: Context | None = None) -> np.ndarray:
+        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in ``context`` (default: the
+        episode's).
 
         The DMP is anchored at the patch centre and starts at the sponge start with ``start_blend``:
         the offset from the demonstrated start (relative to the anchor) is faded out over the
         transient, so the path starts where the sponge is, keeps the demonstrated approach's shape
         and is the DMP's own periodic pattern from the end of the transient on.
         """
+        context = self._episode(context, "rollout_path")
         anchor = np.array([*context.patch_centre, self._anchor_z])
         return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
                                       y0=context.sponge_start, anchor=anchor, start_blend=True)[0]
 
-    def imitation_path(self, context: Context) -> np.ndarray:
-        """The imitation's path ``[T_ctrl, 3]`` in ``context`` (``rollout_path(theta0, context)`` to round-off).
+    def imitation_path(self, context: Context | None = None) -> np.ndarray:
+        """The imitation's path ``[T_ctrl, 3]`` in ``context`` (default: the episode's; ``rollout_path(theta0,
+        context)`` to round-off).
 
         With the parameters fixed, the rollout is affine in the start and the anchor (a linear transformation
         system, a start offset blended out linearly), so the env rolls out the imitation once for a reference
@@ -400,6 +442,7 @@ class WipingTask(TaskDescription):
                                            start_blend=True)
             self._imitation_paths = (paths[0], (paths[1:] - paths[0]) / _IMITATION_SHIFT)
         base, unit = self._imitation_paths
+        context = self._episode(context, "imitation_path")
         shift = np.r_[context.sponge_start, context.patch_centre]
         return base + np.tensordot(shift, unit, axes=1)
 
@@ -409,16 +452,18 @@ class WipingTask(TaskDescription):
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
         return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
 
-    def _cup(self) -> Cup | None:
-        """The episode's cup as it stands before the wipe (world frame), or None without one."""
-        if self.context is None or not self.context.obstacle:
-            return None
-        origin, rot = self.scene.table_frame(actual=True)
-        base = origin + rot @ np.r_[self.context.obstacle_position, 0.0]
-        return Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+    def _episode(self, context: Context | None, what: str) -> Context:
+        """``context``, or the episode's (RuntimeError before the first ``reset``)."""
+        if context is not None:
+            return context
+        if self.context is None:
+            raise RuntimeError(f"call reset() before {what}()")
+        return self.context
 
-    def cup(self, context: Context | None) -> Cup | None:
-        """The cup of ``context`` as it stands before the wipe (world frame), or None without one."""
+    def cup(self, context: Context | None = None) -> Cup | None:
+        """The cup of ``context`` (default: the episode's) as it stands before the wipe (world frame), or None
+        without one."""
+        context = self.context if context is None else context
         if context is None or not context.obstacle:
             return None
         origin, rot = self.scene.table_frame(actual=True)
@@ -479,13 +524,18 @@ class WipingTask(TaskDescription):
         return self.context_spec.sample(rng, options)
 
     def place(self, model: mujoco.MjModel, context: Context) -> None:
-        """Tilt and raise the table and stand (or park) the cup for ``context`` (the scene's ``model``)."""
+        """Tilt and raise the table, stand (or park) the cup and lay the dirt for ``context`` (the scene's
+        ``model``); ``context`` becomes the episode's."""
         if model is not self.scene.model:
             raise ValueError("model: the wiping task places its objects in its own scene's model")
         self.scene.set_table(TablePose(context.table_height, *context.table_tilt))
         self.scene.place_obstacle(context.obstacle_position if context.obstacle else None)
+        self.context = context
+        self.dirt_cells = self.patch_cells(context)
+        self.dirt_left = np.ones(len(self.dirt_cells))
+        self._imitation_jerk = None
 
-    def dirt_cells(self, context: Context) -> np.ndarray:
+    def patch_cells(self, context: Context) -> np.ndarray:
         """The dirt cells' centres ``[N, 3]`` (world) of ``context`` on the placed table."""
         cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
         origin, rot = self.scene.table_frame(actual=True)
@@ -515,13 +565,160 @@ class WipingTask(TaskDescription):
                 info["simulated_coverage"], info["coverage"] = info["coverage"], 0.0
         else:
             terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
-        info["valid"], info["invalid_reason"] = valid, "" if valid else "penetration"
+        if not valid:
+            logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, record.penetration_limit)
+        info["n_cells"] = len(self.dirt_cells)
         causes = outcome(info, valid, trace.unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)[1]
-        return Outcome(terms, cost, info, causes)
+        return Outcome(terms, cost, info, causes, valid=valid, reason="" if valid else "penetration")
 
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         """The robot's workspace box (nominal table frame)."""
         return robot.workspace
+
+    # ------------------------------------------------------------------ execution on the faces
+    def stage(self, robot: RobotDescription) -> Stage:
+        """The task's own scene (the version's: composed, or the robot's hand-merged scene in v1 and v2), timing,
+        action map (with the approach and the sweep) and path IK (to the sponge's face centre)."""
+        if robot.name != self.robot.name:
+            raise ValueError(f"robot: the wiping task was built for {self.robot.name!r}, not {robot.name!r}")
+        return Stage(self.scene, self.frame_skip, self.dt, self.n_steps, self.times, self.action_map, self.ik)
+
+    def rest_pose(self, context: Context, plan: TaskPlan, face: Any) -> np.ndarray:
+        """The joints with the sponge at the context's start (flat on the table where it is low)."""
+        return self.solve_path(context.sponge_start[None]).q[0]
+
+    def check_params(self, theta: np.ndarray) -> Rejection | None:
+        """Parameters whose amplitude leaves the DMP's range are refused (reason ``"r0"``)."""
+        violation = self.action_map.r0_violation(theta)
+        return Rejection("r0", violation - 1.0) if violation > 0 else None
+
+    def solve(self, plan: TaskPlan, face: Any) -> Solution | Rejection:
+        """The path is finite and inside the workspace; its joints (the path IK, :meth:`solve_path`) reach it, with
+        the sponge flat on the table where it is low (at most the engage height above it), and move within the
+        joint speed limit. With :attr:`cup_clearance` the path is pushed away from the cup first (and checked against
+        the workspace again; ``info["clearance_push"]``: the largest push, m)."""
+        path = plan.path
+        info: dict[str, Any] = {}
+        if not np.all(np.isfinite(path)):
+            return Rejection("nonfinite_path", 1.0)
+        excess = _workspace_excess(path, self.robot.workspace)
+        if excess > 0:
+            return Rejection("workspace", excess / 0.1)
+        solution = self.solve_path(path)
+        if self.cup_clearance is not None:
+            path, solution = self._clear_cup(path, solution, info)
+            excess = _workspace_excess(path, self.robot.workspace)
+            if excess > 0:
+                return Rejection("workspace", excess / 0.1, info)
+        flat = path[:, 2] <= self._engage
+        bad = (solution.pos_error > self.ik_tolerance[0]) | (flat & (solution.rot_error > self.ik_tolerance[1]))
+        if np.any(bad):
+            severity = 0.5 * np.mean(bad) + 0.5 * min(1.0, float(solution.pos_error.max()) / 0.1)
+            return Rejection("unreachable", severity, info)
+        speed = float(np.max(np.abs(np.diff(solution.q, axis=0)))) / self.dt
+        if speed > self.max_joint_speed:
+            return Rejection("joint_speed", speed / self.max_joint_speed - 1.0, info)
+        return Solution(TaskPlan(path, plan.origin, plan.rotation, plan.extras), solution, info)
+
+    def simulate(self, solution: Solution, face: Any, capture: Callable[[int], None] | None) -> ToolPath:
+        """The simulation core with the wiping hook (:func:`~rdmp_gym.envs.tasks.wiping.simulation.simulate_wipe`):
+        the joint targets with the servos' feed-forward, the pressing depth adapted online from the wrist force
+        along the control normal, the dirt worn step by step (:attr:`dirt_left` afterwards)."""
+        path, joints = solution.plan.path, solution.joints
+        smooth = self.smoothness(path, joints.q)
+        scene = self.scene
+        normal = scene.control_frame()[1][:, 2]
+        plan = JointTargetPlan(joints, self.dt, face.servo_lead, scene.joint_lower, scene.joint_upper, normal)
+        scene.set_arm_state(joints.q[0])
+        adaptation = self.force_adaptation()
+        dirt = DirtField(self.dirt_cells, scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
+                         contact_threshold=self.reward_settings.contact_threshold)
+        self.dirt_left = np.ones(len(self.dirt_cells))
+        after = None
+        if capture is not None:
+            capture(-1)
+
+            def after(k: int, dirt_left: Callable[[], np.ndarray]) -> None:
+                self._live_dirt = dirt_left
+                capture(k)
+
+        try:
+            trace = simulate_wipe(scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
+                                  self.simulation_settings, callback=after)
+        finally:
+            self._live_dirt = None
+        self.dirt_left = trace.dirt
+        return ToolPath(TaskPlan(path, *scene.control_frame()), joints.q, np.zeros((0, 0)), np.zeros((0, 0)),
+                        np.zeros((0, 0)), trace.sponge_pos, trace.steps, trace.unstable, self.dt, self.frame_skip,
+                        smooth.jerk_ratio, float(smooth.joint_accel.max()), self.robot.max_joint_accel,
+                        WipeRecord(trace, smooth, self.penetration_limit))
+
+    def invalid(self, reason: str, severity: float, n_steps: int) -> Outcome:
+        """The invalid-parameter penalty (:func:`~rdmp_gym.envs.tasks.wiping.reward.invalid_reward`) with the void
+        statistics of an episode not run (:func:`~rdmp_gym.envs.tasks.wiping.info.void_statistics`)."""
+        traces: dict[str, np.ndarray] = {}
+        info: dict[str, Any] = {"cost_terms": traces}
+        terms, cost = invalid_reward(severity, n_steps, self.reward_weights, traces)
+        info.update(void_statistics(n_steps))
+        info["n_cells"] = len(self.dirt_cells)
+        return Outcome(terms, cost, info, ("invalid",), valid=False, reason=reason)
+
+    def render_overlay(self, renderer: SceneRenderer) -> np.ndarray:
+        """The frame with the dirt left on the table (during an episode, as worn so far)."""
+        _, rot = self.scene.table_frame(actual=True)
+        dirt = self.dirt_left if self._live_dirt is None else self._live_dirt()
+        return renderer.render(self.dirt_cells, dirt, 0.5 * self.cell_size, rot)
+
+    # ------------------------------------------------------------------ the episode's conveniences
+    def smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
+        """Jerk of the commanded path relative to the imitation's in the episode's context (v2: per unit of squared
+        speed, :meth:`Smoothness.speed_normalised`), and joint accelerations."""
+        jerk_sq = Smoothness.jerk_squared(path, self.dt)
+        normalised = self.task_version.speed_normalised_jerk
+        measure = Smoothness.speed_normalised if normalised else Smoothness.integrated_jerk
+        if self._imitation_jerk is None:
+            self._imitation_jerk = measure(self.imitation_path(), self.dt)
+        ratio = measure(path, self.dt) / max(self._imitation_jerk, 1e-12)
+        return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
+
+    def context_kind(self, observation: np.ndarray) -> str:
+        """The kind of the context ``observation [13]`` (:data:`rdmp_gym.envs.tasks.wiping.context.CONTEXT_KINDS`: a
+        cup on the approach, a cup beside the patch, no cup on one of the largest patches, no cup), for stratified
+        validation."""
+        return self.context_spec.kind(Context.from_vector(np.asarray(observation, dtype=np.float64)))
+
+    def executed_path(self, theta: np.ndarray) -> np.ndarray:
+        """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that an episode executes for parameters ``theta``
+        in the episode's context: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
+        path = self.rollout_path(theta)
+        if (self.cup_clearance is None or not np.all(np.isfinite(path))
+                or _workspace_excess(path, self.robot.workspace) > 0):
+            return path
+        return self._clear_cup(path, self.solve_path(path), {})[0]
+
+    def hand_cup_gaps(self, path: np.ndarray) -> dict[str, np.ndarray]:
+        """``{part: [T]}``: for each part of the hand (fingers, thumb, palm, sponge), the horizontal gap (m)
+        between its points below the cup's top and the cup's side at every control step of ``path [T, 3]``
+        (nominal table frame) as planned (inverse kinematics, no simulation); inf where the part is above the
+        cup. Empty without a cup."""
+        cup = self.cup()
+        if cup is None:
+            return {}
+        hand = self.hand_points()
+        gaps = hand.gaps(self.solve_path(np.asarray(path, dtype=np.float64)).q, cup)
+        return dict(zip(hand.names, gaps.T, strict=True))
+
+    def _clear_cup(self, path: np.ndarray, solution: IKResult, info: dict) -> tuple[np.ndarray, IKResult]:
+        """``path [T, 3]`` and its IK solution with :attr:`cup_clearance`'s push (unchanged without a cup);
+        records the largest push (m) in ``info["clearance_push"]``."""
+        info["clearance_push"] = 0.0
+        cup = self.cup()
+        if cup is None:
+            return path, solution
+        path, solution, push = self.cup_clearance.apply(path, solution, self.solve_path, self.hand_points(), cup,
+                                                        self.scene.control_frame()[1], self.dt)
+        info["clearance_push"] = push
+        return path, solution
 
 
 #: Shift (m) of each context number for the affine basis of :meth:`WipingTask.imitation_path`.
