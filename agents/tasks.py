@@ -10,7 +10,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
-from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, find_spec, learner_defaults
+from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
+from rdmp_gym.envs.specs import find_spec
 
 from .imitation import load_demonstration
 

@@ -8,13 +8,13 @@ Gymnasium's way of saying that an import is wanted for its side effect).
 from __future__ import annotations
 
 import copy
-import importlib
 import inspect
 from collections.abc import Mapping
 from typing import Any
 
 import gymnasium as gym
 
+from .specs import find_spec
 from .tasks import TASKS
 from .tasks.wiping.faces import DEPRECATED as _DEPRECATED
 
@@ -33,7 +33,6 @@ __all__ = [
     "STEP_ID_V3",
     "TRACKING_ID",
     "env_settings",
-    "find_spec",
     "learner_defaults",
     "register_envs",
     "register_task_ids",
@@ -91,18 +90,6 @@ def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
                     if entry.faces is not None and task_ids(task, robot, version)[0] == env_id:
                         defaults = entry.learner_defaults(version)
     return copy.deepcopy(dict(defaults))
-
-
-def find_spec(env_id: str) -> gym.envs.registration.EnvSpec:
-    """The registered spec of ``env_id``, also in the ``"module:id"`` form ``gym.make`` takes (the module is imported
-    first: it registers the id). Raises ValueError naming ``env_id`` for an id nobody registers."""
-    module, _, name = env_id.rpartition(":")
-    try:
-        if module:
-            importlib.import_module(module)
-        return gym.spec(name)
-    except (gym.error.Error, ModuleNotFoundError) as error:
-        raise ValueError(f"env_id: no env registered as {env_id!r} ({error})") from None
 
 
 def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:

@@ -42,6 +42,7 @@ from .ik import IKResult
 from .recording import SceneRenderer, write_video
 from .robots import RobotDescription, get_robot
 from .smoothness import Smoothness
+from .task_scene import standard_stage
 from .tasks import TASKS, get_task
 from .tasks.description import Rejection, TaskDescription, TaskPlan
 from .viewer import HumanViewer
@@ -61,7 +62,7 @@ class RhythmicTaskEnv(gym.Env):
         task: a registered task name (``"drum"``, ``"wipe"``) or a
             :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
         robot: a registered robot name (``"armar3"``, ``"panda"``) or a ``RobotDescription``.
-        version: the task's version (one of its ``versions``; ``gym.make`` of an id sets it).
+        version: the task's version (one of its ``versions``; ``gym.make`` of an id sets it); None: its latest.
         render_mode: ``None``, ``"rgb_array"``, ``"depth_array"`` or ``"human"``; width, height (default the
             task's :attr:`~rdmp_gym.envs.tasks.description.TaskDescription.frame_size`), camera: of the rendered
             frames.
@@ -74,13 +75,15 @@ class RhythmicTaskEnv(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
 
     def __init__(self, task: str | TaskDescription = "drum", robot: str | RobotDescription = "armar3",
-                 version: int = 1, render_mode: str | None = None, width: int | None = None,
+                 version: int | None = None, render_mode: str | None = None, width: int | None = None,
                  height: int | None = None, camera: str | None = "front", frame_stride: int = 4,
                  record_frames: bool = False, **task_settings: Any):
         super().__init__()
         if isinstance(task, str) and task in TASKS:
+            version = max(TASKS[task].versions) if version is None else version
             task_settings = {**TASKS[task].face_settings(robot, version), **task_settings}
         self.task: TaskDescription = get_task(task, **task_settings)
+        version = max(self.task.versions) if version is None else version
         if self.task.own_faces is not None:
             raise ValueError(f"task: {self.task.name!r} runs on its own envs ({self.task.own_faces}), not on the "
                              f"rhythmic face")
@@ -94,7 +97,7 @@ class RhythmicTaskEnv(gym.Env):
                              f"got {render_mode!r}")
         self.render_mode = render_mode
         self.dmp = self.task.imitation()
-        stage = self.task.stage(self.robot)
+        stage = self.task.stage(self.robot) or standard_stage(self.task, self.robot)
         self.scene = stage.scene
         self.frame_skip, self.dt, self.n_steps, self.times = stage.frame_skip, stage.dt, stage.n_steps, stage.times
         self.control_rate = 1.0 / self.dt

@@ -14,11 +14,12 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from .action import ActionMap
 from .arena import DIST, FOUND, MINDIST, add_contact_sensor, self_contact_sensors
 from .ik import BodyClearance, PathIK
 from .kinematics import ChainKinematics
 from .robots import RobotDescription, get_robot
-from .tasks.description import TaskDescription
+from .tasks.description import Stage, TaskDescription
 
 __all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "TaskScene", "compose_task_scene", "read_arm",
            "rotation_from_tilt", "servo_lead"]
@@ -133,3 +134,16 @@ class TaskScene:
     def table_to_world(self, points: np.ndarray) -> np.ndarray:
         """Nominal table-frame points ``[..., 3]`` in the world frame."""
         return np.asarray(points, dtype=np.float64) @ self.table_rotation.T + self.table_origin
+
+
+def standard_stage(task: TaskDescription, robot: RobotDescription) -> Stage:
+    """The stage a face runs ``task`` on with ``robot`` where the task gives none: the room composed with the robot
+    and the task (:class:`TaskScene`); the task's :attr:`control_rate` and :attr:`duration` in its physics steps; the
+    action map of the task's groups and scales; the scene's path inverse kinematics."""
+    scene = TaskScene(robot, task)
+    timestep = scene.model.opt.timestep
+    frame_skip = max(1, round(1.0 / (task.control_rate * timestep)))
+    dt = frame_skip * timestep
+    n_steps = max(2, round(task.duration / dt))
+    return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt,
+                 ActionMap(task.imitation(), task.groups, task.scales), scene.path_ik())

@@ -53,6 +53,18 @@ def test_the_wiping_env_defaults_to_the_current_version():
     assert env_settings("rdmp_gym/ArmarWipeStep-v1")["version"] == 1
 
 
+def test_a_task_built_by_name_is_its_latest_version_with_its_learner_defaults():
+    from rdmp_gym.envs.registration import learner_defaults
+    from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
+    from rdmp_gym.envs.tasks import TASKS
+
+    env = RhythmicTaskEnv("wipe")
+    assert env.version == max(TASKS["wipe"].versions) == 3
+    assert TASKS["wipe"].learner_defaults() == learner_defaults(LATEST_ENV_ID) != learner_defaults(
+        "rdmp_gym/ArmarWipe-v1")
+    env.close()
+
+
 @pytest.mark.parametrize(("env_id", "kwargs", "error", "name"), [
     ("rdmp_gym/ArmarWipe-v3", {"target_forse": 10.0}, SettingTypeError, "target_forse"),
     ("rdmp_gym/ArmarWipe-v3", {"target_force": -1.0}, ValueError, "target_force"),

@@ -35,7 +35,7 @@ import numpy as np
 from rdmp_gym import Demonstration, RhythmicDMP
 
 from ..action import checked_action
-from ..registration import find_spec
+from ..specs import find_spec
 from .controller import JointReader, MujocoJoints, TrackingController, make_controller
 from .defaults import default_demonstration, env_defaults
 from .params import JointParameterMap

@@ -40,11 +40,11 @@ class TaskEntry:
 
     def learner_defaults(self, version: int | None = None) -> dict[str, dict[str, Any]]:
         """The task's learner defaults (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.defaults_for`
-        ``version``, its first without one; empty where the factory is not a description class)."""
+        ``version``, its latest without one; empty where the factory is not a description class)."""
         factory = self._factory()
         if not (isinstance(factory, type) and issubclass(factory, TaskDescription)):
             return {}
-        defaults = factory.defaults_for(self.versions[0] if version is None else version)
+        defaults = factory.defaults_for(max(self.versions) if version is None else version)
         return {agent: dict(options) for agent, options in defaults.items()}
 
     def face_settings(self, robot: Any, version: int) -> dict[str, Any]:

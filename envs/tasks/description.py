@@ -251,20 +251,11 @@ class TaskDescription(ABC):
         return robot.workspace
 
     # ------------------------------------------------------------------ execution on the faces
-    def stage(self, robot: RobotDescription) -> Stage:
-        """What the faces run the task on with ``robot`` (default: the room composed with the robot and the task,
-        :class:`~rdmp_gym.envs.task_scene.TaskScene`; :attr:`control_rate` and :attr:`duration` in its physics
-        steps; the action map of :attr:`groups` and :attr:`scales`; the scene's path inverse kinematics)."""
-        from ..action import ActionMap
-        from ..task_scene import TaskScene
-
-        scene = TaskScene(robot, self)
-        timestep = scene.model.opt.timestep
-        frame_skip = max(1, round(1.0 / (self.control_rate * timestep)))
-        dt = frame_skip * timestep
-        n_steps = max(2, round(self.duration / dt))
-        return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt,
-                     ActionMap(self.imitation(), self.groups, self.scales), scene.path_ik())
+    def stage(self, robot: RobotDescription) -> Stage | None:
+        """What the faces run the task on with ``robot``, or None (the default) for the standard stage
+        (:func:`~rdmp_gym.envs.task_scene.standard_stage`: the room composed with the robot and the task, the action
+        map of :attr:`groups` and :attr:`scales`, the scene's path inverse kinematics)."""
+        return None
 
     def action_time_weights(self, dmp: RhythmicDMP, times: np.ndarray, action_map: ActionMap) -> np.ndarray:
         """How active each action dimension is at the control times ``times [T]``, ``[T, n]`` in [0, 1] (default: the
