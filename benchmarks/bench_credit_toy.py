@@ -17,6 +17,7 @@ against their pair's mean: an exact baseline of the context); and the random-ret
 interquartile mean over seeds of the held-out loss after the updates, with a 95 % bootstrap interval.
 
     python benchmarks/bench_credit_toy.py --save         # 10 seeds, about 6 CPU minutes
+    python benchmarks/bench_credit_toy.py --rough 0.5 --name credit_toy_rough0.5 --save   # rougher exploration
 """
 
 from __future__ import annotations
@@ -51,6 +52,9 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--updates", type=int, default=30)
     parser.add_argument("--rollouts", type=int, default=10, help="rollouts per update (even)")
+    parser.add_argument("--rough", type=float, default=None,
+                        help="bbrl's share of independent (not smooth) exploration (default: bbrl's own)")
+    parser.add_argument("--name", default="credit_toy", help="the results file's name (.json)")
     add_save_argument(parser)
     args = parser.parse_args()
     if args.dims < 2 or args.dims % 2 or args.rollouts < 2 or args.rollouts % 2:
@@ -81,6 +85,7 @@ def cost_traces(actions: np.ndarray, contexts: np.ndarray, offset: np.ndarray) -
 def run(target: str, condition: str, seed: int, args: argparse.Namespace) -> dict:
     """One learner on the toy: the held-out loss before and after, and the last update's KL."""
     options, paired, random_returns = CONDITIONS[condition]
+    options = options if args.rough is None else {**options, "rough": args.rough}
     n = args.dims
     offset = offsets(target, n)
     space = SearchSpace({"periodic": slice(0, n)}, 1, np.zeros(1), np.ones(1), time_weights=np.eye(n))
@@ -129,7 +134,7 @@ def main() -> None:
             print(f"| {target} | {condition} | {text} | {'' if wins is None else f'{wins}/{args.seeds}'} |")
         start = np.mean([r["before"] for r in runs if r["target"] == target])
         print(f"| {target} | the start (a = 0) | {start:.3f} | |")
-    path = results_dir(args.save) / "credit_toy.json"
+    path = results_dir(args.save) / f"{args.name}.json"
     path.write_text(json.dumps({"settings": {k: v for k, v in vars(args).items() if k != "save"},
                                 "summary": summary, "runs": runs}, indent=1))
     print(f"wrote {path}")
