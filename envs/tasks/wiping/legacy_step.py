@@ -46,7 +46,7 @@ import numpy as np
 from rdmp_gym import DMPStepper
 
 from ...controller import ForceAdaptation
-from ...coupling import axis_shift, coupling_action
+from ...coupling import axis_shift, coupling_action, plan_velocity
 from ...servo import ServoSimulation
 from .context import SIZE as CONTEXT_SIZE
 from .env import ArmarWipeEnv, outcome
@@ -175,11 +175,7 @@ class ArmarWipeStepEnv(gym.Env):
             self._path[k + 1] = self._clip(target)
             self._q[k + 1], self._ndq[k + 1] = self._solve(self._path[k + 1], self._ik_start)
         q = self._q
-        if count == 1:
-            velocity = np.zeros(q.shape[1])
-        else:                                              # np.gradient of the episodic JointTargetPlan
-            lo, hi = max(0, k - 1), min(count - 1, k + 1)
-            velocity = (q[hi] - q[lo]) / ((hi - lo) * task.dt)
+        velocity = plan_velocity(q, k, task.dt)             # np.gradient of the episodic JointTargetPlan
         unstable = self._core.step(k, q[k] + self._lead * velocity)
         self._k = k + 1
         penetrated = self._penetration > task.penetration_limit
