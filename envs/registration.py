@@ -99,10 +99,10 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.typed_settings`: the wiping task's
     :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`, also for the deprecated v0); the other ids of this package
     give the keywords (registered and given), checked against the env's signature and, for a task of the rhythmic
-    face, against its description; ids of other packages give the keywords as they are, checked to be
-    keywords of the env or settings of the rhythmic black-box wrapper (:func:`~rdmp_gym.envs.blackbox.split_settings`).
-    Raises ValueError for an unknown id, and TypeError or ValueError naming a setting the env does not take or a value
-    it refuses.
+    face or its step twin, the face's keywords as the face's episodic ids check them; ids of other packages give the
+    keywords as they are, checked to be keywords of the env or settings of the rhythmic black-box wrapper
+    (:func:`~rdmp_gym.envs.blackbox.split_settings`). Raises ValueError for an unknown id, and TypeError or ValueError
+    naming a setting the env does not take or a value it refuses.
     """
     spec = find_spec(env_id)
     settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
@@ -116,23 +116,39 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
         from .tasks.wiping.settings import EnvConfig
 
         return EnvConfig.from_kwargs(**settings)
-    if spec.entry_point == _RHYTHMIC and settings.get("task") in TASKS:
+    if spec.entry_point == _RHYTHMIC:
+        return _face_settings(env_id, settings)
+    bound = _bound(env_id, spec.entry_point, settings)
+    if spec.entry_point == _RHYTHMIC_STEP:
+        _face_settings(env_id, bound.arguments.get("kwargs", {}))
+    return settings
+
+
+def _face_settings(env_id: str, settings: dict[str, Any]) -> Any:
+    """The episodic face's keywords ``settings`` as the task's typed record where it has one, else as they are,
+    checked against the face's signature and the task's description."""
+    if settings.get("task") in TASKS:
         typed = TASKS[settings["task"]].typed_settings({k: v for k, v in settings.items() if k != "task"})
         if typed is not None:
             return typed
-    creator = gym.envs.registration.load_env_creator(spec.entry_point)
+    bound = _bound(env_id, _RHYTHMIC, settings)
+    from .tasks import get_task
+
     try:
-        bound = inspect.signature(creator).bind(**settings)
+        get_task(settings["task"], **bound.arguments.get("task_settings", {}))
     except TypeError as error:
         raise TypeError(f"env_kwargs: {env_id} does not take these settings: {error}") from None
-    if spec.entry_point in (_RHYTHMIC, _RHYTHMIC_STEP):
-        from .tasks import get_task
-
-        try:
-            get_task(settings["task"], **bound.arguments.get("task_settings", {}))
-        except TypeError as error:
-            raise TypeError(f"env_kwargs: {env_id} does not take these settings: {error}") from None
     return settings
+
+
+def _bound(env_id: str, entry_point: str, settings: dict[str, Any]) -> inspect.BoundArguments:
+    """``settings`` bound to the signature of the env at ``entry_point`` (TypeError naming ``env_id`` if they do not
+    fit)."""
+    creator = gym.envs.registration.load_env_creator(entry_point)
+    try:
+        return inspect.signature(creator).bind(**settings)
+    except TypeError as error:
+        raise TypeError(f"env_kwargs: {env_id} does not take these settings: {error}") from None
 
 
 def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:

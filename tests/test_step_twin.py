@@ -1,12 +1,17 @@
-"""The v3 step twin runs the episodic env's simulation core: action 0 is the episodic imitation, exactly."""
+"""The v3 step twin runs the episodic env's simulation core: action 0 is the episodic imitation, exactly; the step
+ids keep their published observation and action spaces."""
 
 from __future__ import annotations
+
+import hashlib
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
-from rdmp_gym.envs.tasks.wiping.step import WipeStepEnv, coupling_filter
+from rdmp_gym.envs.coupling import coupling_filter
+from rdmp_gym.envs.rhythmic_step import RhythmicTaskStepEnv
+from rdmp_gym.envs.tasks.wiping.step import WipeStepBook, WipeStepEnv
 
 SHORT = {"n_periods": 2.0}
 
@@ -57,10 +62,42 @@ def test_a_shifted_episode_moves_the_sponge_and_stays_finite():
     assert np.max(path[:, 1] - imitation[:, 1]) == pytest.approx(0.06, abs=0.01)
 
 
-@pytest.mark.parametrize(("key", "value"), [("cup_clearance", 0.01), ("record_frames", True)])
+@pytest.mark.parametrize(("key", "value"), [("cup_clearance", 0.01), ("record_frames", True), ("reward_every", 2)])
 def test_settings_it_cannot_honour_are_refused_by_name(key, value):
     with pytest.raises(ValueError, match=key):
-        WipeStepEnv(version=3, **{key: value})
+        gym.make("rdmp_gym/ArmarWipeStep-v3", **SHORT, **{key: value})
+
+
+def test_the_wiping_step_env_is_a_deprecated_name_of_the_generic_twin():
+    with pytest.warns(DeprecationWarning, match="WipeStepEnv"):
+        env = WipeStepEnv(version=3, **SHORT)
+    assert isinstance(env, RhythmicTaskStepEnv) and isinstance(env.book, WipeStepBook)
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="cup_clearance"):
+        WipeStepEnv(version=3, cup_clearance=0.01, **SHORT)
+
+
+#: the published step ids' spaces: observation size and the digest of the observation's and the action's bounds
+SPACES = {"rdmp_gym/ArmarWipeStep-v1": (26, "8cc093141bc9378c"), "rdmp_gym/ArmarWipeStep-v2": (26, "8cc093141bc9378c"),
+          "rdmp_gym/ArmarWipeStep-v3": (26, "8cc093141bc9378c"), "rdmp_gym/PandaWipeStep-v3": (26, "8cc093141bc9378c"),
+          "rdmp_gym/ArmarDrumStep-v1": (15, "02ae886d185139e7"), "rdmp_gym/PandaDrumStep-v1": (15, "02ae886d185139e7")}
+
+
+@pytest.mark.parametrize("env_id", sorted(SPACES))
+def test_the_step_ids_keep_their_observation_and_action_spaces(env_id):
+    if env_id.startswith("rdmp_gym/Panda"):
+        pytest.importorskip("gymnasium_robotics")
+    env = gym.make(env_id).unwrapped
+    observation, action = env.observation_space, env.action_space
+    size, digest = SPACES[env_id]
+    assert observation.shape == (size,) and observation.dtype == action.dtype == np.float32
+    assert action.shape == (3,) and np.all(action.low == -1.0) and np.all(action.high == 1.0)
+    context = env.task.observation_space
+    np.testing.assert_array_equal(observation.high[-context.shape[0]:], np.maximum(-context.low, context.high))
+    assert np.all(observation.low == -observation.high)
+    bounds = hashlib.sha256(b"".join(np.ascontiguousarray(bound).tobytes() for space in (observation, action)
+                                     for bound in (space.low, space.high)))
+    assert bounds.hexdigest()[:16] == digest
+    env.close()
 
 
 def test_bad_actions_and_order_are_errors():

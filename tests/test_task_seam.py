@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
@@ -18,6 +18,8 @@ from mini_arm import MINI
 from rdmp_gym.envs.arena import FORCE, FOUND, NETFORCE, add_contact_sensor
 from rdmp_gym.envs.registration import learner_defaults, register_task_ids, task_ids
 from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
+from rdmp_gym.envs.rhythmic_step import RhythmicTaskStepEnv
+from rdmp_gym.envs.step_book import StepBook
 from rdmp_gym.envs.tasks import TASKS, Outcome, TaskDescription, TaskPlan, ToolPath, get_task, register_task
 
 from rdmp_gym import Demonstration, RhythmicDMP
@@ -85,6 +87,26 @@ class TapTask(TaskDescription):
         return Outcome({"taps": -float(cost[-1])}, cost, {"taps": taps}, () if taps >= 3 else ("taps",))
 
 
+class EndAfter(StepBook):
+    """The generic step interface, ended by the task after ``steps`` control steps and judged only then."""
+
+    refused: ClassVar[Mapping[str, str]] = {"reward_every": "it judges the episode once, at its end"}
+
+    def __init__(self, face: RhythmicTaskEnv, steps: int):
+        super().__init__(face, reward_every=face.n_steps)
+        self.steps = steps
+
+    def ended(self, k: int) -> bool:
+        return k + 1 >= self.steps
+
+
+class ShortTap(TapTask):
+    """The tap task with a step interface of its own: a step episode of 50 control steps."""
+
+    def step_book(self, face: RhythmicTaskEnv) -> StepBook:
+        return EndAfter(face, 50)
+
+
 @pytest.fixture(scope="module", autouse=True)
 def tap_registered():
     register_task("tap", TapTask, id_name="Tap")
@@ -107,12 +129,35 @@ def test_a_registered_task_gets_episodic_and_step_ids_for_every_robot(tap_regist
     assert tap_registered == ["rdmp_gym/ArmarTap-v1", "rdmp_gym/PandaTap-v1"]
     assert task_ids("tap", "panda", 1) == ("rdmp_gym/PandaTap-v1", "rdmp_gym/PandaTapStep-v1")
     env = gym.make("rdmp_gym/ArmarTapStep-v1")
+    assert type(env.unwrapped) is RhythmicTaskStepEnv and type(env.unwrapped.book) is StepBook     # the generic twin
     env.reset(seed=1)
     total, done = 0.0, False
     while not done:
         _, reward, terminated, truncated, info = env.step(np.zeros(3))
         total, done = total + reward, terminated or truncated
     assert info["is_success"] and np.isclose(total, -info["cost_trace"].sum())
+
+
+@pytest.mark.parametrize("env_id", ["rdmp_gym/ArmarWipeStep-v3", "rdmp_gym/PandaWipeStep-v3"])
+def test_the_wiping_step_ids_are_the_generic_step_twin_of_the_task(env_id):
+    spec = gym.spec(env_id)
+    assert spec.entry_point == "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv" and spec.kwargs["task"] == "wipe"
+
+
+def test_a_tasks_step_book_ends_an_episode_early_and_refuses_a_setting_by_name():
+    env = RhythmicTaskStepEnv(task=ShortTap(), robot="armar3")
+    env.reset(seed=1)
+    rewards, done = [], False
+    while not done:
+        _, reward, terminated, truncated, info = env.step(np.zeros(3))
+        rewards.append(reward)
+        done = terminated or truncated
+    assert len(rewards) == 50 and terminated and not truncated
+    assert rewards[:-1] == [0.0] * 49 and rewards[-1] == info["episode_reward"] and "is_success" in info
+    with pytest.raises(RuntimeError, match="ended"):
+        env.step(np.zeros(3))
+    with pytest.raises(ValueError, match="reward_every"):
+        RhythmicTaskStepEnv(task=ShortTap(), robot="armar3", reward_every=2)
 
 
 def test_tasks_are_refused_by_name():

@@ -19,6 +19,10 @@ A task description holds everything task-specific, so that one episodic face
   and path checks (:meth:`solve`: the joint plan, or a rejection with its reason and severity), the simulation with
   the task's hook on the core (:meth:`simulate`), the penalty of a rejected path (:meth:`invalid`) and the rendered
   frame with the task's overlay (:meth:`render_overlay`);
+- the **step interface** on the step twin (:meth:`step_book`): a :class:`~rdmp_gym.envs.step_book.StepBook` with the
+  plan the twin shifts, the simulation, the shifted target, the per-step bookkeeping, an early end, the step's reward
+  and info, the observation and the settings the twin refuses; by default the generic book (the tool tip observed, a
+  reward judged every few control steps);
 - the **learner defaults** (:attr:`learner_defaults`): settings a learner may read from the task, by agent name.
 
 Adding a task is one folder with its description and one line in :data:`rdmp_gym.envs.tasks.TASKS` (or a call of
@@ -326,6 +330,11 @@ class TaskDescription(ABC):
     def render_overlay(self, renderer: SceneRenderer) -> np.ndarray:
         """The scene's current frame with what the task draws on it (default: nothing, the scene as it is)."""
         return renderer.render()
+
+    def step_book(self, face: Any) -> Any:
+        """The task's step interface on the step twin over the episodic ``face``: a
+        :class:`~rdmp_gym.envs.step_book.StepBook` of the task's own, or None (the default) for the generic book."""
+        return None
 
 
 #: IK residuals (position m, angle rad) beyond which a path is unreachable (:meth:`TaskDescription.solve`)

@@ -1,12 +1,12 @@
 """The envs that serve the wiping task's ids (strings only: registering the ids imports no MuJoCo).
 
 The episodic ids of every version are the generic face :class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv` of the
-task ``"wipe"`` (its hooks: :class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`). The step twins are the task's
-own, on that face: :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv` from v3 on and the v1/v2 step env
-:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`; their observation (the canonical state, the
-sponge's pose and velocity, the wrist force), their reward terms grown step by step and their end on a penetration
-are the published step interface of the task, which the generic step twin's (the tool tip, a reward judged every
-few steps) is not. v1 and v2 were published on ARMAR-III only."""
+task ``"wipe"`` (its hooks: :class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`). The step ids from v3 on are the
+generic step twin :class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv` of the task ``"wipe"``, with the task's
+step book (:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`: the canonical state, the sponge's pose and
+velocity and the wrist force observed, every reward term grown step by step, the end on a penetration). The v1/v2
+step ids are the v1/v2 step env :class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`, which runs the
+DMP online on that face. v1 and v2 were published on ARMAR-III only."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from typing import Any
 __all__ = ["DEPRECATED", "EPISODIC", "LEGACY_STEP", "STEP", "faces"]
 
 EPISODIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
-STEP = "rdmp_gym.envs.tasks.wiping.step:WipeStepEnv"
+STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
 LEGACY_STEP = "rdmp_gym.envs.tasks.wiping.legacy_step:ArmarWipeStepEnv"
 #: ``rdmp_gym/ArmarWipe-v0``: v1 without the cup, with a DeprecationWarning
 DEPRECATED = "rdmp_gym.envs.tasks.wiping.env:deprecated_v0"
@@ -31,5 +31,6 @@ def faces(robot: str, version: int) -> tuple[tuple[str, dict[str, Any]], tuple[s
     on_robot = {} if robot == "armar3" else {"robot": robot}
     episodic = (EPISODIC, {"task": "wipe", "obstacle": True, "version": version, **on_robot})
     shift = {} if version == 1 else {"max_shift": _STEP_SHIFT}
-    step = (STEP if version >= 3 else LEGACY_STEP, {"version": version, **shift, **on_robot})
-    return episodic, step
+    if version >= 3:
+        return episodic, (STEP, {"task": "wipe", "version": version, **shift, **on_robot})
+    return episodic, (LEGACY_STEP, {"version": version, **shift, **on_robot})

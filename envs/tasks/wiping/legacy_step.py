@@ -3,8 +3,9 @@
 The step-based sibling of ``ArmarWipe-v1``, as fancy_gym offers one beside each movement-primitive env:
 the same scene (tilted table, Preston dirt, the cup), context, DMP, controller and reward terms; the
 generic episodic face of the wiping task inside (:class:`ArmarWipeEnv`) provides them. It keeps its own class
-(not the generic step twin) because its online DMP, observation and per-step reward are the published v1/v2 step
-interface. Per ``step`` (control step ``k``):
+(not the generic step twin with the wiping task's step book, which shifts a planned path) because its DMP runs online
+and its inverse kinematics solves one target per step, the published v1/v2 step interface. Per ``step`` (control
+step ``k``):
 
 1. the DMP runs online (``RhythmicDMP.start(start_blend=True)`` -> :class:`rdmp_gym.DMPStepper`, anchored at
    the dirt patch, started at the sponge start), driven by the **coupling term**

@@ -18,9 +18,10 @@ hand-merged scene in v1 and v2; the action map with the approach and the sweep),
 the amplitude check (``"r0"``), the path checks (the sponge flat within the engage height, the cup clearance), the
 wiping hook on the simulation core, the invalid penalty and the dirt drawn on the frames, so that every number the
 published versions gave reproduces bit for bit. The episode's state the task keeps (:attr:`WipingTask.context`, the
-dirt) is set by :meth:`WipingTask.place`. The step twins are the task's own
-(:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepEnv`, v1/v2
-:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`) on that face.
+dirt) is set by :meth:`WipingTask.place`. The v3 step ids are the generic step twin
+(:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`) with the task's step book
+(:meth:`WipingTask.step_book`, :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`); the v1/v2 step env
+(:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`) runs the DMP online on that face.
 """
 
 from __future__ import annotations
@@ -58,6 +59,7 @@ from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, w
 from .scene import TablePose, WipeScene, dirt_grid
 from .settings import EnvConfig, ForceConfig, RewardConfig, TaskConfig
 from .simulation import DirtField, SimulationSettings, WipeTrace, simulate_wipe
+from .step import WipeStepBook
 from .versions import LEARNER_DEFAULTS, TASK_VERSIONS, TaskVersion
 
 __all__ = ["DEFAULT_GROUPS", "WipeRecord", "WipingTask", "episode_success", "failure_causes", "outcome"]
@@ -568,8 +570,12 @@ class WipingTask(TaskDescription):
         if not valid:
             logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, record.penetration_limit)
         info["n_cells"] = len(self.dirt_cells)
-        causes = outcome(info, valid, trace.unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)[1]
+        causes = self.success(info, valid, trace.unstable)[1]
         return Outcome(terms, cost, info, causes, valid=valid, reason="" if valid else "penetration")
+
+    def success(self, stats: Mapping[str, Any], valid: bool, unstable: bool) -> tuple[bool, tuple[str, ...]]:
+        """``(is_success, causes)`` of an episode's statistics with this version's criteria (:func:`outcome`)."""
+        return outcome(stats, valid, unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)
 
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         """The robot's workspace box (nominal table frame)."""
@@ -668,6 +674,12 @@ class WipingTask(TaskDescription):
         _, rot = self.scene.table_frame(actual=True)
         dirt = self.dirt_left if self._live_dirt is None else self._live_dirt()
         return renderer.render(self.dirt_cells, dirt, 0.5 * self.cell_size, rot)
+
+    def step_book(self, face: Any) -> WipeStepBook:
+        """The wiping task's step interface (:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`: the canonical
+        state, the sponge and the wrist force observed, every reward term grown step by step, the target kept in the
+        workspace, the end on a penetration)."""
+        return WipeStepBook(face)
 
     # ------------------------------------------------------------------ the episode's conveniences
     def smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
