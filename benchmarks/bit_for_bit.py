@@ -2,8 +2,8 @@
 
 Each entry is a SHA-256 of the exact bytes of a result: the fitted DMPs of the built-in demonstrations (the
 library's defaults and the settings the environments pin), episodic returns and infos of the published task
-versions (v1, v2, v2 with the cup clearance, v3 on both robots, the step twins) on fixed reset seeds and actions,
-and short learner runs (a few updates of every learner, one worker).
+versions (v1, v2, v2 with the cup clearance, v3 on both robots, drumming on both robots, the step twins) on fixed
+reset seeds and actions, and short learner runs (a few updates of every learner, one worker).
 
     python benchmarks/bit_for_bit.py --out runs/bit_for_bit.json            # write the digests
     python benchmarks/bit_for_bit.py --check benchmarks/results/bit_for_bit.json   # compare, exit 1 on a change
@@ -105,7 +105,11 @@ def envs() -> dict[str, str]:
             "env/v3": _episodes("rdmp_gym/ArmarWipe-v3"),
             "env/panda_v3": _episodes("rdmp_gym/PandaWipe-v3"),
             "env/step_v3": _step_episodes("rdmp_gym/ArmarWipeStep-v3"),
-            "env/panda_step_v3": _step_episodes("rdmp_gym/PandaWipeStep-v3")}
+            "env/panda_step_v3": _step_episodes("rdmp_gym/PandaWipeStep-v3"),
+            "env/drum": _episodes("rdmp_gym/ArmarDrum-v1"),
+            "env/panda_drum": _episodes("rdmp_gym/PandaDrum-v1"),
+            "env/drum_step": _step_episodes("rdmp_gym/ArmarDrumStep-v1"),
+            "env/panda_drum_step": _step_episodes("rdmp_gym/PandaDrumStep-v1")}
 
 
 def learners() -> dict[str, str]:
