@@ -84,9 +84,6 @@ class RhythmicTaskEnv(gym.Env):
             task_settings = {**TASKS[task].face_settings(robot, version), **task_settings}
         self.task: TaskDescription = get_task(task, **task_settings)
         version = max(self.task.versions) if version is None else version
-        if self.task.own_faces is not None:
-            raise ValueError(f"task: {self.task.name!r} runs on its own envs ({self.task.own_faces}), not on the "
-                             f"rhythmic face")
         self.robot: RobotDescription = get_robot(robot)
         if version not in self.task.versions:
             raise ValueError(f"version: the task {self.task.name!r} has the versions {list(self.task.versions)}, "

@@ -189,8 +189,6 @@ class TaskDescription(ABC):
     control_rate: float = 100.0
     #: settings a learner may read from the task: ``{agent: {option: value}}``
     learner_defaults: Mapping[str, Mapping[str, Any]] = {}
-    #: the envs that run the task where they are its own, not the rhythmic face (None: the rhythmic face)
-    own_faces: ClassVar[str | None] = None
     #: the rendered frames' default size (width, height) in pixels
     frame_size: ClassVar[tuple[int, int]] = (480, 360)
 
