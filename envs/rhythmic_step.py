@@ -32,11 +32,12 @@ velocity, the wrist force and the context.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
+
+from rdmp_gym.validation import refuse_settings
 
 from .coupling import axis_shift, coupling_action, coupling_filter, joint_shift, plan_velocity
 from .rhythmic_env import RhythmicTaskEnv
@@ -69,10 +70,10 @@ class RhythmicTaskStepEnv(gym.Env):
             raise ValueError(f"reward_every: expected an integer >= 1, got {reward_every!r}")
         self.episodic = RhythmicTaskEnv(**kwargs)
         face = self.episodic
+        every = REWARD_EVERY if reward_every is None else reward_every
         #: the task's step interface (:class:`~rdmp_gym.envs.step_book.StepBook`)
-        self.book: StepBook = face.task.step_book(face) or StepBook(
-            face, REWARD_EVERY if reward_every is None else reward_every)
-        _refuse(self.book.refused, {**kwargs, "reward_every": reward_every})
+        self.book: StepBook = face.task.step_book(face, every) or StepBook(face, every)
+        refuse_settings(self.book.refused, {**kwargs, "reward_every": reward_every}, "the step twin")
         self.render_mode = face.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(face.control_rate))}
         dmp = face.dmp
@@ -150,10 +151,3 @@ class RhythmicTaskStepEnv(gym.Env):
         self._path[k] = target
         self._q[k] = self._imitation_q[k] + joint_shift(self.episodic.ik.kin, self._imitation_q[k],
                                                           self._plan.rotation @ offset)
-
-
-def _refuse(refused: Mapping[str, str], settings: Mapping[str, Any]) -> None:
-    """ValueError naming the first of the ``refused`` settings (name -> why) given a value other than None or False."""
-    for key, why in refused.items():
-        if settings.get(key) not in (None, False):
-            raise ValueError(f"{key}: the step twin cannot honour it ({why})")

@@ -26,6 +26,7 @@ __all__ = [
     "check_range",
     "check_time_grid",
     "is_number",
+    "refuse_settings",
 ]
 
 
@@ -122,6 +123,14 @@ def check_choice(value: str, name: str, choices: tuple[str, ...]) -> None:
     """Raise ``ValueError`` naming ``name`` unless ``value`` is one of ``choices``."""
     if value not in choices:
         raise ValueError(f"{name}: expected one of {list(choices)}, got {value!r}")
+
+
+def refuse_settings(refused: Mapping[str, str], settings: Mapping[str, object], env: str) -> None:
+    """Raise ``ValueError`` naming the first of the ``refused`` settings (name -> why ``env`` cannot honour it) that
+    ``settings`` give a value other than None or False."""
+    for name, why in refused.items():
+        if settings.get(name) not in (None, False):
+            raise ValueError(f"{name}: {env} cannot honour it ({why})")
 
 
 def as_finite_array(value: object, name: str, ndim: int | tuple[int, ...] | None = None) -> np.ndarray:

@@ -103,7 +103,7 @@ class EndAfter(StepBook):
 class ShortTap(TapTask):
     """The tap task with a step interface of its own: a step episode of 50 control steps."""
 
-    def step_book(self, face: RhythmicTaskEnv) -> StepBook:
+    def step_book(self, face: RhythmicTaskEnv, reward_every: int) -> StepBook:
         return EndAfter(face, 50)
 
 
@@ -158,6 +158,35 @@ def test_a_tasks_step_book_ends_an_episode_early_and_refuses_a_setting_by_name()
         env.step(np.zeros(3))
     with pytest.raises(ValueError, match="reward_every"):
         RhythmicTaskStepEnv(task=ShortTap(), robot="armar3", reward_every=2)
+
+
+class OwnBook(StepBook):
+    """A book of a task's own that keeps the generic judgement."""
+
+
+class JudgedTap(TapTask):
+    """The tap task with a book of its own, judged at the twin's resolution; it notes the steps it judged."""
+
+    def __init__(self):
+        super().__init__()
+        self.judged: list[int] = []
+
+    def step_book(self, face: RhythmicTaskEnv, reward_every: int) -> StepBook:
+        return OwnBook(face, reward_every)
+
+    def evaluate(self, record: ToolPath, context: Any, sensor: Mapping[str, slice]) -> Outcome:
+        self.judged.append(record.steps)
+        return super().evaluate(record, context, sensor)
+
+
+def test_a_tasks_step_book_gets_the_twins_reward_resolution():
+    task = JudgedTap()
+    env = RhythmicTaskStepEnv(task=task, robot="armar3", reward_every=7)
+    assert type(env.book) is OwnBook and env.book.reward_every == 7
+    env.reset(seed=1)
+    for _ in range(30):
+        env.step(np.zeros(3))
+    assert task.judged == [7, 14, 21, 28]
 
 
 def test_tasks_are_refused_by_name():

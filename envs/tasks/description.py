@@ -329,9 +329,10 @@ class TaskDescription(ABC):
         """The scene's current frame with what the task draws on it (default: nothing, the scene as it is)."""
         return renderer.render()
 
-    def step_book(self, face: Any) -> Any:
+    def step_book(self, face: Any, reward_every: int) -> Any:
         """The task's step interface on the step twin over the episodic ``face``: a
-        :class:`~rdmp_gym.envs.step_book.StepBook` of the task's own, or None (the default) for the generic book."""
+        :class:`~rdmp_gym.envs.step_book.StepBook` of the task's own, or None (the default) for the generic book;
+        ``reward_every`` is the twin's reward resolution in control steps, which a book honours or refuses by name."""
         return None
 
 

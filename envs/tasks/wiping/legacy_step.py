@@ -45,6 +45,7 @@ import gymnasium as gym
 import numpy as np
 
 from rdmp_gym import DMPStepper
+from rdmp_gym.validation import refuse_settings
 
 from ...controller import ForceAdaptation
 from ...coupling import axis_shift, coupling_action, plan_velocity
@@ -87,9 +88,7 @@ class ArmarWipeStepEnv(gym.Env):
     def __init__(self, max_shift: float | tuple[float, float, float] = 0.02, ik_iterations: int = 30,
                  **kwargs: Any) -> None:
         super().__init__()
-        for key, why in REFUSED.items():
-            if kwargs.get(key) not in (None, False):
-                raise ValueError(f"{key}: the v1/v2 step env cannot honour it ({why})")
+        refuse_settings(REFUSED, kwargs, "the v1/v2 step env")
         kwargs.setdefault("version", 1)
         if kwargs["version"] not in (1, 2):
             raise ValueError(f"version: this step env runs the versions 1 and 2, got {kwargs['version']!r}; "

@@ -675,10 +675,10 @@ class WipingTask(TaskDescription):
         dirt = self.dirt_left if self._live_dirt is None else self._live_dirt()
         return renderer.render(self.dirt_cells, dirt, 0.5 * self.cell_size, rot)
 
-    def step_book(self, face: Any) -> WipeStepBook:
+    def step_book(self, face: Any, reward_every: int) -> WipeStepBook:
         """The wiping task's step interface (:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`: the canonical
-        state, the sponge and the wrist force observed, every reward term grown step by step, the target kept in the
-        workspace, the end on a penetration)."""
+        state, the sponge and the wrist force observed, every reward term grown step by step, so it refuses a given
+        ``reward_every``; the target kept in the workspace, the end on a penetration)."""
         return WipeStepBook(face)
 
     # ------------------------------------------------------------------ the episode's conveniences
