@@ -91,7 +91,8 @@ def test_the_low_rank_factor_learns_from_its_small_random_start():
     assert _learner().policy.low_rank.shape == (N, 0)           # the default: no factor
 
 
-@pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}, {"linear": True}])
+@pytest.mark.parametrize("options", [{}, {"baseline": "network", "history": 2}, {"linear": True},
+                                     {"linear": True, "linear_fit": "ridge"}])
 def test_resume_is_exact_and_the_state_gives_the_policy(options):
     learner = _learner(**options)
     _run(learner, 3)
@@ -127,6 +128,50 @@ def test_the_linear_part_carries_the_mean_beyond_the_contexts_seen():
         _learner(linear=True).load_state_dict(_learner().state_dict())
 
 
+def test_the_ridge_fitted_affine_part_extrapolates_further_than_the_adam_fitted_one():
+    """The same toy as above: the affine part fitted in closed form (``linear_fit="ridge"``) extrapolates the linear
+    optimum better than the linear part fitted by Adam, and fits the seen contexts at least as well."""
+
+    def losses(linear_fit, seed):
+        learner = _learner(seed=seed, length=0.0, epsilon=0.2, linear=True, linear_fit=linear_fit, linear_prior=1.0)
+        rng = np.random.default_rng(100 + seed)
+        beyond = rng.uniform(1.2, 1.6, (50, 2)) * rng.choice([-1, 1], (50, 2))
+        _, inside, kls = _run(learner, 60, seed=seed)
+        assert np.all(kls <= 0.2 + 1e-9)                                  # the closed-form step obeys the bound
+        return inside, np.mean(np.sum((learner.policy_actions(beyond) - _target(beyond)) ** 2, axis=1))
+
+    adam = np.array([losses("adam", seed) for seed in range(3)])
+    ridge = np.array([losses("ridge", seed) for seed in range(3)])
+    assert ridge[:, 1].mean() < 0.9 * adam[:, 1].mean()
+    assert ridge[:, 0].mean() < adam[:, 0].mean()
+    with pytest.raises(ValueError, match="affine"):                     # a state of the other linear part is refused
+        _learner(linear=True, linear_fit="ridge").load_state_dict(_learner(linear=True).state_dict())
+
+
+def test_the_affine_part_is_each_dimensions_weighted_least_squares_fit():
+    """Samples that are an exact affine function of the context, equally weighted, and a negligible prior: the
+    closed-form fit recovers the offset and the gains exactly; with one dimension's weight on two samples only,
+    that dimension's fit passes through those two (a weighted fit per dimension, not one shared weighting)."""
+    learner = _learner(linear=True, linear_fit="ridge", linear_prior=1e-9)
+    rng = np.random.default_rng(3)
+    contexts = rng.uniform(-1, 1, (30, 2))
+    offset, gains = rng.normal(size=N), rng.normal(size=(N, 2))
+    samples = offset + contexts @ gains.T
+    learner._fit_affine(torch.as_tensor(contexts), torch.as_tensor(samples), np.full((1, 30), 1 / 30))
+    fitted = learner.policy.affine.detach().numpy()
+    np.testing.assert_allclose(fitted[:, 0] + learner.fixed, offset, atol=1e-6)    # u0 = the start action
+    np.testing.assert_allclose(fitted[:, 1:], gains, atol=1e-6)
+    weights = np.full((N, 30), 1 / 30)
+    weights[0] = 0.0
+    weights[0, :3] = 1 / 3
+    noisy = samples + rng.normal(0, 0.1, samples.shape)
+    learner._fit_affine(torch.as_tensor(contexts), torch.as_tensor(noisy), weights)
+    with torch.no_grad():
+        fitted_mean = learner.policy.mean(torch.as_tensor(contexts)).numpy()
+    np.testing.assert_allclose(fitted_mean[:3, 0], noisy[:3, 0], atol=1e-6)      # three points, three unknowns
+    assert np.abs(fitted_mean[3:, 0] - noisy[3:, 0]).max() > 1e-3
+
+
 def test_bad_options_and_inputs_raise_clear_errors():
     with pytest.raises(ValueError, match="epsilon"):
         _learner(epsilon=0.0)
@@ -138,6 +183,12 @@ def test_bad_options_and_inputs_raise_clear_errors():
         _learner(baseline="mlp")
     with pytest.raises(ValueError, match="history"):
         _learner(baseline="network", history=0)
+    with pytest.raises(ValueError, match="linear_fit"):
+        _learner(linear_fit="ridge")                                     # there is no linear part to fit
+    with pytest.raises(ValueError, match="linear_fit"):
+        _learner(linear=True, linear_fit="lstsq")
+    with pytest.raises(ValueError, match="linear_prior"):
+        _learner(linear=True, linear_fit="ridge", linear_prior=0.0)
     networked = _learner(baseline="network")
     _run(networked, 2)
     with pytest.raises(ValueError, match="state"):

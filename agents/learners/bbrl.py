@@ -33,6 +33,10 @@ One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k
 2. **weighted maximum likelihood** (the M-step of MPO, Abdolmaleki et al. 2018): ``epochs`` Adam steps on
    ``1/2 sum_ik d_ik ((u_ki - mu_i(s_k)) / sigma_i)^2 / n`` for the mean network and the episode-weighted
    negative log-likelihood of the samples around the old means for ``sigma`` and ``U``;
+   With ``linear_fit="ridge"`` the mean has an affine part ``b + B s`` (in action units, not whitened) fitted
+   before the network, in closed form: each action dimension's weighted ridge regression of what the network
+   leaves, ``u_ki - (mu_i(s_k) - b_i - B_i s_k)``, on ``[1, s_k]`` with its weights ``d_ik``, ``B`` pulled towards
+   its previous value by ``linear_prior`` (as ``cpi2`` fits its gains); the network then fits what is left;
 3. the **trust region**: the mean KL divergence ``KL(p_old(.|s) || p_new(.|s))`` over the samples' contexts must
    not exceed ``epsilon``; the step is shrunk towards the old parameters (halving its length, up to 20 times,
    else dropped) until it does. The bound holds by construction, not only on average as with a clipped ratio.
@@ -141,11 +145,11 @@ class _Value(torch.nn.Module):
 
 
 class _Policy(torch.nn.Module):
-    """``mu(s) = u0 + D0 L (MLP(s) + W s)`` (``W s`` with ``linear`` only) and ``Sigma = D C D + U U^T`` (see the
-    module docstring)."""
+    """``mu(s) = u0 + D0 L (MLP(s) + W s) + b + B s`` (``W s`` with ``linear`` only, ``b + B s`` with ``affine``
+    only) and ``Sigma = D C D + U U^T`` (see the module docstring)."""
 
     def __init__(self, u0: np.ndarray, n_context: int, hidden: int, correlation: np.ndarray, sigma: np.ndarray,
-                 rank: int, context_scale: bool = False, linear: bool = False) -> None:
+                 rank: int, context_scale: bool = False, linear: bool = False, affine: bool = False) -> None:
         super().__init__()
         n = u0.size
         self.n = n
@@ -158,6 +162,9 @@ class _Policy(torch.nn.Module):
         self.linear = torch.nn.Linear(n_context, n, bias=False) if linear else None
         if self.linear is not None:
             torch.nn.init.zeros_(self.linear.weight)
+        #: ``[n, 1 + o]`` the affine part ``[b, B]`` (None without ``affine``), fitted in closed form, not by Adam
+        self.affine = (torch.nn.Parameter(torch.zeros(n, n_context + 1, dtype=_DTYPE), requires_grad=False)
+                       if affine else None)
         self.register_buffer("u0", torch.as_tensor(u0))
         self.register_buffer("correlation", torch.as_tensor(correlation))
         sigma = torch.as_tensor(np.broadcast_to(sigma, (n,)).copy(), dtype=_DTYPE)
@@ -172,7 +179,10 @@ class _Policy(torch.nn.Module):
         out = self.net(contexts)[:, : self.n]
         if self.linear is not None:
             out = out + self.linear(contexts)
-        return self.u0 + out @ self.shape.T
+        mean = self.u0 + out @ self.shape.T
+        if self.affine is not None:
+            mean = mean + self.affine[:, 0] + contexts @ self.affine[:, 1:].T
+        return mean
 
     def log_scale(self, contexts: torch.Tensor) -> torch.Tensor:
         """``[K]`` the log exploration scale of each context (0 without ``context_scale``, with no network pass)."""
@@ -239,7 +249,8 @@ class BBRL(Learner):
         torch.manual_seed(int(rng.integers(2**31)))
         self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
                               self._initial_sigma(space), self.config.rank, self.config.context_scale,
-                              self.config.linear)
+                              self.config.linear and self.config.linear_fit == "adam",
+                              self.config.linear and self.config.linear_fit == "ridge")
         self.time_weights = self._time_weights(space) if self.config.credit == "step" else None
         #: the cost-to-go baseline network (``baseline="network"``), else None
         self.value = (_Value(self.center.size, self.config.hidden, self._value_outputs())
@@ -389,6 +400,8 @@ class BBRL(Learner):
         with torch.no_grad():
             old_mean, old_chol = self.policy.mean(contexts), self._chol()
             old_scale = self.policy.log_scale(contexts)
+        if self.policy.affine is not None:
+            self._fit_affine(contexts, samples, per_dimension)
         self._maximise_likelihood(contexts, samples, torch.as_tensor(per_dimension), torch.as_tensor(episode),
                                   old_mean)
         self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol, old_scale)
@@ -435,6 +448,22 @@ class BBRL(Learner):
             cov_loss = -torch.sum(episode * log_prob) / samples.shape[1]
             (mean_loss + cov_loss).backward()
             optimizer.step()
+
+    def _fit_affine(self, contexts: torch.Tensor, samples: torch.Tensor, weights: np.ndarray) -> None:
+        """Step 2 with ``linear_fit="ridge"``: the affine part ``[b, B] [n, 1 + o]`` by each dimension's weighted
+        ridge regression (weights ``[n or 1, N]``) of what the rest of the mean leaves of the samples ``[N, n]``
+        on ``[1, s]`` (contexts ``[N, o]``), ``B`` pulled towards its previous value."""
+        previous = self.policy.affine.detach().numpy()
+        x = np.c_[np.ones(len(contexts)), contexts.numpy()]                             # [N, 1 + o]
+        with torch.no_grad():
+            rest = (samples - self.policy.mean(contexts)).numpy() + x @ previous.T      # [N, n]
+        weights = np.broadcast_to(weights, (previous.shape[0], len(x)))                 # [n, N]
+        prior = self.config.linear_prior * np.eye(x.shape[1])
+        prior[0, 0] = 1e-9
+        gram = np.einsum("ik,kf,kg->ifg", weights, x, x) + prior                        # [n, 1 + o, 1 + o]
+        moment = np.einsum("ik,ki,kf->if", weights, rest, x) + previous @ prior         # [n, 1 + o]
+        with torch.no_grad():
+            self.policy.affine.copy_(torch.as_tensor(np.linalg.solve(gram, moment[..., None])[..., 0]))
 
     def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor,
             old_scale: torch.Tensor) -> float:
@@ -484,7 +513,7 @@ class BBRL(Learner):
         shapes = {name: tuple(value.shape) for name, value in self.policy.state_dict().items()}
         if {name: tuple(value.shape) for name, value in parameters.items()} != shapes:
             raise ValueError("state.parameters: the state's policy network has other shapes than this learner's "
-                             "(hidden, rank, groups, context_scale or linear differ)")
+                             "(hidden, rank, groups, context_scale, linear or linear_fit differ)")
         self.policy.load_state_dict(parameters)
         if self.value is not None:             # a state of the other baseline fails check_state_like's keys
             self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
@@ -516,6 +545,8 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     if "linear.weight" in params:                            # the linear part of the mean
         out = out + x @ params["linear.weight"].T
     policy = params["u0"] + out @ params["shape"].T
+    if "affine" in params:                                   # the affine part fitted in closed form
+        policy = policy + params["affine"][:, 0] + x @ params["affine"][:, 1:].T
     full = np.repeat(np.asarray(state["fixed"], dtype=np.float64)[None], len(obs), axis=0)
     full[:, np.asarray(state["active"], dtype=np.int64)] = policy
     return squash(full)

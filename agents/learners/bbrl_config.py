@@ -10,10 +10,11 @@ from rdmp_gym.validation import check_choice, check_range
 from ..registry import register
 from .contextual import ContextualSettings
 
-__all__ = ["BASELINES", "CREDITS", "BBRLConfig"]
+__all__ = ["BASELINES", "CREDITS", "LINEAR_FITS", "BBRLConfig"]
 
 CREDITS = ("step", "episode")
 BASELINES = ("ridge", "network")
+LINEAR_FITS = ("adam", "ridge")
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,12 @@ class BBRLConfig(ContextualSettings):
         linear: the mean has a linear part ``W s`` beside the network (zero at the start): it extrapolates to
             contexts beyond those seen (the largest patches) as a linear policy does, the network bends it where
             the cost needs it (a cup).
+        linear_fit: how the linear part is fitted: ``"adam"`` (a map ``W s`` in the network's whitened
+            coordinates, fitted with the network) or ``"ridge"`` (an affine map ``b + B s`` of the action, fitted in
+            closed form by each action dimension's weighted ridge regression on its per-step credit weights, as
+            ``cpi2`` fits its gains; the network then fits what the affine map leaves; both inside the trust region).
+        linear_prior: ``"ridge"`` only: the ridge pulling the gains ``B`` towards their previous value
+            (``cpi2``'s ``gain_prior``; the offset ``b`` is free).
         antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
             context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
             ridge regression on the context; needs an even number of rollouts.
@@ -67,6 +74,8 @@ class BBRLConfig(ContextualSettings):
     antithetic: bool = False
     context_scale: bool = False
     linear: bool = False
+    linear_fit: str = "adam"
+    linear_prior: float = 10.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -83,6 +92,10 @@ class BBRLConfig(ContextualSettings):
         check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
         check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
         check_range(self.replay_size, "replay_size", 1, None)
+        check_choice(self.linear_fit, "linear_fit", LINEAR_FITS)
+        check_range(self.linear_prior, "linear_prior", 0.0, None, low_open=True)
+        if self.linear_fit == "ridge" and not self.linear:
+            raise ValueError("linear_fit: 'ridge' fits the linear part of the mean, which needs linear=True")
         if self.antithetic and self.replay > 0:
             raise ValueError("antithetic: a pair's own mean judges each sample, which leaves the replay no context "
                              "to rank; use antithetic with replay = 0")
