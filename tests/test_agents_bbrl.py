@@ -219,6 +219,28 @@ def test_per_step_credit_judges_a_weight_by_the_costs_from_when_it_acts():
     assert only_episode.shape == (1, 3)
 
 
+def test_remaining_step_weighting_lets_the_steps_that_see_most_of_the_episode_count_most():
+    """A dimension active at every step; sample 0 is the cheapest episode, sample 1 the cheapest from step 1 on:
+    averaged by activation the late steps outvote the first, averaged by ``T - t`` (``"remaining"``) sample 0 gains
+    weight, and a dimension active only at the last step is judged the same either way."""
+    traces = np.array([[0.0, 0.0, 0.0, 1.5], [1.0, 1.0, 0.0, 0.0], [0.5, 0.5, 0.5, 0.5]])
+    activation = np.zeros((4, N))
+    activation[:, 0] = 1.0
+    activation[3, 1] = 1.0
+    space = SearchSpace({"all": slice(0, N)}, 1, np.zeros(2), np.ones(2), activation)
+    weights = {}
+    for weighting in ("activation", "remaining"):
+        learner = make_learner("bbrl", np.zeros(N), 3, np.random.default_rng(0), {"step_weighting": weighting},
+                               space=space)
+        data = {"costs": traces.sum(axis=1), "traces": traces, "contexts": np.zeros((3, 2))}
+        weights[weighting] = learner._sample_weights(data, None)[0]
+    assert weights["activation"][0].argmax() == 1
+    assert weights["remaining"][0, 0] > weights["activation"][0, 0] + 0.1
+    np.testing.assert_allclose(weights["remaining"][1], weights["activation"][1])
+    with pytest.raises(ValueError, match="step_weighting"):
+        _learner(step_weighting="late")
+
+
 def test_groups_leave_the_other_dimensions_at_the_start_action():
     start = np.linspace(-0.5, 0.5, N)
     learner = make_learner("bbrl", start, 10, np.random.default_rng(0), {"groups": "amplitude"}, space=_space())

@@ -24,7 +24,9 @@ One update, from the samples of the last ``reuse`` batches ``(s_k, u_k, J_k, c_k
 1. **credit** (PI², Theodorou et al. 2010, per context): the cost-to-go ``S_k(t)`` minus a ridge regression of it on
    the context gives per-step weights ``P_k(t) = exp(-h Â_k(t))`` (normalised over the samples); each action
    dimension ``i`` gets ``d_ik = sum_t a_i(t) P_k(t) / sum_t a_i(t)`` from its activation ``a_i(t)`` over time (the
-   env's ``action_time_weights``), so a weight that acts early is judged by what happened from then on. Dimensions
+   env's ``action_time_weights``; ``step_weighting="remaining"``: times ``T - t``, as PI² averages its per-step
+   updates, so that the steps whose cost-to-go covers most of the episode count most), so a weight that acts early
+   is judged by what happened from then on. Dimensions
    that are never active, and tasks without a cost trace (``credit="episode"``), get the episode-level weights.
    With ``baseline="network"`` a second MLP ``V(s)`` of the cost-to-go, fitted to the ``history`` batches before
    the reused ones (never to the samples it judges), is subtracted first (the ridge then removes what is left,
@@ -293,6 +295,8 @@ class BBRL(Learner):
         weights = np.asarray(space.time_weights, dtype=np.float64)
         if weights.ndim != 2 or weights.shape[1] != self.n_params:
             raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
+        if self.config.step_weighting == "remaining":
+            weights = (len(weights) - np.arange(len(weights)))[:, None] * weights
         return weights[:, self.active]
 
     def _full(self, u: np.ndarray) -> np.ndarray:

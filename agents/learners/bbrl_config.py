@@ -10,11 +10,12 @@ from rdmp_gym.validation import check_choice, check_range
 from ..registry import register
 from .contextual import ContextualSettings
 
-__all__ = ["BASELINES", "CREDITS", "LINEAR_FITS", "BBRLConfig"]
+__all__ = ["BASELINES", "CREDITS", "LINEAR_FITS", "STEP_WEIGHTINGS", "BBRLConfig"]
 
 CREDITS = ("step", "episode")
 BASELINES = ("ridge", "network")
 LINEAR_FITS = ("adam", "ridge")
+STEP_WEIGHTINGS = ("activation", "remaining")
 
 
 @dataclass(frozen=True)
@@ -27,6 +28,9 @@ class BBRLConfig(ContextualSettings):
         rank: columns of the learned low-rank covariance factor ``U`` (0 = none; it starts at small random values).
         hidden: width of the two hidden layers of the mean network.
         credit: ``"step"`` (per-step credit from the cost trace, where the task gives one) or ``"episode"``.
+        step_weighting: how per-step credit averages each dimension's per-step weights over time: by its
+            activation (``"activation"``) or by its activation times the steps that remain, ``T - t``
+            (``"remaining"``, PI²'s averaging of its per-step updates, which ``cpi2`` uses).
         epochs: Adam steps per update.
         learning_rate: Adam's step size.
         value_ridge: ridge of the context baselines of the cost (and cost-to-go).
@@ -62,6 +66,7 @@ class BBRLConfig(ContextualSettings):
     rank: int = 0
     hidden: int = 64
     credit: str = "step"
+    step_weighting: str = "activation"
     epochs: int = 10
     learning_rate: float = 1e-2
     value_ridge: float = 1.0
@@ -93,6 +98,7 @@ class BBRLConfig(ContextualSettings):
         check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
         check_range(self.replay_size, "replay_size", 1, None)
         check_choice(self.linear_fit, "linear_fit", LINEAR_FITS)
+        check_choice(self.step_weighting, "step_weighting", STEP_WEIGHTINGS)
         check_range(self.linear_prior, "linear_prior", 0.0, None, low_open=True)
         if self.linear_fit == "ridge" and not self.linear:
             raise ValueError("linear_fit: 'ridge' fits the linear part of the mean, which needs linear=True")
