@@ -157,7 +157,10 @@ def test_the_affine_part_is_each_dimensions_weighted_least_squares_fit():
     contexts = rng.uniform(-1, 1, (30, 2))
     offset, gains = rng.normal(size=N), rng.normal(size=(N, 2))
     samples = offset + contexts @ gains.T
-    learner._fit_affine(torch.as_tensor(contexts), torch.as_tensor(samples), np.full((1, 30), 1 / 30))
+    contexts_t = torch.as_tensor(contexts)
+    with torch.no_grad():
+        start = learner.policy.mean(contexts_t)
+    learner._fit_affine(contexts_t, torch.as_tensor(samples), np.full((1, 30), 1 / 30), start)
     fitted = learner.policy.affine.detach().numpy()
     np.testing.assert_allclose(fitted[:, 0] + learner.fixed, offset, atol=1e-6)    # u0 = the start action
     np.testing.assert_allclose(fitted[:, 1:], gains, atol=1e-6)
@@ -165,9 +168,11 @@ def test_the_affine_part_is_each_dimensions_weighted_least_squares_fit():
     weights[0] = 0.0
     weights[0, :3] = 1 / 3
     noisy = samples + rng.normal(0, 0.1, samples.shape)
-    learner._fit_affine(torch.as_tensor(contexts), torch.as_tensor(noisy), weights)
     with torch.no_grad():
-        fitted_mean = learner.policy.mean(torch.as_tensor(contexts)).numpy()
+        start = learner.policy.mean(contexts_t)
+    learner._fit_affine(contexts_t, torch.as_tensor(noisy), weights, start)
+    with torch.no_grad():
+        fitted_mean = learner.policy.mean(contexts_t).numpy()
     np.testing.assert_allclose(fitted_mean[:3, 0], noisy[:3, 0], atol=1e-6)      # three points, three unknowns
     assert np.abs(fitted_mean[3:, 0] - noisy[3:, 0]).max() > 1e-3
 

@@ -78,11 +78,16 @@ def cost_to_go(costs: np.ndarray, traces: np.ndarray) -> np.ndarray:
     return np.cumsum(traces[:, ::-1], axis=1)[:, ::-1] + terminal[:, None]
 
 
+def ridge_penalty(size: int, prior: float) -> np.ndarray:
+    """``[size, size]`` the ridge penalty ``prior * I`` of regressors ``[1, φ]``, the constant column unpenalised."""
+    penalty = prior * np.eye(size)
+    penalty[0, 0] = 1e-9
+    return penalty
+
+
 def ridge_hat(x: np.ndarray, prior: float) -> np.ndarray:
     """``[N, N]`` hat matrix of a ridge regression on ``x [N, F+1]`` (the constant column unpenalised)."""
-    penalty = prior * np.eye(x.shape[1])
-    penalty[0, 0] = 1e-9
-    return x @ np.linalg.solve(x.T @ x + penalty, x.T)
+    return x @ np.linalg.solve(x.T @ x + ridge_penalty(x.shape[1], prior), x.T)
 
 
 def check_state_like(value: Any, template: Any, path: str) -> None:

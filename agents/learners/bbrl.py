@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
 from .bbrl_config import BASELINES, CREDITS, BBRLConfig
 from .contextual import SearchSpace, group_factors, select_groups
 from .smooth_exploration import smooth_factor, squash, unsquash
@@ -405,7 +405,7 @@ class BBRL(Learner):
             old_mean, old_chol = self.policy.mean(contexts), self._chol()
             old_scale = self.policy.log_scale(contexts)
         if self.policy.affine is not None:
-            self._fit_affine(contexts, samples, per_dimension)
+            self._fit_affine(contexts, samples, per_dimension, old_mean)
         self._maximise_likelihood(contexts, samples, torch.as_tensor(per_dimension), torch.as_tensor(episode),
                                   old_mean)
         self.last_kl = self._enforce_trust_region(old, contexts, old_mean, old_chol, old_scale)
@@ -453,17 +453,16 @@ class BBRL(Learner):
             (mean_loss + cov_loss).backward()
             optimizer.step()
 
-    def _fit_affine(self, contexts: torch.Tensor, samples: torch.Tensor, weights: np.ndarray) -> None:
+    def _fit_affine(self, contexts: torch.Tensor, samples: torch.Tensor, weights: np.ndarray,
+                    mean: torch.Tensor) -> None:
         """Step 2 with ``linear_fit="ridge"``: the affine part ``[b, B] [n, 1 + o]`` by each dimension's weighted
-        ridge regression (weights ``[n or 1, N]``) of what the rest of the mean leaves of the samples ``[N, n]``
-        on ``[1, s]`` (contexts ``[N, o]``), ``B`` pulled towards its previous value."""
+        ridge regression (weights ``[n or 1, N]``) of what the rest of the current mean ``[N, n]`` leaves of the
+        samples ``[N, n]`` on ``[1, s]`` (contexts ``[N, o]``), ``B`` pulled towards its previous value."""
         previous = self.policy.affine.detach().numpy()
         x = np.c_[np.ones(len(contexts)), contexts.numpy()]                             # [N, 1 + o]
-        with torch.no_grad():
-            rest = (samples - self.policy.mean(contexts)).numpy() + x @ previous.T      # [N, n]
+        rest = (samples - mean).numpy() + x @ previous.T                                # [N, n]
         weights = np.broadcast_to(weights, (previous.shape[0], len(x)))                 # [n, N]
-        prior = self.config.linear_prior * np.eye(x.shape[1])
-        prior[0, 0] = 1e-9
+        prior = ridge_penalty(x.shape[1], self.config.linear_prior)
         gram = np.einsum("ik,kf,kg->ifg", weights, x, x) + prior                        # [n, 1 + o, 1 + o]
         moment = np.einsum("ik,ki,kf->if", weights, rest, x) + previous @ prior         # [n, 1 + o]
         with torch.no_grad():

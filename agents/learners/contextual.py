@@ -40,7 +40,7 @@ from rdmp_gym.validation import check_choice, check_range
 
 from ..config import Settings
 from ..registry import register
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
 from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = [
@@ -516,8 +516,7 @@ class ContextualSearch(Learner):
         return fit
 
     def _regress(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray, previous: np.ndarray) -> np.ndarray:
-        prior = self.config.gain_prior * np.eye(x.shape[1])
-        prior[0, 0] = 1e-9
+        prior = ridge_penalty(x.shape[1], self.config.gain_prior)
         gram = np.einsum("sk,kf,kg->sfg", weights, x, x) + prior                 # [S, F+1, F+1]
         moment = np.einsum("sk,kn,kf->snf", weights, u, x) + previous @ prior    # [S, n, F+1]
         return np.linalg.solve(gram, np.swapaxes(moment, 1, 2)).swapaxes(1, 2)
