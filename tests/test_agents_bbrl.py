@@ -26,10 +26,13 @@ def _target(contexts):
     return 0.2 + contexts @ GAINS.T
 
 
-def _batch(actions, returns):
+def _batch(actions, returns, traces=None, seeds=None):
+    """An ``EpisodeBatch`` of ``k`` episodes: no cost trace and reset seed 0 unless given (``[k, T]``, ``[k]``)."""
     k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    traces = np.zeros((k, 1)) if traces is None else traces
+    seeds = np.zeros(k) if seeds is None else seeds
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), traces, np.full(k, np.nan),
+                        np.full(k, np.nan), np.ones(k, dtype=bool), np.asarray(seeds, dtype=np.int64))
 
 
 def _run(learner, updates, seed=0, random_returns=False):
@@ -254,8 +257,7 @@ def _learn_segments(seed, credit, random_returns=False, updates=30):
         actions = learner.ask(contexts)
         traces = _segment_traces(actions, contexts)
         returns = rng.standard_normal(10) if random_returns else -traces.sum(axis=1)
-        learner.tell(EpisodeBatch(actions, returns, traces, np.full(10, np.nan), np.full(10, np.nan),
-                                  np.ones(10, dtype=bool), np.zeros(10, dtype=np.int64)))
+        learner.tell(_batch(actions, returns, traces))
         kls.append(learner.last_kl)
     return before, cost(), max(kls)
 
@@ -344,12 +346,6 @@ def test_the_network_baseline_learns_a_cost_no_linear_function_of_the_context_gi
     assert values[outer].mean() - values[~outer].mean() > 3.0            # the jump is 5; a linear fit sees ~0
 
 
-def _seeded_batch(actions, returns, seeds):
-    k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.asarray(seeds, dtype=np.int64))
-
-
 def test_replay_revisits_the_contexts_the_policy_did_worst_in():
     """Context seed 3 cost far more than its context predicts: of 10 fresh seeds, 3 (replay 0.3) are replaced
     by distinct earlier ones, seed 3 almost always among them; without replay the fresh seeds stay."""
@@ -360,7 +356,7 @@ def test_replay_revisits_the_contexts_the_policy_did_worst_in():
     for seed in range(20):
         learner = _learner(seed, replay=0.3)
         actions = learner.ask(contexts)
-        learner.tell(_seeded_batch(actions, np.where(np.arange(10) == 3, -10.0, 0.0), np.arange(10)))
+        learner.tell(_batch(actions, np.where(np.arange(10) == 3, -10.0, 0.0), seeds=np.arange(10)))
         seeds = learner.choose_seeds(fresh)
         replayed = seeds[~np.isin(seeds, fresh)]
         assert replayed.size == 3 and np.unique(replayed).size == 3 and np.all(replayed < 10)
@@ -374,7 +370,7 @@ def test_the_replay_keeps_the_most_recent_contexts_once_each():
     for update in range(4):
         contexts = rng.uniform(-1, 1, (10, 2))
         seeds = learner.choose_seeds(np.arange(10) + 10 * update)
-        learner.tell(_seeded_batch(learner.ask(contexts), rng.standard_normal(10), seeds))
+        learner.tell(_batch(learner.ask(contexts), rng.standard_normal(10), seeds=seeds))
         assert learner._replay_seeds.size == min(15, np.unique(learner._replay_seeds).size)
     assert learner._replay_seeds.size == 15 and np.array_equal(np.sort(learner._replay_seeds[-10:]), np.sort(seeds))
 
@@ -384,7 +380,7 @@ def test_resume_with_replay_chooses_the_same_contexts():
     rng = np.random.default_rng(3)
     for update in range(3):
         seeds = learner.choose_seeds(np.arange(10) + 10 * update)
-        learner.tell(_seeded_batch(learner.ask(rng.uniform(-1, 1, (10, 2))), rng.standard_normal(10), seeds))
+        learner.tell(_batch(learner.ask(rng.uniform(-1, 1, (10, 2))), rng.standard_normal(10), seeds=seeds))
     twin = _learner(seed=99, replay=0.3)
     twin.load_state_dict(learner.state_dict())
     np.testing.assert_array_equal(twin.choose_seeds(np.arange(50, 60)), learner.choose_seeds(np.arange(50, 60)))
