@@ -58,7 +58,7 @@ xml = env.unwrapped.scene.xml_file
 assert "site-packages" in str(xml) and xml.is_file(), xml
 print("gym.make found", xml)
 PY
-"$BIN/rdmp-gym" train --agent pi2 --updates 1 --rollouts 2 --workers 1 --n-periodic 10 --n-transient 10 \
+"$BIN/rdmp-gym" train --agent pi2 --updates 1 --rollouts 2 --workers 1 --env-option n_periodic 10 n_transient 10 \
   --out "$WORK/train"
 test -s "$WORK/train/dmp.json"
 step "ok"

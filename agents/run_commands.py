@@ -1,37 +1,48 @@
 """``rdmp-gym train``, ``evaluate`` and ``main`` (the job of ``make run``); they need the ``agents`` extra.
 
-Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses: the
-run's (:class:`TrainCommand`), the task's (:class:`TaskFlags`) and the chosen learner's settings
-(``--options.NAME``, the fields of its settings class, e.g. :class:`~rdmp_gym.agents.learners.bbrl_config.BBRLConfig`)::
+Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses. The run's
+flags are :class:`~rdmp_gym.agents.train_config.TrainConfig`'s fields, one flag per field with its type, default and
+the first sentence of its documentation as help (``env_id`` is ``--env``, ``env_kwargs`` ``--env-option KEY VALUE``,
+``reset_options`` ``--reset-option KEY VALUE``), and the chosen learner's settings are ``--options.NAME`` (the fields
+of its settings class, e.g. :class:`~rdmp_gym.agents.learners.bbrl_config.BBRLConfig`)::
 
     rdmp-gym train --out runs/bbrl                      # the main job's learner (bbrl) on the current task
     rdmp-gym train --agent cpi2 --updates 30 --options.sigma 0.2 --out runs/cpi2
     rdmp-gym train --agent bbrl --options.sigma-factors approach 3 amplitude 2 --out runs/wide
+    rdmp-gym train --env-option style 2 --env-option groups '["periodic", "amplitude"]' --out runs/style2
+    rdmp-gym train --agent cmaes --env InvertedPendulum-v5 --env-option duration 1.0 --out runs/pendulum
     rdmp-gym train --out runs/bbrl --resume --updates 300       # continue (and extend) a run
     rdmp-gym evaluate runs/bbrl --episodes 20 --video   # final policy on the 20 test contexts
     rdmp-gym main --out runs/main
 
-A run saves its configuration as ``config.json``; ``--resume`` reads it back and applies only the flags given
-(``--updates`` and ``--workers`` may change, any other differing setting is an error naming it). The launcher
-:mod:`rdmp_gym.agents.cli` calls :func:`command_train`, :func:`command_evaluate` and :func:`command_main`.
+The env's settings come from the env itself (its defaults) or from ``--env-option KEY VALUE``: the flag may be
+repeated and takes several pairs, a key given twice takes the last value, and a VALUE is read as JSON where it is
+JSON (:func:`env_value`). A run saves its configuration as ``config.json``; ``--resume`` reads it back (its env
+settings come back as env options) and applies only the flags given (``--updates`` and ``--workers`` may change,
+any other differing setting is an error naming its flag). The launcher :mod:`rdmp_gym.agents.cli` calls
+:func:`command_train`, :func:`command_evaluate` and :func:`command_main`.
 """
 
 from __future__ import annotations
 
 import atexit
 import dataclasses
+import inspect
 import json
 import logging
 import os
+import re
 import shutil
 import tempfile
+import typing
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import tyro
+from rdmp_gym.envs.specs import is_episodic
 
 from rdmp_gym.figures.paper import write_paper_figures
 
@@ -41,89 +52,111 @@ from .plots import plot_fit
 from .protocol import interval
 from .report import evaluate_run, record_best_episode
 from .runs import RunDirectory
-from .tasks import failure_contexts, main_env_kwargs, main_options
-from .train_config import AGENTS, START_MODES, TrainConfig
+from .tasks import TaskSpec, failure_contexts, main_env_kwargs, main_options
+from .train_config import TrainConfig
 from .training import MUTABLE_ON_RESUME, load_run_config, train
 
-__all__ = ["EvaluateCommand", "MainCommand", "TaskFlags", "TrainCommand", "command_evaluate", "command_main",
-           "command_train", "parse_evaluate", "parse_main", "parse_train", "train_config"]
+__all__ = ["RUN_FIELDS", "EvaluateCommand", "MainCommand", "TrainCommand", "command_evaluate", "command_main",
+           "command_train", "env_value", "parse_evaluate", "parse_main", "parse_train", "train_config"]
 
 logger = logging.getLogger(__name__)
 
-#: a ``gym.make`` keyword's or reset option's value on the command line (``None`` for null)
-EnvValue = bool | int | float | str | None
 _WORKERS = os.cpu_count() or 1
-#: the run's defaults, defined once by :class:`TrainConfig` (the main learner on the current task)
-_RUN = {item.name: item.default for item in dataclasses.fields(TrainConfig)}
+#: the run's settings given by flags: every field of :class:`TrainConfig` but the learner's settings, whose fields
+#: are ``--options.NAME`` flags of their own
+RUN_FIELDS = tuple(item.name for item in dataclasses.fields(TrainConfig) if item.name != "options")
+#: the flags of the fields that are not ``--NAME`` (their key-value fields: ``--env-option KEY VALUE``)
+_FLAG_NAMES = {"env_id": "env", "env_kwargs": "env-option", "reset_options": "reset-option"}
+#: the fields given as KEY VALUE pairs, and their help (the pairs' form is the command line's, not the config's)
+_PAIRS = {
+    "env_kwargs": "the env's settings over its own defaults, KEY VALUE pairs (repeatable; a key given twice: the last "
+                  "value). VALUE is JSON where it parses (2, 0.5, true, null, '[\"periodic\", \"amplitude\"]'), "
+                  "else text. A step-based env also takes the black-box wrapper's settings (p_gains, duration, ...); "
+                  "the main job's env gets cup_clearance 0.01 unless given (null: no clearance)",
+    "reset_options": "options for every reset, KEY VALUE pairs read as --env-option reads them (e.g. to fix the "
+                     "context)",
+}
+_PYTHON_WORDS: dict[str, Any] = {"None": None, "True": True, "False": False}
+
+
+def env_value(text: str) -> Any:
+    """The value of an ``--env-option``/``--reset-option`` VALUE: JSON where ``text`` parses as JSON (numbers,
+    ``true``/``false``/``null``, lists such as ``["periodic", "amplitude"]``, objects), ``None``/``True``/``False`` as
+    in Python, else ``text`` itself (a JSON string, ``'"2"'``, keeps a number-like text a text)."""
+    if text in _PYTHON_WORDS:
+        return _PYTHON_WORDS[text]
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def _attribute_help(kind: type) -> dict[str, str]:
+    """``{attribute: help}``: the first sentence of each entry of the ``Attributes:`` section of ``kind``'s docstring,
+    its reStructuredText markup removed."""
+    doc = inspect.cleandoc(kind.__doc__ or "")
+    entries: dict[str, str] = {}
+    name = None
+    for line in doc.partition("\nAttributes:\n")[2].splitlines():
+        entry = re.match(r"    (\w+): (.*)", line)
+        if entry:
+            name, entries[entry[1]] = entry[1], entry[2]
+        elif name and line.startswith("        "):
+            entries[name] += " " + line.strip()
+    plain = {key: re.sub(r":\w+:`~?(?:[\w.]*\.)?(\w+)`", r"\1", text).replace("``", "")
+             for key, text in entries.items()}
+    return {key: re.split(r"(?<!e\.g)(?<!i\.e)\.(?:\s|$)", text, maxsplit=1)[0] for key, text in plain.items()}
+
+
+def _run_flags(name: str, **defaults: Any) -> type:
+    """The run's flags as a tyro dataclass ``name``: one field per :data:`RUN_FIELDS` entry, with :class:`TrainConfig`'s
+    type and default (``defaults`` replace some) and the first sentence of its documentation as help; the key-value
+    fields are text pairs (``dict[str, str]``, read by :func:`env_value`)."""
+    hints = typing.get_type_hints(TrainConfig)
+    helps = _attribute_help(TrainConfig)
+    specs = []
+    for item in dataclasses.fields(TrainConfig):
+        if item.name not in RUN_FIELDS:
+            continue
+        flag = _FLAG_NAMES.get(item.name)
+        if item.name in _PAIRS:
+            arg = tyro.conf.arg(name=flag, metavar="KEY VALUE", help=_PAIRS[item.name])
+            specs.append((item.name, Annotated[dict[str, str], arg], field(default_factory=dict)))
+        else:
+            arg = tyro.conf.arg(name=flag, help=helps[item.name])
+            specs.append((item.name, Annotated[hints[item.name], arg],
+                          field(default=defaults.get(item.name, item.default))))
+    flags = dataclasses.make_dataclass(name, specs)
+    flags.__module__ = __name__
+    return flags
 
 
 @dataclass
-class TaskFlags:
-    """The task: the env and its ``gym.make`` keywords."""
+class _CommandFlags:
+    """The flags of ``train`` and ``main`` beside the run's."""
 
-    env: str = _RUN["env_id"]
-    """episodic env id (one step = one DMP rollout); rdmp_gym/DMPTracking-v0 is a physics-free DMP task"""
-    style: int | None = None
-    """built-in demonstration style 1-4 (default: the env's)"""
-    demo: str = ""
-    """a CSV/NPZ demonstration to imitate instead of --style, in the table frame in metres (default: none)"""
     time_column: str = "t"
     """name of the --demo CSV's time column (seconds)"""
     rate: float | None = None
     """resample --demo onto an even grid at this rate in Hz (default: keep the samples, evenly spaced)"""
-    dmp: str = ""
-    """a saved DMP (dmp.json, e.g. a run's refined DMP) to start from instead of fitting (default: none)"""
-    groups: tuple[str, ...] | None = None
-    """parameter groups to refine: periodic transient initial amplitude (default: the env's)"""
-    n_periodic: int | None = None
-    """periodic basis functions (default: the env's)"""
-    n_transient: int | None = None
-    """transient basis functions (default: the env's)"""
-    duration: float | None = None
-    """episode length in s (default: the env's)"""
-    env_option: dict[str, EnvValue] = field(default_factory=dict)
-    """any other gym.make keyword, KEY VALUE pairs (on the main job's env: cup_clearance 0.01 unless given;
-    cup_clearance None turns the clearance off)"""
-    reset_option: dict[str, EnvValue] = field(default_factory=dict)
-    """reset options for every episode, KEY VALUE pairs (e.g. to fix the context)"""
-
-
-@dataclass
-class TrainCommand(TaskFlags):
-    """Train an agent: bbrl with the main job's settings on the current task unless --agent / --env say otherwise."""
-
-    out: str = ""
-    """run directory (required)"""
-    agent: Literal[AGENTS] = _RUN["agent"]  # type: ignore[valid-type]
-    """learner; its settings are --options.NAME flags (see --agent NAME --help)"""
-    updates: int = _RUN["updates"]
-    """updates"""
-    rollouts: int = _RUN["rollouts"]
-    """episodes per update"""
-    seed: int = _RUN["seed"]
-    """run seed"""
-    workers: int = _WORKERS
-    """worker processes (the numbers do not depend on it)"""
     backend: Literal["local", "ray"] = "local"
     """where the episodes run: local worker processes or Ray actors (the numbers are the same)"""
     ray_address: str | None = None
     """Ray cluster to join with --backend ray (default: $RAY_ADDRESS, else a new local Ray instance)"""
-    start: Literal[START_MODES] = _RUN["start"]  # type: ignore[valid-type]
-    """start of the search"""
-    perturbation: float = _RUN["perturbation"]
-    """std of the perturbed start"""
-    eval_episodes: int = _RUN["eval_episodes"]
-    """validation contexts the policy is evaluated on"""
-    eval_every: int = _RUN["eval_every"]
-    """updates between policy evaluations"""
-    stratified_validation: bool = _RUN["stratified_validation"]
-    """spread the validation contexts evenly over the kinds of context the env names (e.g. cup on the approach)"""
     resume: bool = False
     """continue the run in --out from its checkpoint with its own config.json (flags only to change it)"""
     video: bool = False
-    """record the best policy's episode (best_episode.mp4)"""
+    """record the best policy's episode (best_episode.mp4); checked before any work: the env must record episodes"""
     verbose: bool = False
     """log progress details"""
+
+
+@dataclass
+class TrainCommand(_CommandFlags, _run_flags("TrainRun", workers=_WORKERS)):
+    """Train an agent: bbrl with the main job's settings on the current task unless --agent / --env say otherwise."""
+
+    out: str = ""
+    """run directory (required)"""
 
     @property
     def run_path(self) -> Path:
@@ -132,14 +165,12 @@ class TrainCommand(TaskFlags):
 
 
 @dataclass
-class MainCommand(TrainCommand):
+class MainCommand(_CommandFlags, _run_flags("MainRun", workers=_WORKERS, updates=200, eval_episodes=8,
+                                            eval_every=20)):
     """Imitation, the paper's figures, contextual refinement and evaluation on test contexts, end to end."""
 
     out: str = "runs/main"
     """output directory"""
-    updates: int = 200
-    eval_episodes: int = 8
-    eval_every: int = 20
     episodes: int = 20
     """test contexts"""
 
@@ -147,6 +178,10 @@ class MainCommand(TrainCommand):
     def run_path(self) -> Path:
         """The run directory: ``train`` in the output directory."""
         return Path(self.out) / "train"
+
+
+#: a ``train`` or ``main`` command
+RunCommand = TrainCommand | MainCommand
 
 
 @dataclass
@@ -166,117 +201,130 @@ class EvaluateCommand:
     ray_address: str | None = None
     """Ray cluster to join with --backend ray"""
     video: bool = False
-    """record the best episode (best_episode.mp4)"""
+    """record the best episode (best_episode.mp4); checked before the evaluation: the env must record episodes"""
     verbose: bool = False
     """log progress details"""
 
 
-def _env_kwargs(task: TaskFlags) -> dict[str, Any]:
-    """The ``gym.make`` keywords of the task flags (the main job's env keywords under them on its env)."""
-    kwargs = {name: getattr(task, name) for name in ("style", "n_periodic", "n_transient", "duration")
-              if getattr(task, name) is not None}
-    if task.groups is not None:
-        kwargs["groups"] = list(task.groups)
-    if task.dmp:
-        kwargs["dmp"] = str(Path(task.dmp).resolve())
-    clash = sorted(set(task.env_option) & set(kwargs))
-    if clash:
-        raise ValueError(f"--env-option: {clash[0]} is also given by its own flag")
-    return {**main_env_kwargs(task.env), **kwargs, **task.env_option}
-
-
-def _prepare_demo(task: TaskFlags) -> str:
+def _prepare_demo(command: RunCommand) -> str:
     """``--demo``, or with ``--time-column``/``--rate`` an even-grid copy of it in a temporary folder (removed at
     exit); the run copies it in as ``demo.npz``, so it holds the demonstration it was trained on."""
-    if not task.demo or (task.time_column == "t" and task.rate is None):
-        return task.demo
-    demo = load_demonstration(task.demo, time_column=task.time_column, rate=task.rate)
+    if not command.demo or (command.time_column == "t" and command.rate is None):
+        return command.demo
+    demo = load_demonstration(command.demo, time_column=command.time_column, rate=command.rate)
     folder = Path(tempfile.mkdtemp(prefix="rdmp-gym-demo-"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     demo.to_npz(folder / "demo.npz")
     return str(folder / "demo.npz")
 
 
-def train_config(command: TrainCommand, options: Settings | None = None) -> TrainConfig:
-    """The training run of a ``train``/``main`` command (``options``: the learner's settings; default: the task's
-    defaults for the agent, the main job's options for its learner)."""
-    return TrainConfig(agent=command.agent, updates=command.updates, rollouts=command.rollouts, seed=command.seed,
-                       workers=command.workers, env_id=command.env, env_kwargs=_env_kwargs(command),
-                       reset_options=dict(command.reset_option) or None,
-                       options=_default_options(command) if options is None else options, start=command.start,
-                       perturbation=command.perturbation, demo=_prepare_demo(command),
-                       eval_episodes=command.eval_episodes, eval_every=command.eval_every,
-                       stratified_validation=command.stratified_validation)
+def train_config(command: RunCommand, options: Settings | None = None) -> TrainConfig:
+    """The training run of a ``train``/``main`` command: its :data:`RUN_FIELDS` as they are (``env_kwargs`` as the
+    command holds them: :func:`parse_train` puts the main job's keywords under the given ones on a new run), the
+    demonstration prepared (:func:`_prepare_demo`); ``options``: the learner's settings (default: the task's defaults
+    for the agent, the main job's options for its learner)."""
+    values = {name: getattr(command, name) for name in RUN_FIELDS}
+    values.update(env_kwargs=dict(command.env_kwargs), reset_options=dict(command.reset_options) or None,
+                  demo=_prepare_demo(command))
+    if options is None:
+        options = _default_options(command.agent, command.env_id, values["env_kwargs"])
+    return TrainConfig(**values, options=options)
 
 
-def _default_options(command: TrainCommand) -> Settings:
+def _default_options(agent: str, env_id: str, env_kwargs: dict[str, Any]) -> Settings:
     """The learner's settings of a new run: the task's defaults for the agent (the main job's for its learner)."""
-    return TrainConfig(agent=command.agent, env_id=command.env, env_kwargs=_env_kwargs(command),
-                       options=main_options(command.agent, command.env)).options
+    return TrainConfig(agent=agent, env_id=env_id, env_kwargs=env_kwargs, options=main_options(agent, env_id)).options
 
 
-_TASK_FLAGS = ("style", "n_periodic", "n_transient", "duration", "groups", "dmp")
-_FLAG_NAMES = {"env_id": "--env"}
+def _saved_command(kind: type[RunCommand], saved: TrainConfig, out: str) -> RunCommand:
+    """The command whose flags rebuild ``saved`` (a resumed run's defaults, so that only given flags change it; its
+    env settings come back as env options)."""
+    values = {name: getattr(saved, name) for name in RUN_FIELDS}
+    values.update(env_kwargs=dict(saved.env_kwargs), reset_options=dict(saved.reset_options or {}))
+    return kind(**values, out=out, resume=True)
 
 
-def _saved_command(kind: type[TrainCommand], saved: TrainConfig, out: str) -> TrainCommand:
-    """The command whose flags rebuild ``saved`` (a resumed run's defaults, so that only given flags change it)."""
-    env_kwargs = dict(saved.env_kwargs)
-    flags = {name: env_kwargs.pop(name) for name in _TASK_FLAGS if name in env_kwargs}
-    if "groups" in flags:
-        flags["groups"] = tuple(flags["groups"])
-    for key, value in main_env_kwargs(saved.env_id).items():  # the main job's keywords come back as defaults
-        if env_kwargs.get(key, object()) == value:
-            env_kwargs.pop(key)
-    return kind(env=saved.env_id, demo=saved.demo, env_option=env_kwargs, reset_option=dict(saved.reset_options or {}),
-                out=out, agent=saved.agent, updates=saved.updates, rollouts=saved.rollouts, seed=saved.seed,
-                workers=saved.workers, start=saved.start, perturbation=saved.perturbation,
-                eval_episodes=saved.eval_episodes, eval_every=saved.eval_every,
-                stratified_validation=saved.stratified_validation, resume=True, **flags)
+def _gather_pairs(argv: list[str], flag: str) -> tuple[list[str], dict[str, Any]]:
+    """``argv`` without the ``flag KEY VALUE ...`` groups, and their pairs (``{key: env_value(VALUE)}``): a repeated
+    flag adds its pairs, a key given twice keeps its last value."""
+    names = (flag, "--" + flag[2:].replace("-", "_"))
+    rest: list[str] = []
+    pairs: dict[str, Any] = {}
+    index = 0
+    while index < len(argv):
+        if argv[index] not in names:
+            rest.append(argv[index])
+            index += 1
+            continue
+        end = index + 1
+        while end < len(argv) and not argv[end].startswith("--"):
+            end += 1
+        values = argv[index + 1:end]
+        if not values or len(values) % 2:
+            raise ValueError(f"{flag}: expected KEY VALUE pairs, got {' '.join(values) or 'none'!r}")
+        pairs.update({key: env_value(value) for key, value in zip(values[::2], values[1::2], strict=True)})
+        index = end
+    return rest, pairs
 
 
-def _parse_flags(kind: type[TrainCommand], argv: Sequence[str], prog: str, *, read_run: bool = True
-                 ) -> tuple[TrainCommand, TrainConfig | None]:
+def _refuse_unknown(unknown: Sequence[str], prog: str) -> None:
+    """A flag the command does not have (the learner's ``--options.NAME`` are read later) is a ValueError that says how
+    a setting of the env is given instead."""
+    for token in unknown:
+        if token.startswith("--") and not token.startswith("--options.") and token != "--help":
+            key = token[2:].partition("=")[0].replace("-", "_")
+            raise ValueError(f"{token}: {prog} has no such flag ({prog} --help lists them); a setting of the env is "
+                             f"given as --env-option {key} VALUE (a JSON value where it is one, e.g. --env-option "
+                             f"groups '[\"periodic\", \"amplitude\"]')")
+
+
+def _parse_flags(kind: type[RunCommand], argv: Sequence[str], prog: str, *, read_run: bool = True
+                 ) -> tuple[RunCommand, TrainConfig | None]:
     """Parse a ``train``/``main`` command line into the command, with the learner's settings as ``options``, and
     (for ``--resume`` with ``read_run``) the saved run it continues.
 
-    The agent (and for ``--resume`` the saved run) decides which learner settings exist, so a first pass reads
-    the run's flags and a second parses everything, the learner's ``--options.NAME`` flags included, with the
-    defaults of the task (or of the saved run). Dict settings (``sigma_factors``) add to the defaults'. Without
-    ``read_run`` a ``--resume`` line is parsed over the task's defaults (no run directory is read).
+    The ``--env-option``/``--reset-option`` pairs are gathered first (:func:`_gather_pairs`). The agent (and for
+    ``--resume`` the saved run) decides which learner settings exist, so a first pass reads the run's flags and a
+    second parses everything, the learner's ``--options.NAME`` flags included, with the defaults of the task (or of
+    the saved run). Dict settings (``sigma_factors``) and the env options add to the defaults'. Without ``read_run``
+    a ``--resume`` line is parsed over the task's defaults (no run directory is read).
     """
-    first = tyro.cli(kind, args=argv, prog=prog, add_help=False, return_unknown_args=True)[0]
+    argv, env_pairs = _gather_pairs(list(argv), "--env-option")
+    argv, reset_pairs = _gather_pairs(argv, "--reset-option")
+    first, unknown = tyro.cli(kind, args=argv, prog=prog, add_help=False, return_unknown_args=True)
+    _refuse_unknown(unknown, prog)
     read_run = read_run and first.resume
     if read_run and not first.out:
         raise ValueError("--out: the run directory is required")
     saved = load_run_config(RunDirectory(first.run_path)) if read_run else None
-    if saved is not None:
-        defaults, options = _saved_command(kind, saved, first.out), saved.options
-    else:
-        defaults, options = first, _default_options(first)
+    defaults = _saved_command(kind, saved, first.out) if saved is not None else \
+        dataclasses.replace(first, env_kwargs=main_env_kwargs(first.env_id))
+    env_kwargs = {**defaults.env_kwargs, **env_pairs}
+    reset_options = {**defaults.reset_options, **reset_pairs}
+    options = saved.options if saved is not None else _default_options(first.agent, first.env_id, env_kwargs)
     dicts = {item.name: getattr(options, item.name) for item in dataclasses.fields(options)
              if isinstance(getattr(options, item.name), dict)}
     flags = dataclasses.make_dataclass(kind.__name__, [("options", type(options), field(default=None))],
                                        bases=(kind,))
     flags.__module__ = kind.__module__
     values = {item.name: getattr(defaults, item.name) for item in dataclasses.fields(kind)}
-    start = flags(**{**values, "env_option": {}, "reset_option": {}},      # tyro fixes the keys of a given dict
+    start = flags(**{**values, "env_kwargs": {}, "reset_options": {}},      # tyro fixes the keys of a given dict
                   options=dataclasses.replace(options, **{key: {} for key in dicts}))
     parsed = tyro.cli(flags, args=argv, prog=prog, default=start, description=kind.__doc__)
     given = dataclasses.replace(parsed.options, **{name: {**value, **getattr(parsed.options, name)}
                                                    for name, value in dicts.items()})
     command = flags(**{**{item.name: getattr(parsed, item.name) for item in dataclasses.fields(kind)},
-                       **{name: {**values[name], **getattr(parsed, name)} for name in ("env_option", "reset_option")}},
-                    options=given)
+                       "env_kwargs": env_kwargs, "reset_options": reset_options}, options=given)
     if not command.out:
         raise ValueError("--out: the run directory is required")
     return command, saved
 
 
 def parse_train(argv: Sequence[str]) -> TrainCommand:
-    """The ``train`` command line parsed into its :class:`TrainCommand` (the learner's settings as ``options``),
-    without running it or reading a run directory (a ``--resume`` line is parsed over the task's defaults)."""
-    return _parse_flags(TrainCommand, argv, "rdmp-gym train", read_run=False)[0]
+    """The ``train`` command line parsed into its :class:`TrainCommand` (the learner's settings as ``options``, the
+    env options gathered and read by :func:`env_value`), without running it or reading a run directory (a
+    ``--resume`` line is parsed over the task's defaults)."""
+    return _parse_flags(TrainCommand, argv, "rdmp-gym train", read_run=False)[0]  # type: ignore[return-value]
 
 
 def parse_main(argv: Sequence[str]) -> MainCommand:
@@ -292,13 +340,10 @@ def parse_evaluate(argv: Sequence[str]) -> EvaluateCommand:
 def _flag(key: str) -> str:
     """The command-line flag of a setting of the run (``key``: a field, or ``field.entry`` of a dict field)."""
     name, _, entry = key.partition(".")
-    if not entry:
-        return _FLAG_NAMES.get(name, "--" + name.replace("_", "-"))
     if name == "options":
         return "--options." + entry.replace("_", "-")
-    if name == "env_kwargs":
-        return "--" + entry.replace("_", "-") if entry in _TASK_FLAGS else f"--env-option {entry}"
-    return f"--reset-option {entry}"
+    flag = "--" + _FLAG_NAMES.get(name, name.replace("_", "-"))
+    return f"{flag} {entry}" if entry else flag
 
 
 def _resume_changes(saved: TrainConfig, config: TrainConfig) -> dict[str, Any]:
@@ -315,21 +360,65 @@ def _resume_changes(saved: TrainConfig, config: TrainConfig) -> dict[str, Any]:
     return changes
 
 
-def _parse_run(kind: type[TrainCommand], argv: Sequence[str], prog: str
-               ) -> tuple[TrainCommand, TrainConfig, TrainConfig | None]:
+def _parse_run(kind: type[RunCommand], argv: Sequence[str], prog: str
+               ) -> tuple[RunCommand, TrainConfig, TrainConfig | None]:
     """A ``train``/``main`` command line: the command, its training run and (``--resume``) the saved run."""
     command, saved = _parse_flags(kind, argv, prog)
     if saved is not None and command.agent != saved.agent:      # the run's learner settings are its agent's
         raise ValueError(f"--agent: {command.agent!r} differs from the run's {saved.agent!r} "
                          f"({RunDirectory(command.run_path).config_path}); a resumed run keeps its configuration, "
                          f"only {' and '.join(MUTABLE_ON_RESUME)} may change")
-    config = train_config(command, command.options)  # type: ignore[attr-defined]
-    if saved is not None:                # not a flag: the saved run's (runs of the library may set it either way)
-        config = dataclasses.replace(config, shared_context=saved.shared_context)
-    return command, config, saved
+    return command, train_config(command, command.options), saved  # type: ignore[attr-defined]
 
 
-def _train_or_resume(command: TrainCommand, config: TrainConfig, saved: TrainConfig | None) -> RunDirectory:
+def _with_flag_hint(error: ValueError) -> str:
+    """``error``'s message, and where the black-box wrapper's reason names a setting it needs, the flag that gives
+    it (``--env-option NAME VALUE``)."""
+    from rdmp_gym.envs.blackbox import WRAPPER_SETTINGS
+
+    reason = str(error.__cause__ or "")
+    name = reason.partition(":")[0].strip()
+    if name in WRAPPER_SETTINGS:
+        return f"{error}; give it with --env-option {name} VALUE"
+    return str(error)
+
+
+def _check_recording(env: Any, env_id: str) -> None:
+    """``--video``: ValueError unless the env records episodes (``record_episode``) and MuJoCo renders here."""
+    base = env.unwrapped
+    if not callable(getattr(base, "record_episode", None)):
+        raise ValueError(f"--video: {env_id} cannot record an episode ({type(base).__name__} has no "
+                         f"record_episode); leave out --video")
+    can_record = getattr(base, "can_record", None)
+    if callable(can_record):
+        can_record()                                   # the env's own check (ValueError saying why not)
+    import mujoco
+
+    try:
+        mujoco.Renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8).close()
+    except Exception as error:          # each OpenGL backend fails in its own way
+        raise ValueError(f"--video: MuJoCo cannot render here ({error}); set MUJOCO_GL=egl (or osmesa) in the "
+                         f"environment, or leave out --video") from None
+
+
+def _check_task(task: TaskSpec, video: bool) -> None:
+    """Build the run's env once, before any work, where that can fail for a reason a flag fixes: a step-based env the
+    black-box wrapper cannot drive (the error names the ``--env-option`` to give) and, with ``video``, an env that
+    cannot record its episodes."""
+    if not video and is_episodic(task.env_id):
+        return
+    try:
+        env = task.make()
+    except ValueError as error:
+        raise ValueError(_with_flag_hint(error)) from error
+    try:
+        if video:
+            _check_recording(env, task.env_id)
+    finally:
+        env.close()
+
+
+def _train_or_resume(command: RunCommand, config: TrainConfig, saved: TrainConfig | None) -> RunDirectory:
     """A new run, or (``--resume``) the saved run changed only by the given flags (a differing setting is an error
     naming its flag)."""
     if saved is None:
@@ -343,6 +432,7 @@ def _train_or_resume(command: TrainCommand, config: TrainConfig, saved: TrainCon
 def command_train(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(TrainCommand, argv, "rdmp-gym train")
     _setup(command)
+    _check_task(config.task, command.video)
     run = _train_or_resume(command, config, saved)
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
@@ -354,6 +444,8 @@ def command_train(argv: Sequence[str]) -> None:
 def command_evaluate(argv: Sequence[str]) -> None:
     command = parse_evaluate(argv)
     _setup(command)
+    if command.video:
+        _check_task(load_run_config(RunDirectory(command.run)).task, video=True)
     result = evaluate_run(command.run, command.episodes, workers=command.workers, policy=command.policy,
                           video=command.video, progress=True, backend=command.backend,
                           ray_address=command.ray_address)
@@ -407,6 +499,7 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
 def command_main(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(MainCommand, argv, "rdmp-gym main")
     _setup(command)
+    _check_task(config.task, command.video)
     out = Path(command.out)
     out.mkdir(parents=True, exist_ok=True)
     print("[1/4] imitation: the env's rhythmic DMP fitted to the demonstration (the start of training)")
@@ -440,9 +533,8 @@ def _setup(command: Any) -> None:
                         format="%(levelname)s %(name)s: %(message)s")
     if getattr(command, "video", False) and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
         raise ValueError("--video: no display; run with MUJOCO_GL=egl (or osmesa) set in the environment")
-    if isinstance(command, (TrainCommand, EvaluateCommand)):
-        try:
-            import torch  # optional: only the torch learners need it
-        except ModuleNotFoundError:
-            return
-        torch.set_num_threads(1)
+    try:
+        import torch  # optional: only the torch learners need it
+    except ModuleNotFoundError:
+        return
+    torch.set_num_threads(1)

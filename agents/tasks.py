@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
 from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
-from rdmp_gym.envs.specs import find_spec
+from rdmp_gym.envs.specs import is_episodic
 
 from .imitation import load_demonstration
 
@@ -45,17 +45,6 @@ def main_options(agent: str, env_id: str) -> dict[str, Any]:
     env, else none (the task's learner defaults still apply: :func:`task_options`)."""
     return copy.deepcopy(MAIN_OPTIONS) if agent == MAIN_AGENT and env_id == MAIN_ENV else {}
 
-_EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
-
-
-def _own_id(env_id: str) -> bool:
-    """Whether ``env_id`` (``"module:id"`` as ``gym.make`` takes it) is an env of this package (unknown ids: True,
-    so that ``gym.make`` names the problem)."""
-    try:
-        entry = find_spec(env_id).entry_point
-    except ValueError:
-        return True
-    return not isinstance(entry, str) or entry.startswith("rdmp_gym.")
 
 
 #: options that name the env's action groups: a task's defaults assume its own layout and drop them under other groups
@@ -78,13 +67,16 @@ class TaskSpec:
     """A picklable recipe for the task's environment (worker processes rebuild it from this).
 
     Attributes:
-        env_id: a registered episodic env (default :data:`MAIN_ENV`, the current wiping task), or a step-based
-            Gymnasium env with a continuous action space (run under the rhythmic black-box wrapper).
-        env_kwargs: keywords for ``gym.make`` (style, groups, n_periodic, duration, ...); None:
-            :func:`main_env_kwargs`.
+        env_id: a registered env with a continuous action space, with a string or a class entry point: an episodic
+            env (one that declares a task contract, :func:`rdmp_gym.envs.specs.is_episodic`; default
+            :data:`MAIN_ENV`, the current wiping task), or a step-based env, run under the rhythmic black-box wrapper.
+        env_kwargs: the env's settings (the wiping task's style, groups, n_periodic, duration, ...; on a step-based
+            env the wrapper's settings and the env's ``gym.make`` keywords,
+            :func:`rdmp_gym.envs.blackbox.split_settings`); None: :func:`main_env_kwargs`.
         reset_options: ``options`` passed to every ``reset`` (e.g. to fix the context), or None.
-        demo: a CSV/NPZ demonstration (table frame, m) that the env fits instead of its built-in
-            style ("" = none); passed as the env's ``demonstration`` keyword.
+        demo: a CSV/NPZ demonstration that the env fits its initial DMP to ("" = none), in the env's own space (the
+            wiping and tracking tasks: the table frame in metres; a step-based env: its actuated joints); passed as
+            the env's (or the wrapper's) ``demonstration`` keyword.
     """
 
     env_id: str = MAIN_ENV
@@ -97,44 +89,37 @@ class TaskSpec:
             object.__setattr__(self, "env_kwargs", main_env_kwargs(self.env_id))
 
     def make(self, render_mode: str | None = None) -> gym.Env:
-        """Build the environment (importing the packages that register the ids). On an env of another package,
-        ``env_kwargs`` that are settings of the rhythmic black-box wrapper (``p_gains``, ``groups``, ``duration``,
-        ...) build it under the wrapper with them; the rest go to the env."""
-        if not _own_id(self.env_id):
-            from rdmp_gym.envs.blackbox import split_settings
-
-            if split_settings(self.env_id, self.env_kwargs)[0]:    # ValueError naming a setting nobody takes
-                return self._black_box(render_mode)
+        """Build the environment (importing the packages that register the ids): an episodic env as it is, with
+        ``env_kwargs``; a step-based env under the rhythmic black-box wrapper (:meth:`_black_box`). Which it is, is
+        told by what the env is (:func:`rdmp_gym.envs.specs.is_episodic`), not by the package that registers it."""
+        if not is_episodic(self.env_id):           # ValueError naming an unknown id
+            return self._black_box(render_mode)
         kwargs = dict(self.env_kwargs)
         if render_mode is not None:
             kwargs["render_mode"] = render_mode
         if self.demo:
             kwargs["demonstration"] = load_demonstration(self.demo)
         try:
-            env = gym.make(self.env_id, disable_env_checker=True, **kwargs)
+            return gym.make(self.env_id, disable_env_checker=True, **kwargs)
         except gym.error.Error as error:   # unknown id, namespace or version
             raise ValueError(f"env_id: {error}") from error
-        if not all(hasattr(env.unwrapped, name) for name in _EPISODIC_API):
-            env.close()
-            return self._black_box(render_mode)
-        return env
 
     def _black_box(self, render_mode: str | None) -> gym.Env:
-        """A step-based env with a continuous action space, under the rhythmic black-box wrapper with its defaults
-        (the wrapper's settings among ``env_kwargs`` replace them, the rest go to the env); ValueError saying why
-        where the wrapper cannot drive it."""
+        """A step-based env under the rhythmic black-box wrapper with its defaults: the wrapper's settings among
+        ``env_kwargs`` replace them, the rest go to the env's ``gym.make`` (``demo``: the wrapper's demonstration, in
+        the actuated joints); ValueError passing on the wrapper's reason where it cannot drive the env (a discrete
+        action space, a setting it needs)."""
         from rdmp_gym.envs.blackbox import make_blackbox, split_settings
 
+        wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)   # ValueError naming a setting nobody takes
         if self.demo:
-            raise ValueError(f"demo: {self.env_id} is a step-based env; give the black-box wrapper its demonstration "
-                             f"through rdmp_gym/RhythmicBlackBox-v0's keywords instead")
-        wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)
+            wrapper["demonstration"] = load_demonstration(self.demo)
         try:
             return make_blackbox(self.env_id, env_kwargs=env_kwargs, render_mode=render_mode, **wrapper)
         except ValueError as error:
-            raise ValueError(f"env_id: {self.env_id} is not an episodic DMP env (one step = one DMP rollout, with "
-                             f"{', '.join(_EPISODIC_API)} and info['cost_trace']) and the rhythmic black-box wrapper "
-                             f"cannot drive it: {error}. Use {MAIN_ENV} or another rdmp_gym id") from error
+            raise ValueError(f"env_id: {self.env_id} is a step-based env, not an episodic DMP env (one step = one "
+                             f"DMP rollout), and the rhythmic black-box wrapper that would run it cannot: {error}"
+                             ) from error
 
     def make_with_options(self) -> gym.Env:
         """The environment, wrapped so that every reset without options uses ``reset_options``."""

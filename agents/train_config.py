@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from rdmp_gym.envs.registration import env_settings
@@ -22,7 +22,7 @@ from .learners import CONTEXTUAL, EpisodeBatch
 from .registry import REGISTRY, agent_spec
 from .tasks import MAIN_AGENT, MAIN_ENV, TaskSpec, main_env_kwargs, main_options, task_options
 
-__all__ = ["AGENTS", "START_MODES", "Agent", "TrainConfig"]
+__all__ = ["AGENTS", "START_MODES", "Agent", "AgentName", "StartMode", "TrainConfig"]
 
 #: every registered agent's name (the ask/tell learners, ``ppo`` and ``sac``)
 AGENTS = tuple(REGISTRY)
@@ -30,45 +30,63 @@ START_MODES = ("imitation", "perturbed", "shrunk")
 _SEED_LIMIT = 2**31 - 1
 
 
+#: an agent's name as a type (the command line's choices)
+AgentName = Literal[AGENTS]  # type: ignore[valid-type]
+#: a start mode's name as a type
+StartMode = Literal[START_MODES]  # type: ignore[valid-type]
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """Everything that defines a training run (stored as ``config.json``).
 
+    Each attribute's first sentence is the help of its ``rdmp-gym train`` flag, which is derived from this class
+    (:mod:`rdmp_gym.agents.run_commands`).
+
     Attributes:
-        agent: a learner of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``pi2``,
-            ``pibb``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the main
-            learner (:data:`~rdmp_gym.agents.tasks.MAIN_AGENT`).
+        agent: the learner. One of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``,
+            ``pi2``, ``pibb``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the
+            main learner (:data:`~rdmp_gym.agents.tasks.MAIN_AGENT`).
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
-        workers: worker processes (or Ray actors) for the episodes; no learner's numbers depend on it
-            (PPO's parallel envs are its own setting ``envs``).
-        env_id: the episodic env; default the current task (:data:`~rdmp_gym.agents.tasks.MAIN_ENV`).
-        env_kwargs: ``gym.make`` keywords (style, groups, n_periodic, n_transient, duration, ...), validated once
-            against the env's typed settings (:attr:`env_settings`; an unknown or bad setting is an error naming
-            it); None: the main job's keywords on its env, else none (:func:`~rdmp_gym.agents.tasks.main_env_kwargs`).
+        workers: worker processes (or Ray actors) for the episodes (the numbers do not depend on it). PPO's parallel
+            envs are its own setting ``envs``.
+        env_id: the env: a registered id with a continuous action space, episodic or step-based. An episodic env
+            (one that declares a task contract, :func:`rdmp_gym.envs.specs.is_episodic`) runs as it is, a step-based
+            one under the rhythmic black-box wrapper; default the current task
+            (:data:`~rdmp_gym.agents.tasks.MAIN_ENV`).
+        env_kwargs: the env's settings, validated once against the env (:attr:`env_settings`; an unknown or bad setting
+            is an error naming it): the wiping task's ``style``, ``groups``, ``n_periodic``, ``duration``, ...; on a
+            step-based env the wrapper's settings (``p_gains``, ``groups``, ``duration``, ...) and the env's
+            ``gym.make`` keywords (:func:`rdmp_gym.envs.blackbox.split_settings`). None: the main job's keywords on its
+            env, else none (:func:`~rdmp_gym.agents.tasks.main_env_kwargs`).
         reset_options: options for every reset (e.g. a fixed context), or None.
         options: the agent's settings: its typed settings object (``PI2Config``, ``BBRLConfig``, ``PPOConfig``, ...,
             used as given), or a mapping of their fields over the task's defaults for the agent
             (``tasks.task_options``: e.g. a contextual search on the wiping task starts from the task's learner
             defaults, ``rdmp_gym.envs.registration.learner_defaults``); None: the main job's options for the main
             learner on its env, else none (:func:`~rdmp_gym.agents.tasks.main_options`). Stored as the typed object.
-        start: ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise of std
-            ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``:
-            a smaller, damped movement; the initial conditions as fitted).
+        start: the start of the search. ``imitation`` (the fitted DMP, ``a = 0``), ``perturbed`` (plus Gaussian noise
+            of std ``perturbation`` in action units) or ``shrunk`` (the DMP weights scaled by ``1 - perturbation``: a
+            smaller, damped movement; the initial conditions as fitted).
         perturbation: size of the perturbed or shrunk start.
-        demo: a CSV/NPZ demonstration for the env to imitate instead of its built-in style ("" = none).
-        eval_episodes: episodes that evaluate the policy after every update (fixed seeds).
-        eval_every: evaluate the policy every this many updates (and after the last one).
-        shared_context: all rollouts of one update use the same reset seed (same context); the contextual
-            learners (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``amplitude``, ``random``) always get one context
-            per rollout. None: shared for the others, not for them (the same episodes either way).
-        stratified_validation: the validation contexts spread evenly over the kinds of context the env names
-            (:func:`~rdmp_gym.agents.protocol.stratified_validation_seeds`; e.g. the wiping task's cup on the
-            approach, cup beside the patch, largest patch, no cup), instead of the first ``eval_episodes`` seeds.
+        demo: a CSV/NPZ demonstration for the env to fit its initial DMP to ("" = none). In the env's own space: the
+            wiping and tracking tasks' table frame in metres, a step-based env's actuated joints; given to the env (or
+            the wrapper) as its ``demonstration`` keyword, refused by an env that takes none.
+        eval_episodes: validation contexts the policy is evaluated on after every ``eval_every`` updates (fixed
+            seeds).
+        eval_every: updates between policy evaluations (and after the last one).
+        shared_context: all rollouts of one update share one context (None: not for the contextual learners, which
+            always get one context per rollout, else yes). The contextual learners are ``bbrl``, ``creps``,
+            ``cpibb``, ``cpi2``, ``amplitude`` and ``random``; the same episodes either way.
+        stratified_validation: spread the validation contexts evenly over the kinds of context the env names,
+            instead of taking the first ``eval_episodes`` seeds. See
+            :func:`~rdmp_gym.agents.protocol.stratified_validation_seeds`; e.g. the wiping task's cup on the approach,
+            cup beside the patch, largest patch, no cup.
     """
 
-    agent: str = MAIN_AGENT
+    agent: AgentName = MAIN_AGENT
     updates: int = 30
     rollouts: int = 10
     seed: int = 0
@@ -77,7 +95,7 @@ class TrainConfig:
     env_kwargs: Mapping[str, Any] | None = None
     reset_options: dict[str, Any] | None = None
     options: Settings | Mapping[str, Any] | None = None
-    start: str = "imitation"
+    start: StartMode = "imitation"
     perturbation: float = 0.3
     demo: str = ""
     eval_episodes: int = 1
@@ -100,6 +118,11 @@ class TrainConfig:
         if not isinstance(self.env_kwargs, Mapping):
             raise TypeError(f"env_kwargs: expected a mapping, got {type(self.env_kwargs).__name__}")
         env_settings(self.env_id, self.env_kwargs)
+        if self.demo:
+            try:
+                env_settings(self.env_id, {**self.env_kwargs, "demonstration": None})
+            except (TypeError, ValueError) as error:
+                raise ValueError(f"demo: {self.env_id} takes no demonstration ({error})") from None
         if self.options is None:
             object.__setattr__(self, "options", main_options(self.agent, self.env_id))
         if self.shared_context is None:

@@ -14,7 +14,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from .specs import find_spec
+from .specs import find_spec, is_episodic
 from .tasks import TASKS
 from .tasks.wiping.faces import DEPRECATED as _DEPRECATED
 
@@ -100,17 +100,21 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
     :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig`, also for the deprecated v0); the other ids of this package
     give the keywords (registered and given), checked against the env's signature and, for a task of the rhythmic
     face or its step twin, the face's keywords as the face's episodic ids check them; ids of other packages give the
-    keywords as they are, checked to be keywords of the env or settings of the rhythmic black-box wrapper
+    keywords as they are (string or class entry point alike): for an episodic env
+    (:func:`~rdmp_gym.envs.specs.is_episodic`) checked against its signature, for a step-based env checked to be
+    keywords of the env or settings of the rhythmic black-box wrapper that runs it
     (:func:`~rdmp_gym.envs.blackbox.split_settings`). Raises ValueError for an unknown id, and TypeError or ValueError
     naming a setting the env does not take or a value it refuses.
     """
     spec = find_spec(env_id)
     settings = {**(spec.kwargs or {}), **dict(kwargs or {})}
     if not isinstance(spec.entry_point, str) or not spec.entry_point.startswith("rdmp_gym."):
-        if isinstance(spec.entry_point, str):     # another package's env: its keywords, or the black-box wrapper's
+        if not is_episodic(env_id):             # a step-based env: its keywords, or the black-box wrapper's
             from .blackbox.wrapper import split_settings
 
             split_settings(env_id, kwargs)
+        else:
+            _bound(env_id, spec.entry_point, settings)
         return settings
     if spec.entry_point == _DEPRECATED:
         from .tasks.wiping.settings import EnvConfig
@@ -141,10 +145,10 @@ def _face_settings(env_id: str, settings: dict[str, Any]) -> Any:
     return settings
 
 
-def _bound(env_id: str, entry_point: str, settings: dict[str, Any]) -> inspect.BoundArguments:
-    """``settings`` bound to the signature of the env at ``entry_point`` (TypeError naming ``env_id`` if they do not
-    fit)."""
-    creator = gym.envs.registration.load_env_creator(entry_point)
+def _bound(env_id: str, entry_point: Any, settings: dict[str, Any]) -> inspect.BoundArguments:
+    """``settings`` bound to the signature of the env at ``entry_point`` (a ``"module:name"`` string, a class or a
+    function; TypeError naming ``env_id`` if they do not fit)."""
+    creator = gym.envs.registration.load_env_creator(entry_point) if isinstance(entry_point, str) else entry_point
     try:
         return inspect.signature(creator).bind(**settings)
     except TypeError as error:

@@ -92,7 +92,7 @@ def _alive(pid: int) -> bool:
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_exit_when_a_training_run_is_killed(tmp_path):
     command = [sys.executable, "-m", "rdmp_gym.agents.cli", "train", "--out", str(tmp_path / "run"),
-               "--env", TRACKING_ID, "--n-periodic", "10", "--n-transient", "10", "--duration", "4",
+               "--env", TRACKING_ID, "--env-option", "n_periodic", "10", "n_transient", "10", "duration", "4",
                "--updates", "1000", "--rollouts", "4", "--workers", "2"]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:

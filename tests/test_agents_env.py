@@ -98,8 +98,9 @@ def test_ppo_trains_on_the_env(tmp_path, context):
 
 def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     out = tmp_path / "main"
-    tiny = ["--updates", "2", "--rollouts", "4", "--workers", "1", "--n-periodic", "10", "--n-transient", "10",
-            "--env-option", "n_periods", "2", "control_rate", "25", "frame_stride", "25", "width", "64", "height", "64"]
+    tiny = ["--updates", "2", "--rollouts", "4", "--workers", "1", "--env-option", "n_periodic", "10",
+            "n_transient", "10", "--env-option", "n_periods", "2", "control_rate", "25", "frame_stride", "25", "width",
+            "64", "height", "64"]
     assert main(["main", "--out", str(out), "--episodes", "2", "--video", *tiny]) == 0
     assert "trained fails on: " in capsys.readouterr().out
     for name in ("fit.png", "summary.json", "train/log.jsonl", "train/learning_curve.png", "train/evaluation.png",

@@ -92,15 +92,15 @@ def test_an_object_array_in_the_checkpoint_npz_is_refused(tmp_path):
 def test_resume_takes_the_runs_config_and_only_extending_flags(tmp_path, capsys):
     out = tmp_path / "run"
     assert _cli_train(out, "--agent", "pibb", "--updates", "2", "--rollouts", "4", "--seed", "5",
-                      "--n-periodic", "8", "--n-transient", "8", "--duration", "3") == 0
+                      "--env-option", "n_periodic", "8", "n_transient", "8", "--env-option", "duration", "3") == 0
     assert _cli_train(out, "--resume") == 0                   # no flags: the run is complete, nothing added
     assert _updates(out) == [0, 1, 2]
     assert _cli_train(out, "--resume", "--updates", "3", "--seed", "5") == 0  # a repeated equal flag is fine
     assert _updates(out) == [0, 1, 2, 3]
     assert json.loads((out / "config.json").read_text())["updates"] == 3
     capsys.readouterr()
-    assert _cli_train(out, "--resume", "--updates", "4", "--n-periodic", "9") == 2
-    assert "--n-periodic" in capsys.readouterr().err
+    assert _cli_train(out, "--resume", "--updates", "4", "--env-option", "n_periodic", "9") == 2
+    assert "--env-option n_periodic" in capsys.readouterr().err
     assert _cli_train(out, "--resume", "--options.sigma", "0.5") == 2
     assert "--options.sigma" in capsys.readouterr().err
     assert _cli_train(out, "--resume", "--env-option", "weight_scale", "0.4") == 2

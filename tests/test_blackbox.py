@@ -394,8 +394,9 @@ def test_env_options_reach_the_wrapper_and_an_unknown_one_is_named(tmp_path, cap
     env.close()
     with pytest.raises(ValueError, match="'p_gain' is neither a setting of the rhythmic black-box wrapper"):
         TrainConfig(agent="cmaes", env_id="Swimmer-v5", env_kwargs={"p_gain": 4.0})
-    command = parse_train(["--agent", "cmaes", "--env", "Swimmer-v5", "--out", str(tmp_path / "run"), "--duration",
-                           "0.4", "--groups", "amplitude", "tempo", "--env-option", "p_gains", "4"])
+    command = parse_train(["--agent", "cmaes", "--env", "Swimmer-v5", "--out", str(tmp_path / "run"), "--env-option",
+                           "duration", "0.4", "--env-option", "groups", '["amplitude", "tempo"]', "--env-option",
+                           "p_gains", "4"])
     config = train_config(command)
     assert config.env_kwargs == {"duration": 0.4, "groups": ["amplitude", "tempo"], "p_gains": 4}
     again = TrainConfig.from_dict(json.loads(json.dumps(config.to_dict()))).task.make().unwrapped

@@ -248,8 +248,8 @@ def test_ppo_tensorboard_logging_writes_into_the_run_directory(tmp_path):
 @pytest.mark.slow
 def test_make_run_can_be_run_twice(tmp_path):
     out = tmp_path / "main"
-    tiny = ("--updates 1 --rollouts 2 --workers 1 --episodes 1 --env rdmp_gym/DMPTracking-v0 --n-periodic 8 "
-            "--n-transient 8 --duration 3")
+    tiny = ("--updates 1 --rollouts 2 --workers 1 --episodes 1 --env rdmp_gym/DMPTracking-v0 --env-option n_periodic 8 "
+            "n_transient 8 duration 3")
     command = ["make", "-s", "-o", ".venv/.installed", "run", f"RUN_OUT={out}", f"RUN_FLAGS={tiny}"]
     first = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert first.returncode == 0, first.stderr[-2000:]

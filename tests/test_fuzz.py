@@ -269,7 +269,8 @@ def test_fuzz_cli_train(tmp_path_factory, flags, capsys):
 
     out = tmp_path_factory.mktemp("train") / "run"
     argv = ["train", "--out", str(out), "--env", TRACKING_ID, "--updates", "1", "--rollouts", "2", "--workers", "1",
-            "--n-periodic", "6", "--n-transient", "6", "--duration", "2", *[part for flag in flags for part in flag]]
+            "--env-option", "n_periodic", "6", "n_transient", "6", "duration", "2",
+            *[part for flag in flags for part in flag]]
     code = _cli(argv)
     assert code in (0, 2), f"{argv} exited with {code}"
     if code == 0:

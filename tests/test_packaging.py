@@ -161,8 +161,8 @@ def test_train_takes_a_recording_with_a_time_column_and_uneven_stamps(tmp_path):
     np.savetxt(path, np.column_stack([jitter, demo.Y]), delimiter=",", header="time,x,y,z", comments="")
     out = tmp_path / "run"
     code = cli.main(["train", "--env", "rdmp_gym/DMPTracking-v0", "--demo", str(path), "--time-column", "time",
-                     "--rate", "100", "--updates", "1", "--rollouts", "2", "--workers", "1", "--n-periodic", "8",
-                     "--n-transient", "8", "--duration", "3", "--out", str(out)])
+                     "--rate", "100", "--updates", "1", "--rollouts", "2", "--workers", "1", "--env-option",
+                     "n_periodic", "8", "n_transient", "8", "duration", "3", "--out", str(out)])
     assert code == 0
     saved = Demonstration.from_npz(out / "demo.npz")
     assert np.allclose(np.diff(saved.t), 0.01) and (out / "dmp.json").is_file()
