@@ -170,7 +170,7 @@ def test_sb3_sac_trains_on_it(env):
 @pytest.mark.parametrize(("setting", "value"), [("cup_clearance", 0.01), ("force_learning", True),
                                                 ("record_frames", True)])
 def test_the_v1_v2_step_env_refuses_by_name_what_it_cannot_honour(setting, value):
-    from rdmp_gym.envs.tasks.wiping.legacy_step import ArmarWipeStepEnv
+    from rdmp_gym.envs.tasks.wiping.legacy.step import ArmarWipeStepEnv
 
     with pytest.raises(ValueError, match=setting):
         ArmarWipeStepEnv(**{setting: value})

@@ -35,8 +35,11 @@ class TaskEntry:
     faces: Any = None
 
     def build(self, **settings: Any) -> TaskDescription:
-        """The description with ``settings``."""
-        return self._factory()(**settings)
+        """The description with ``settings`` (a description class's :meth:`TaskDescription.build`)."""
+        factory = self._factory()
+        if isinstance(factory, type) and issubclass(factory, TaskDescription):
+            return factory.build(**settings)
+        return factory(**settings)
 
     def learner_defaults(self, version: int | None = None) -> dict[str, dict[str, Any]]:
         """The task's learner defaults (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.defaults_for`

@@ -193,6 +193,12 @@ class TaskDescription(ABC):
     frame_size: ClassVar[tuple[int, int]] = (480, 360)
 
     @classmethod
+    def build(cls, **settings: Any) -> TaskDescription:
+        """The description of ``settings`` (default: ``cls(**settings)``; a task whose versions have descriptions of
+        their own returns the settings' version's)."""
+        return cls(**settings)
+
+    @classmethod
     def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
         """The learner defaults of the task's ``version`` (default: :attr:`learner_defaults` for every version)."""
         return cls.learner_defaults

@@ -16,9 +16,10 @@
   changes, the typed settings and the learner defaults;
 - :mod:`~rdmp_gym.envs.tasks.wiping.step`: the task's step book, its step interface on the generic step twin (the
   ids ``rdmp_gym/{Armar,Panda}WipeStep-v3``);
-- :mod:`~rdmp_gym.envs.tasks.wiping.faces`, :mod:`~rdmp_gym.envs.tasks.wiping.env`,
-  :mod:`~rdmp_gym.envs.tasks.wiping.legacy_step`: the envs of the ids ``rdmp_gym/{Armar,Panda}Wipe{,Step}-v{N}`` (the
-  v1/v2 step env runs the DMP online).
+- :mod:`~rdmp_gym.envs.tasks.wiping.faces`, :mod:`~rdmp_gym.envs.tasks.wiping.env`: the envs of the ids
+  ``rdmp_gym/{Armar,Panda}Wipe{,Step}-v{N}``;
+- :mod:`~rdmp_gym.envs.tasks.wiping.legacy`: the published versions 1 and 2, frozen (their description, their step
+  env, which runs the DMP online, and the deprecated ``rdmp_gym/ArmarWipe-v0``).
 
 The package imports nothing on its own (the id registry reads its learner defaults without loading MuJoCo).
 """

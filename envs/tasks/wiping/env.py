@@ -35,14 +35,13 @@ step, ``record_episode`` (or ``record_frames=True``) captures frames inside it.
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 from ...rhythmic_env import RhythmicTaskEnv
 from .settings import EnvConfig
 from .task import WipingTask, episode_success, failure_causes, outcome
 
-__all__ = ["ArmarWipeEnv", "deprecated_v0", "episode_success", "failure_causes", "outcome"]
+__all__ = ["ArmarWipeEnv", "episode_success", "failure_causes", "outcome"]
 
 
 class ArmarWipeEnv(RhythmicTaskEnv):
@@ -112,22 +111,9 @@ class ArmarWipeEnv(RhythmicTaskEnv):
 
     def __init__(self, config: EnvConfig | None = None, **settings: Any):
         config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
-        task = WipingTask(config)
+        task = WipingTask.build(config)
         render = config.render
         super().__init__(task, robot=task.robot, version=task.version, render_mode=render.render_mode,
                          width=render.width, height=render.height, camera=render.camera,
                          frame_stride=render.frame_stride, record_frames=render.record_frames)
 
-
-def deprecated_v0(**kwargs: Any) -> ArmarWipeEnv:
-    """Entry point of the deprecated ``rdmp_gym/ArmarWipe-v0``: warns and makes v1 without the obstacle.
-
-    v0's reward counted dirt beyond the table edge, touching as wiping and let the arm pass through the
-    robot; v1 (:class:`ArmarWipeEnv`) fixes all of it and changes the reward's meaning, hence the new version.
-    """
-    warnings.warn("rdmp_gym/ArmarWipe-v0 is deprecated and will be removed: its reward could be gamed. It now "
-                  "makes rdmp_gym/ArmarWipe-v1 with obstacle=False; use rdmp_gym/ArmarWipe-v3, the current task.",
-                  DeprecationWarning, stacklevel=2)
-    kwargs.setdefault("obstacle", False)
-    kwargs.setdefault("version", 1)
-    return ArmarWipeEnv(**kwargs)

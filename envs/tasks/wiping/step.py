@@ -157,8 +157,8 @@ class WipeStepBook(StepBook):
         """The episode's statistics, reward terms, cost traces, validity and success."""
         task = self.face.task
         stats = task.statistics(trace, smooth)
-        if penetrated and task.task_version.void_coverage:
-            stats["simulated_coverage"], stats["coverage"] = stats["coverage"], 0.0
+        if penetrated:
+            task.void_coverage(stats)
         success, causes = task.success(stats, not penetrated, trace.unstable)
         return {**stats, "episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces,
                 "valid": not penetrated, "invalid_reason": "penetration" if penetrated else "", "is_success": success,

@@ -21,7 +21,7 @@ published versions gave reproduces bit for bit. The episode's state the task kee
 dirt) is set by :meth:`WipingTask.place`. The v3 step ids are the generic step twin
 (:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`) with the task's step book
 (:meth:`WipingTask.step_book`, :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`); the v1/v2 step env
-(:class:`~rdmp_gym.envs.tasks.wiping.legacy_step.ArmarWipeStepEnv`) runs the DMP online on that face.
+(:class:`~rdmp_gym.envs.tasks.wiping.legacy.step.ArmarWipeStepEnv`) runs the DMP online on that face.
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ from .scene import TablePose, WipeScene, dirt_grid
 from .settings import EnvConfig, ForceConfig, RewardConfig, TaskConfig
 from .simulation import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 from .step import WipeStepBook
-from .versions import LEARNER_DEFAULTS, TASK_VERSIONS, TaskVersion
+from .versions import LEARNER_DEFAULTS, MAX_JERK_RATIO, TASK_VERSIONS, TaskVersion, pad_clearance
 
 __all__ = ["DEFAULT_GROUPS", "WipeRecord", "WipingTask", "episode_success", "failure_causes", "outcome"]
 
@@ -199,7 +199,7 @@ class WipingTask(TaskDescription):
     """
 
     name = "Wipe"
-    versions = (1, 2, 3)
+    versions = (3,)
     tool_site = "sponge_tcp"
     #: the approach and the sweep are action dimensions of the DMP's action map (fixed directions in theta)
     extras: Mapping[str, float] = {}
@@ -207,9 +207,17 @@ class WipingTask(TaskDescription):
     frame_size: ClassVar[tuple[int, int]] = (480, 480)
     #: settings a learner reads, per version (:data:`rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS`)
     defaults_by_version: ClassVar[Mapping[int, Mapping[str, Mapping[str, Any]]]] = LEARNER_DEFAULTS
+    #: ``is_success`` needs the path's jerk within this factor of the imitation's (None: not checked)
+    max_jerk_ratio: ClassVar[float | None] = MAX_JERK_RATIO
+    #: the cup's displacement counts from the robot's first touch (else from where it was placed)
+    cup_from_touch: ClassVar[bool] = True
 
     def __init__(self, config: EnvConfig | None = None, **settings: Any):
         config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
+        if config.task.version not in self.versions:
+            raise ValueError(f"version: {type(self).__name__} describes the version(s) {list(self.versions)}, got "
+                             f"{config.task.version!r} (WipingTask.build and the task's name \"wipe\" build every "
+                             f"version's description)")
         #: every setting of the task (saves to and loads from JSON)
         self.config = config
         #: what this task version changes (see :mod:`rdmp_gym.envs.tasks.wiping.versions`)
@@ -220,8 +228,7 @@ class WipingTask(TaskDescription):
         self.dmp = self._imitation(config.task)
         self._set_groups(config.task)
         #: the scene: the arena, the robot and the task's objects (:meth:`compose`)
-        self.scene = WipeScene(self.robot, composed=self.task_version.composed_scene and config.xml_file is None,
-                               xml_file=config.xml_file)
+        self.scene = self._scene(config)
         config.check_robot(np.c_[self.scene.joint_lower, self.scene.joint_upper])
         self._set_timing(config)
         #: the episode's length (s)
@@ -231,12 +238,12 @@ class WipingTask(TaskDescription):
         self._set_force_and_reward(config.force, config.reward)
         self._set_limits(config.task)
         self.obstacle = config.context.obstacle
+        clearance, near_patch = self._cup_placement()
         self.context_spec = ContextSpec(config.context.ranges, table_extent=self.scene.table_extent,
                                         obstacle=self.obstacle,
                                         obstacle_probability=config.context.obstacle_probability,
-                                        obstacle_radius=self.scene.obstacle_radius,
-                                        patch_clearance=self.task_version.patch_clearance(self.scene.sponge_half),
-                                        near_patch=self.task_version.pad_clearance)
+                                        obstacle_radius=self.scene.obstacle_radius, patch_clearance=clearance,
+                                        near_patch=near_patch)
         _check_reach(self.context_spec, self.robot)
         self.ik = self._path_ik()
         #: the clearance term that keeps the hand away from the cup (None: off)
@@ -255,6 +262,15 @@ class WipingTask(TaskDescription):
         self.fine_force = False
         self._imitation_jerk: float | None = None
         self._live_dirt: Callable[[], np.ndarray] | None = None
+
+    @classmethod
+    def build(cls, config: EnvConfig | None = None, **settings: Any) -> WipingTask:
+        """The description of the settings' version: a :class:`WipingTask`, or for the versions 1 and 2 their frozen
+        description (:class:`~rdmp_gym.envs.tasks.wiping.legacy.task.LegacyWipingTask`)."""
+        from .legacy.task import LegacyWipingTask
+
+        config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
+        return (LegacyWipingTask if config.task.version in LegacyWipingTask.versions else cls)(config)
 
     @classmethod
     def defaults_for(cls, version: int) -> Mapping[str, Mapping[str, Any]]:
@@ -287,10 +303,25 @@ class WipingTask(TaskDescription):
                                    method=task.fit_method, **FADE_BEFORE_T)
         return _fit_style(task.style, task.n_periodic, task.n_transient, task.fit_method)
 
+    def _scene(self, config: EnvConfig) -> WipeScene:
+        """The scene composed from the arena, the robot and the sponge tool."""
+        if config.xml_file is not None:
+            raise ValueError(f"xml_file: a hand-merged scene serves the versions 1 and 2; version {self.version} "
+                             f"composes its scene from the arena, the robot and the sponge tool (got "
+                             f"{config.xml_file!r})")
+        return WipeScene(self.robot, composed=True)
+
+    def default_groups(self) -> tuple[str, ...]:
+        """The action's parameter groups where none are given: :data:`DEFAULT_GROUPS` and the travelling anchor."""
+        return (*DEFAULT_GROUPS, "sweep")
+
+    def _cup_placement(self) -> tuple[float, bool]:
+        """``(clearance, near_patch)`` of the cup (:class:`~rdmp_gym.envs.tasks.wiping.context.ContextSpec`): the
+        pad's clearance (:func:`~rdmp_gym.envs.tasks.wiping.versions.pad_clearance`), anywhere near the patch."""
+        return pad_clearance(self.scene.sponge_half), True
+
     def _set_groups(self, task: TaskConfig) -> None:
-        groups = task.groups
-        if groups is None:
-            groups = DEFAULT_GROUPS + (("sweep",) if self.task_version.sweep else ())
+        groups = self.default_groups() if task.groups is None else task.groups
         #: the DMP parameter groups of theta (the ``approach`` and ``sweep_x``/``sweep_y`` dimensions come after
         #: them in the action; the ``sweep`` via points have none of their own)
         self.groups = tuple(group for group in groups if group != "approach")
@@ -382,7 +413,7 @@ class WipingTask(TaskDescription):
         """The simulation core's settings of this task
         (:class:`~rdmp_gym.envs.tasks.wiping.simulation.SimulationSettings`)."""
         return SimulationSettings(limit_margin=self.limit_margin, fine_force=self.fine_force,
-                                  cup_from_touch=self.task_version.cup_from_touch)
+                                  cup_from_touch=self.cup_from_touch)
 
     def force_adaptation(self) -> ForceAdaptation:
         """A fresh force controller of this env: the admittance law on the pressing depth (with the learned depth
@@ -394,8 +425,8 @@ class WipingTask(TaskDescription):
 
     @property
     def success_joint_accel(self) -> float | None:
-        """The peak joint acceleration (rad/s²) that ``is_success`` allows (None: not checked, v1)."""
-        return self.reward_settings.max_joint_accel if self.task_version.executable_success else None
+        """The peak joint acceleration (rad/s²) that ``is_success`` allows (None: not checked): the robot's limit."""
+        return self.reward_settings.max_joint_accel
 
     # ------------------------------------------------------------------ the plan
     def action_time_weights(self, dmp: RhythmicDMP | None = None, times: np.ndarray | None = None,
@@ -563,8 +594,7 @@ class WipingTask(TaskDescription):
         valid = trace.penetration <= record.penetration_limit
         if not valid:
             terms, cost = invalid_reward(trace.penetration / 0.05, self.n_steps, self.reward_weights, traces)
-            if self.task_version.void_coverage:
-                info["simulated_coverage"], info["coverage"] = info["coverage"], 0.0
+            self.void_coverage(info)
         else:
             terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         if not valid:
@@ -573,9 +603,14 @@ class WipingTask(TaskDescription):
         causes = self.success(info, valid, trace.unstable)[1]
         return Outcome(terms, cost, info, causes, valid=valid, reason="" if valid else "penetration")
 
+    def void_coverage(self, stats: dict[str, Any]) -> None:
+        """An episode voided after its simulation (a penetration) reports coverage 0 like one refused before it; its
+        simulated coverage goes to ``stats["simulated_coverage"]``."""
+        stats["simulated_coverage"], stats["coverage"] = stats["coverage"], 0.0
+
     def success(self, stats: Mapping[str, Any], valid: bool, unstable: bool) -> tuple[bool, tuple[str, ...]]:
         """``(is_success, causes)`` of an episode's statistics with this version's criteria (:func:`outcome`)."""
-        return outcome(stats, valid, unstable, self.success_joint_accel, self.task_version.max_jerk_ratio)
+        return outcome(stats, valid, unstable, self.success_joint_accel, self.max_jerk_ratio)
 
     def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
         """The robot's workspace box (nominal table frame)."""
@@ -682,12 +717,16 @@ class WipingTask(TaskDescription):
         return WipeStepBook(face)
 
     # ------------------------------------------------------------------ the episode's conveniences
+    def jerk_measure(self, path: np.ndarray, dt: float) -> float:
+        """The jerk of ``path [T, 3]`` with control period ``dt`` that the smoothness compares: per unit of squared
+        speed (:meth:`Smoothness.speed_normalised`)."""
+        return Smoothness.speed_normalised(path, dt)
+
     def smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
-        """Jerk of the commanded path relative to the imitation's in the episode's context (v2: per unit of squared
-        speed, :meth:`Smoothness.speed_normalised`), and joint accelerations."""
+        """Jerk of the commanded path relative to the imitation's in the episode's context (:meth:`jerk_measure`),
+        and joint accelerations."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
-        normalised = self.task_version.speed_normalised_jerk
-        measure = Smoothness.speed_normalised if normalised else Smoothness.integrated_jerk
+        measure = self.jerk_measure
         if self._imitation_jerk is None:
             self._imitation_jerk = measure(self.imitation_path(), self.dt)
         ratio = measure(path, self.dt) / max(self._imitation_jerk, 1e-12)

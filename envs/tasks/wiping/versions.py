@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LEARNER_DEFAULTS", "TASK_VERSIONS", "TaskVersion"]
+__all__ = ["CUP_MARGIN", "LEARNER_DEFAULTS", "MAX_JERK_RATIO", "TASK_VERSIONS", "TaskVersion", "pad_clearance"]
 
 #: Cup-rim clearance (m) beyond the pad's half-diagonal in v2.
 CUP_MARGIN = 0.01
@@ -43,10 +43,11 @@ MAX_JERK_RATIO = 3.0
 
 @dataclass(frozen=True)
 class TaskVersion:
-    """The settings that differ between task versions.
+    """The settings that differ between the task versions (the current one adds its own to version 2's: see the
+    module docstring and :class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`).
 
     Attributes:
-        version: 1 or 2.
+        version: 1, 2 or 3.
         n_periods: default periods of the pattern after the transient.
         sweep: the anchor travels along the covering sweep (action dimensions ``sweep_x``, ``sweep_y``).
         pad_clearance: the cup keeps the pad's half-diagonal plus :data:`CUP_MARGIN` from the patch (else 1 cm).
@@ -55,14 +56,6 @@ class TaskVersion:
             joint at its limit.
         event_charge: what a collision, a joint at its limit or a joint acceleration above the limit costs as soon
             as it happens (a share of its weight, :class:`rdmp_gym.envs.tasks.wiping.reward.RewardSettings`).
-        composed_scene: the scene is composed from the arena, the robot and the sponge tool
-            (:func:`rdmp_gym.envs.tasks.wiping.arena.compose_scene`); else the robot's hand-merged scene.
-        max_jerk_ratio: ``is_success`` also needs the path's jerk within this factor of the imitation's (the
-            smoothness measure of the version); None: not checked.
-        cup_from_touch: the cup's displacement counts from the robot's first touch (a cup that settles untouched
-            costs nothing); else from where it was placed.
-        void_coverage: an episode voided after simulation (penetration) reports coverage 0 like one rejected
-            before it, its simulated coverage in ``info["simulated_coverage"]``.
     """
 
     version: int
@@ -72,16 +65,12 @@ class TaskVersion:
     speed_normalised_jerk: bool
     executable_success: bool
     event_charge: float
-    composed_scene: bool = False
-    max_jerk_ratio: float | None = None
-    cup_from_touch: bool = False
-    void_coverage: bool = False
 
-    def patch_clearance(self, sponge_half: np.ndarray) -> float:
-        """Clearance (m) between the cup's rim and the patch for a sponge box of half sizes ``[3]`` (face: 1, 2)."""
-        if not self.pad_clearance:
-            return 0.01
-        return float(np.hypot(sponge_half[1], sponge_half[2])) + CUP_MARGIN
+
+def pad_clearance(sponge_half: np.ndarray) -> float:
+    """Clearance (m) between the cup's rim and the patch that lets a sponge box of half sizes ``[3]`` (face: 1, 2)
+    wipe the patch's edge past the cup: the pad's half-diagonal plus :data:`CUP_MARGIN`."""
+    return float(np.hypot(sponge_half[1], sponge_half[2])) + CUP_MARGIN
 
 
 TASK_VERSIONS = {
@@ -90,8 +79,7 @@ TASK_VERSIONS = {
     2: TaskVersion(2, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
                    executable_success=True, event_charge=0.2),
     3: TaskVersion(3, n_periods=7.0, sweep=True, pad_clearance=True, speed_normalised_jerk=True,
-                   executable_success=True, event_charge=0.2, composed_scene=True, max_jerk_ratio=MAX_JERK_RATIO,
-                   cup_from_touch=True, void_coverage=True),
+                   executable_success=True, event_charge=0.2),
 }
 
 

@@ -47,14 +47,14 @@ import numpy as np
 from rdmp_gym import DMPStepper
 from rdmp_gym.validation import refuse_settings
 
-from ...controller import ForceAdaptation
-from ...coupling import axis_shift, coupling_action, plan_velocity
-from ...servo import ServoSimulation
-from .context import SIZE as CONTEXT_SIZE
-from .env import ArmarWipeEnv, outcome
-from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .simulation import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
-from .step import UNSUPPORTED, sponge_position
+from ....controller import ForceAdaptation
+from ....coupling import axis_shift, coupling_action, plan_velocity
+from ....servo import ServoSimulation
+from ..context import SIZE as CONTEXT_SIZE
+from ..env import ArmarWipeEnv
+from ..reward import TERMS, Smoothness, invalid_reward, wipe_reward
+from ..simulation import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
+from ..step import UNSUPPORTED, sponge_position
 
 __all__ = ["REFUSED", "ArmarWipeStepEnv"]
 
@@ -308,8 +308,7 @@ class ArmarWipeStepEnv(gym.Env):
         if last:
             stats = task.statistics(trace, smooth)
             valid = not penetrated
-            success, causes = outcome(stats, valid, unstable, task.success_joint_accel,
-                                      task.task_version.max_jerk_ratio)
+            success, causes = task.task.success(stats, valid, unstable)
             info.update(stats)
             info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
