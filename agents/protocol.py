@@ -121,8 +121,9 @@ def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] |
     ``ArmarWipe-v2``)."""
     env.reset(seed=int(seed), options=None if options is None else dict(options))
     base = env.unwrapped
-    if hasattr(base, "executed_path"):        # a task that may change the planned path before executing it
-        path = base.executed_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
+    task = getattr(base, "task", None)
+    if hasattr(task, "executed_path"):        # a task that may change the planned path before executing it
+        path = task.executed_path(base.action_to_params(np.asarray(action, dtype=np.float64)), base.context)
     elif hasattr(base, "action_path"):        # an env whose path depends on more than the DMP's parameters
         path = base.action_path(np.asarray(action, dtype=np.float64))
     else:

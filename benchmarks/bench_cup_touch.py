@@ -44,7 +44,7 @@ def action(env: gym.Env, setting: dict) -> np.ndarray:
 def nearest_part(env: gym.Env, act: np.ndarray) -> tuple[str, float]:
     """(part, gap in m) of the hand part that comes nearest to the cup's side along the path of ``act``."""
     base = env.unwrapped
-    gaps = base.hand_cup_gaps(base.rollout_path(base.action_to_params(act)))
+    gaps = base.task.hand_cup_gaps(base.rollout_path(base.action_to_params(act)), base.context)
     closest = {part: float(np.min(gap)) for part, gap in gaps.items()}
     part = min(closest, key=closest.get)
     return part, closest[part]

@@ -38,6 +38,7 @@ import rdmp_gym.envs  # noqa: F401  (registers the env)
 from output import add_save_argument, results_dir
 from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import JointTargetPlan
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, control_frame
 
 RESULTS = Path(__file__).resolve().parent / "results"
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
@@ -97,9 +98,9 @@ def timing(env, repeats: int) -> dict:
         env_wall.append(time.perf_counter() - wall)
         env.reset(seed=0, options=NOMINAL)
         path = u.rollout_path(u.action_map.theta0)
-        solution = u.solve_path(path)
+        solution = u.task.solve_path(path, u.context)
         plan = JointTargetPlan(solution, u.dt, u.scene.servo_lead(), u.scene.joint_lower, u.scene.joint_upper,
-                               u.scene.control_frame()[1][:, 2])
+                               control_frame(u.task.parts, TablePose.of(u.context))[1][:, 2])
         preload = u.adaptation_settings.target_force / u.adaptation_settings.stiffness
         ctrl = plan.q - preload * plan.normal_dq
         m, d = u.scene.model, u.scene.data

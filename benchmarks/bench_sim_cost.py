@@ -106,7 +106,7 @@ def _start_state(unwrapped: gym.Env, seed: int) -> None:
         unwrapped.scene.set_arm_state(unwrapped.solve_plan(plan, plan.world()).q[0])
         return
     theta = unwrapped.action_to_params(np.zeros(unwrapped.action_space.shape))
-    unwrapped.scene.set_arm_state(unwrapped.solve_path(unwrapped.rollout_path(theta)).q[0])
+    unwrapped.scene.set_arm_state(unwrapped.task.solve_path(unwrapped.rollout_path(theta), unwrapped.context).q[0])
 
 
 def _replay(env: gym.Env, seed: int, targets: list[np.ndarray], fine: list[bool]) -> float:

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 from rdmp_gym.envs.tasks.wiping.approach import LIFT_PROFILE
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, control_frame, table_frame
 
 from rdmp_gym.dmp.coupling import AdaptiveLift, LiftOver, ObstacleAvoidance, avoiding_rollout, spring_stiffness
 from rdmp_gym.synthetic.smoothness import integrated_squared_jerk
@@ -37,16 +38,17 @@ def cup_position(env) -> np.ndarray | None:
 
 def cup_in_path_frame(env) -> tuple[np.ndarray, float] | None:
     """(centre ``[2]`` (m), height of its top (m)) of the episode's cup in the frame the env's paths live in (the
-    nominal table origin, the actual tilt: :meth:`WipeScene.control_frame`), or ``None`` without a cup. The cup
-    stands on the actual table, which the context shifts by ``table_height`` (observation field 0)."""
+    nominal table origin, the actual tilt: :func:`~rdmp_gym.envs.tasks.wiping.scene.control_frame`), or ``None``
+    without a cup. The cup stands on the actual table, which the context shifts by ``table_height`` (observation
+    field 0)."""
     xy = cup_position(env)
     if xy is None:
         return None
-    scene = env.unwrapped.scene
-    origin, rot = scene.table_frame(actual=True)
-    control_origin, control_rot = scene.control_frame()
+    parts, pose = env.unwrapped.task.parts, TablePose.of(env.unwrapped.context)
+    origin, rot = table_frame(parts, pose)
+    control_origin, control_rot = control_frame(parts, pose)
     base = control_rot.T @ (origin + rot @ np.r_[xy, 0.0] - control_origin)
-    top = base[2] + 2.0 * scene.obstacle_half_height
+    top = base[2] + 2.0 * parts.obstacle_half_height
     return base[:2], float(top)
 
 
@@ -61,9 +63,9 @@ def lift_term(env, clearance: float = 0.02, ramp: float = 0.15, profile: tuple[f
         return None
     inner = env.unwrapped
     centre, top = cup
-    half = inner.scene.sponge_half
+    half = inner.task.parts.sponge_half
     length = inner.dmp.transients[0].length
-    return LiftOver(centre, top, inner.scene.obstacle_radius, float(np.hypot(half[1], half[2])) + REACH_MARGIN,
+    return LiftOver(centre, top, inner.task.parts.obstacle_radius, float(np.hypot(half[1], half[2])) + REACH_MARGIN,
                     spring_stiffness(inner.dmp), clearance=clearance, ramp=ramp,
                     window=tuple(fraction * length for fraction in profile))
 

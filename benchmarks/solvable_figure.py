@@ -21,13 +21,13 @@ def draw_paths(env: gym.Env, row: dict, action: np.ndarray, path: Path) -> Path:
     is within 1 cm of the table) in ``row``'s context (``env`` is reset to it); returns ``path`` (PNG)."""
     env.reset(seed=row["seed"])
     base = env.unwrapped
-    imitation, best = base.imitation_path(), base.rollout_path(base.action_to_params(action))
+    imitation, best = base.task.imitation_path(base.context), base.rollout_path(base.action_to_params(action))
     context = env.unwrapped.context
     figure, axis = plt.subplots(figsize=(6, 6))
     low = context.patch_centre - context.patch_size / 2
     axis.add_patch(Rectangle(low, *context.patch_size, color="saddlebrown", alpha=0.25, label="dirt patch"))
     if context.obstacle:
-        radius = env.unwrapped.scene.obstacle_radius
+        radius = env.unwrapped.task.parts.obstacle_radius
         axis.add_patch(Circle(context.obstacle_position, radius, color="tab:red", alpha=0.4, label="cup"))
     for trace, colour, label in ((imitation, "tab:gray", "imitation (action 0)"),
                                  (best, "tab:blue", "best return")):

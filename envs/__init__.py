@@ -44,8 +44,9 @@ from .registration import (
 from .tasks.wiping.clearance import CupClearance
 from .tasks.wiping.context import CONTEXT_FIELDS, Context, ContextSpec
 from .tasks.wiping.env import ArmarWipeEnv
+from .tasks.wiping.legacy.scene import WipeScene
 from .tasks.wiping.reward import TERMS, RewardWeights
-from .tasks.wiping.scene import TablePose, WipeScene
+from .tasks.wiping.scene import TablePose
 from .tracking import TrackingEnv
 from .video import RecordEpisodeVideo
 

@@ -121,6 +121,8 @@ class RhythmicTaskEnv(gym.Env):
         self.record_frames = bool(record_frames)
         self._faced = True                    # from here on the task's own attributes write through the face
         self.context: Any = None
+        #: what the task draws on this episode's frames (its record of the episode so far; None before the first step)
+        self.overlay: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
@@ -182,6 +184,7 @@ class RhythmicTaskEnv(gym.Env):
         self.task.place(self.scene.model, self.context)
         self.imitation_plan = self.plan(self.action_map.theta0, np.zeros(len(self.extra_scales)))
         self._imitation_jerk = None
+        self.overlay = None
         self.scene.set_arm_state(self.task.rest_pose(self.context, self.imitation_plan, self))
         self.frames = []
         return self._observation(), {"context": self.context.vector()}
@@ -240,6 +243,11 @@ class RhythmicTaskEnv(gym.Env):
         return self.task.plan(self.dmp, np.asarray(theta, dtype=np.float64), np.asarray(extras, dtype=np.float64),
                               self.context, self.times, self.scene.table_origin)
 
+    def rollout_path(self, theta: np.ndarray) -> np.ndarray:
+        """The tool path ``[T, 3]`` (task frame) that the task plans for DMP parameters ``theta [P]`` (its own values
+        at 0) in this episode's context."""
+        return self.plan(theta, np.zeros(len(self.extra_scales))).path
+
     def action_path(self, action: np.ndarray) -> np.ndarray:
         """The tool path ``[T, 3]`` (task frame) that :meth:`step` plans for ``action [n]`` in this context."""
         return self.plan(*self._split(self._check_action(action))).path
@@ -281,7 +289,9 @@ class RhythmicTaskEnv(gym.Env):
             return self._invalid(info, solution)
         info.update(solution.info)
         capture = self._capture if self.record_frames or self._viewer is not None else None
+        self.overlay = None
         path = self.task.simulate(solution, self, capture)
+        self.overlay = path.record
         outcome = self.task.evaluate(path, self.context, self.scene.sensor)
         causes = ("unstable",) if path.unstable and outcome.valid else outcome.causes
         info.update(outcome.info)
@@ -297,7 +307,7 @@ class RhythmicTaskEnv(gym.Env):
     def _invalid(self, info: dict, rejection: Rejection) -> tuple[float, dict]:
         """The task's graded penalty for a plan that is not executed (:meth:`TaskDescription.invalid`)."""
         info.update(rejection.info)
-        outcome = self.task.invalid(rejection.reason, rejection.severity, self.n_steps)
+        outcome = self.task.invalid(rejection.reason, rejection.severity, self.n_steps, self.context)
         info.update(outcome.info)
         logger.debug("invalid parameters (%s, severity %.3g)", rejection.reason, rejection.severity)
         return self._finish(info, outcome.terms, outcome.cost_trace, False, rejection.reason, False, outcome.causes)
@@ -315,11 +325,13 @@ class RhythmicTaskEnv(gym.Env):
     def _frame(self) -> np.ndarray:
         if self._renderer is None:
             self._renderer = SceneRenderer(self.scene, *self._render_args)
-        return self.task.render_overlay(self._renderer)
+        return self.task.render_overlay(self._renderer, self.context, self.overlay)
 
-    def _capture(self, k: int) -> None:
+    def _capture(self, k: int, overlay: Any = None) -> None:
         """Before the first control step (``k = -1``) the first frame; after control step ``k`` the viewer's update
-        and every ``frame_stride`` steps a frame."""
+        and every ``frame_stride`` steps a frame (with the task's ``overlay`` of the episode so far, where given)."""
+        if overlay is not None:
+            self.overlay = overlay
         if k < 0:
             self.frames.append(self._frame())
             return

@@ -1,8 +1,9 @@
 """The scene of a task on a robot: the room, the robot at its base pose and the task's tool, objects and sensors.
 
-:func:`compose_task_scene` loads the room (``assets/room.xml``: floor, light, cameras, table), attaches the robot's
-MJCF with MuJoCo's ``MjSpec``, adds the sensors every task reads of a robot (``robot_table``: a robot geom on the
-table; ``arm_<link>``: the moving arm touching a link of the robot's own body) and lets the task add its own
+:func:`compose_task_scene` loads the room (``assets/room.xml``: floor, light, cameras, table; or the task's own,
+:attr:`~rdmp_gym.envs.tasks.description.TaskDescription.room`), attaches the robot's MJCF with MuJoCo's ``MjSpec``,
+adds the sensors every task reads of a robot (``robot_table``: a robot geom on the table; ``arm_<link>``: the moving
+arm touching a link of the robot's own body) and lets the task add its own
 (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.compose`). :class:`TaskScene` holds the compiled model and
 data with the indices the controller and the simulation core need.
 """
@@ -64,7 +65,7 @@ def servo_lead(model: mujoco.MjModel, actuator_ids: np.ndarray) -> np.ndarray:
 
 def compose_task_scene(robot: RobotDescription, task: TaskDescription) -> mujoco.MjModel:
     """The compiled scene of ``task`` on ``robot`` (see the module docstring)."""
-    spec = mujoco.MjSpec.from_file(str(ROOM_XML))
+    spec = mujoco.MjSpec.from_file(str(ROOM_XML if task.room is None else task.room))
     frame = spec.worldbody.add_frame(pos=list(robot.base_pos), quat=list(robot.base_quat))
     spec.attach(robot.spec(), frame=frame, prefix=ROBOT_PREFIX)
     subtree, body = mujoco.mjtObj.mjOBJ_XBODY, mujoco.mjtObj.mjOBJ_BODY
@@ -136,14 +137,16 @@ class TaskScene:
         return np.asarray(points, dtype=np.float64) @ self.table_rotation.T + self.table_origin
 
 
-def standard_stage(task: TaskDescription, robot: RobotDescription) -> Stage:
+def standard_stage(task: TaskDescription, robot: RobotDescription, action_map: ActionMap | None = None) -> Stage:
     """The stage a face runs ``task`` on with ``robot`` where the task gives none: the room composed with the robot
     and the task (:class:`TaskScene`); the task's :attr:`control_rate` and :attr:`duration` in its physics steps; the
-    action map of the task's groups and scales; the scene's path inverse kinematics."""
+    action map of the task's groups and scales (or ``action_map``, the task's own); the scene's path inverse
+    kinematics."""
     scene = TaskScene(robot, task)
     timestep = scene.model.opt.timestep
     frame_skip = max(1, round(1.0 / (task.control_rate * timestep)))
     dt = frame_skip * timestep
     n_steps = max(2, round(task.duration / dt))
-    return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt,
-                 ActionMap(task.imitation(), task.groups, task.scales), scene.path_ik())
+    if action_map is None:
+        action_map = ActionMap(task.imitation(), task.groups, task.scales)
+    return Stage(scene, frame_skip, dt, n_steps, np.arange(n_steps) * dt, action_map, scene.path_ik())

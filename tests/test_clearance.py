@@ -94,12 +94,12 @@ def test_clearance_keeps_the_imitation_off_a_cup_it_knocks(envs):
     assert _run(guarded, TOUCHING_SEED)[0] == guarded_reward                    # the same seed, the same numbers
     base = guarded.unwrapped
     theta = base.action_map.theta0
-    shift = np.linalg.norm(base.executed_path(theta) - base.rollout_path(theta), axis=1).max()
+    shift = np.linalg.norm(base.task.executed_path(theta, base.context) - base.rollout_path(theta), axis=1).max()
     assert shift == pytest.approx(guarded_info["clearance_push"])
-    gaps = base.hand_cup_gaps(base.executed_path(theta))
+    gaps = base.task.hand_cup_gaps(base.task.executed_path(theta, base.context), base.context)
     assert set(gaps) == {"fingers", "thumb", "palm", "sponge"}
     assert all(gap.shape == (base.n_steps,) for gap in gaps.values())
-    before = min(g.min() for g in base.hand_cup_gaps(base.rollout_path(theta)).values())
+    before = min(g.min() for g in base.task.hand_cup_gaps(base.rollout_path(theta), base.context).values())
     after = min(g.min() for g in gaps.values())
     assert before < 0.0 < after and after > 0.5 * base.cup_clearance.margin
     zeros = np.zeros(plain.action_space.shape)
@@ -112,4 +112,5 @@ def test_clearance_changes_nothing_without_a_cup(envs):
     (reward, info), (guarded_reward, guarded_info) = _run(plain, seed), _run(guarded, seed)
     assert guarded_info["clearance_push"] == 0.0 and "clearance_push" not in info
     assert guarded_reward == reward and guarded_info["coverage"] == info["coverage"]
-    assert guarded.unwrapped.hand_cup_gaps(guarded.unwrapped.rollout_path(guarded.unwrapped.action_map.theta0)) == {}
+    u = guarded.unwrapped
+    assert u.task.hand_cup_gaps(u.rollout_path(u.action_map.theta0), u.context) == {}

@@ -6,6 +6,7 @@ import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import DEPRECATED_ENV_ID, ENV_ID, TERMS, ArmarWipeEnv
 from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, table_frame
 from rdmp_gym.envs.tasks.wiping.task import WipingTask
 
 from rdmp_gym import wiping_demonstration
@@ -169,8 +170,10 @@ def test_reset_options(env):
     full = np.array([0, 0, 0, 0, 0, 0.12, 0.12, -0.07, 0.1, 0.08, 1.0, -0.05, 0.15])
     obs, _ = env.reset(seed=0, options={"context": full})
     assert obs == pytest.approx(full)
-    assert env.unwrapped.scene.obstacle_position()[:2] == pytest.approx(env.unwrapped.scene.to_world(
-        np.array([-0.05, 0.15, 0.0]), actual=True)[:2], abs=1e-6)
+    u = env.unwrapped
+    origin, rot = table_frame(u.task.parts, TablePose.of(u.context))
+    cup = u.scene.data.qpos[u.task.parts.obstacle_qpos:u.task.parts.obstacle_qpos + 2]
+    assert cup == pytest.approx((origin + rot @ np.array([-0.05, 0.15, 0.0]))[:2], abs=1e-6)
     # dirt lives on the table only: a patch over the near edge (x = -0.14) is refused
     with pytest.raises(ValueError, match="beyond the table"):
         env.reset(options={"patch_centre": [-0.15, 0.0], "patch_size": [0.12, 0.12]})

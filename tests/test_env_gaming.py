@@ -11,6 +11,7 @@ import probes
 import pytest
 import rdmp_gym.envs  # noqa: F401  (registers the env)
 from rdmp_gym.envs import ENV_ID
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, table_frame
 
 MARGIN = 0.3
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.10, 0.10],
@@ -37,9 +38,9 @@ def test_dirt_lives_on_the_table_only(env):
         env.reset(options={**NOMINAL, "patch_centre": [-0.15, 0.0], "patch_size": [0.12, 0.12]})
     env.reset(options={**NOMINAL, "patch_centre": [-0.08, 0.0], "patch_size": [0.12, 0.12]})
     u = env.unwrapped
-    origin, rot = u.scene.table_frame(actual=True)
-    local = (u.dirt_cells - origin) @ rot
-    x_lo, x_hi, y_lo, y_hi = u.scene.table_extent
+    origin, rot = table_frame(u.task.parts, TablePose.of(u.context))
+    local = (u.task.dirt_cells(u.context) - origin) @ rot
+    x_lo, x_hi, y_lo, y_hi = u.task.parts.table_extent
     assert np.all((local[:, 0] > x_lo) & (local[:, 0] < x_hi) & (local[:, 1] > y_lo) & (local[:, 1] < y_hi))
     assert np.abs(local[:, 2]).max() < 1e-12
     # sampled contexts never put dirt beyond the table either (the sampling ranges are checked at construction)

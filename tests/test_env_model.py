@@ -6,7 +6,8 @@ import pytest
 from rdmp_gym.envs.ik import PathIK
 from rdmp_gym.envs.kinematics import ChainKinematics
 from rdmp_gym.envs.robots import ARMAR3
-from rdmp_gym.envs.tasks.wiping.scene import TablePose, WipeScene, dirt_grid
+from rdmp_gym.envs.tasks.wiping.legacy.scene import WipeScene
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, control_frame, dirt_grid, table_frame
 
 ARM_JOINTS = ARMAR3.joints
 
@@ -121,7 +122,9 @@ def test_path_ik_reaches_a_circle_flat_and_within_limits(scene):
     ik = PathIK(kin, ARMAR3.posture, ARMAR3.mobility)
     t = np.linspace(0, 2 * np.pi, 300)
     path = np.c_[0.05 * np.cos(t), 0.05 * np.sin(t), np.zeros_like(t)]
-    sol = ik.solve(scene.to_world(path, actual=True), scene.nominal_normal)
+    parts = scene.parts
+    normal = parts.table_rotation[:, 2]
+    sol = ik.solve(path @ parts.table_rotation.T + parts.table_origin, normal)
     assert sol.pos_error.max() < 1e-3
     assert np.degrees(sol.rot_error.max()) < 0.5
     assert np.all(sol.q >= kin.lower) and np.all(sol.q <= kin.upper)
@@ -129,18 +132,17 @@ def test_path_ik_reaches_a_circle_flat_and_within_limits(scene):
     # normal_dq moves the sponge along the normal: check by finite differences
     state0 = kin.forward(sol.q[:5])
     state1 = kin.forward(sol.q[:5] + 1e-4 * sol.normal_dq[:5])
-    assert (state1.pos - state0.pos) / 1e-4 == pytest.approx(np.tile(scene.nominal_normal, (5, 1)), abs=5e-3)
+    assert (state1.pos - state0.pos) / 1e-4 == pytest.approx(np.tile(normal, (5, 1)), abs=5e-3)
 
 
 def test_table_pose_and_dirt_grid(scene):
-    scene.set_table(TablePose(0.03, 0.05, -0.04))
-    origin, rot = scene.table_frame(actual=True)
+    parts, pose = scene.parts, TablePose(0.03, 0.05, -0.04)
+    origin, rot = table_frame(parts, pose)
     assert origin[2] == pytest.approx(0.93)
     assert rot @ rot.T == pytest.approx(np.eye(3), abs=1e-12)
-    assert scene.control_frame()[0] == pytest.approx(scene.nominal_table_pos)     # height unknown to the controller
-    assert scene.control_frame()[1] == pytest.approx(rot)                         # tilt known
-    scene.set_table(TablePose())
-    assert scene.table_extent == pytest.approx((-0.14, 0.36, -0.45, 0.45))
+    assert control_frame(parts, pose)[0] == pytest.approx(parts.table_origin)     # height unknown to the controller
+    assert control_frame(parts, pose)[1] == pytest.approx(rot)                    # tilt known
+    assert parts.table_extent == pytest.approx((-0.14, 0.36, -0.45, 0.45))
     cells = dirt_grid(np.array([0.01, -0.02]), np.array([0.12, 0.10]), 0.01)
     assert cells.shape == (120, 2)
     assert cells.mean(axis=0) == pytest.approx([0.01, -0.02])

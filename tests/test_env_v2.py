@@ -47,7 +47,7 @@ def test_action_zero_is_the_imitation_with_the_anchor_at_rest(env):
     theta = base.action_to_params(np.zeros(env.action_space.shape))
     points = theta[base.dmp.param_slices(base.groups)["sweep"]]
     assert np.all(points == 0.0)
-    np.testing.assert_allclose(base.rollout_path(theta), base.imitation_path(), atol=1e-9)
+    np.testing.assert_allclose(base.rollout_path(theta), base.task.imitation_path(base.context), atol=1e-9)
     *_, info = env.step(np.zeros(env.action_space.shape, np.float32))
     assert info["jerk_ratio"] == pytest.approx(1.0, abs=1e-9)
     assert info["reward_terms"]["smoothness"] == pytest.approx(0.0, abs=1e-9)
@@ -60,7 +60,7 @@ def test_the_sweep_carries_the_pattern_across_the_patch(env):
     action[_slices(env)["sweep_x"]] = 1.0
     action[_slices(env)["sweep_y"]] = -0.5
     moved = base.rollout_path(base.action_to_params(action))
-    shift = moved - base.imitation_path()
+    shift = moved - base.task.imitation_path(base.context)
     points = np.c_[COVERING_FIGURE * [0.06, -0.03], np.zeros(len(COVERING_FIGURE))]
     expected = base.dmp.sweep.offsets(base.times, points[None])[0]
     np.testing.assert_allclose(shift, expected, atol=2e-4)            # carried rigidly (to 0.2 mm at 50 Hz)
@@ -129,10 +129,10 @@ def test_speed_normalised_jerk_does_not_depend_on_size_or_place(factor, offset):
 
 def test_the_cup_keeps_the_pads_clearance_from_the_patch():
     env = gym.make(ENV_ID_V2, **FAST).unwrapped
-    half = env.scene.sponge_half
+    half = env.task.parts.sponge_half
     clearance = float(np.hypot(half[1], half[2])) + 0.01
     assert env.context_spec.patch_clearance == pytest.approx(clearance)
-    radius, cups = env.scene.obstacle_radius, 0
+    radius, cups = env.task.parts.obstacle_radius, 0
     for seed in range(200):
         context = env.context_spec.sample(np.random.default_rng(seed))
         if context.obstacle:
@@ -184,7 +184,8 @@ def test_a_refined_dmp_with_its_sweep_is_the_imitation_of_a_new_env(env, tmp_pat
     save_dmp(base.dmp.with_params(theta, base.groups), path)
     reloaded = gym.make(ENV_ID_V2, dmp=str(path), **FAST)
     reloaded.reset(seed=3)
-    np.testing.assert_allclose(reloaded.unwrapped.imitation_path(), base.rollout_path(theta), atol=1e-9)
+    again = reloaded.unwrapped
+    np.testing.assert_allclose(again.task.imitation_path(again.context), base.rollout_path(theta), atol=1e-9)
 
 
 def test_bad_arguments_raise_clear_errors():
@@ -228,7 +229,7 @@ def test_cheap_strategies_lose_to_the_imitation(seed):
     options = {"obstacle": 0}
     env.reset(seed=seed, options=options)
     base = env.unwrapped
-    imitation, _ = base.run_path(base.imitation_path())
+    imitation, _ = base.run_path(base.task.imitation_path(base.context))
     paths = {"hold": probes.hold_still(base), "press_lift": probes.press_lift_grid(base),
              "hover": probes.hold_still(base, depth=-0.05)}
     for name, path in paths.items():

@@ -11,6 +11,7 @@ from rdmp_gym.envs import ENV_ID
 from rdmp_gym.envs.controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from rdmp_gym.envs.ik import IKResult, PathIK
 from rdmp_gym.envs.tasks.wiping.reward import RewardSettings, RewardWeights, Smoothness, wipe_reward
+from rdmp_gym.envs.tasks.wiping.scene import TablePose, control_frame, table_frame, to_world
 from rdmp_gym.envs.tasks.wiping.simulation import DirtField, cells_under_sponge, contact_summary, simulate_wipe
 
 NOMINAL = {"table_height": 0.0, "table_tilt": [0.0, 0.0], "patch_centre": [0.0, 0.0], "patch_size": [0.12, 0.12],
@@ -56,11 +57,11 @@ def test_wear_needs_strokes_under_force_and_calibration_has_room(adaptive):
     the imitation still removes 90 % of a default patch's dirt (4 periods)."""
     u = adaptive.unwrapped
     adaptive.reset(seed=0, options=NOMINAL)
-    half = u.scene.sponge_half
-    dirt = DirtField(u.dirt_cells, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
+    half, cells = u.task.parts.sponge_half, u.task.dirt_cells(u.context)
+    dirt = DirtField(cells, np.array([0.0, 0.0, 1.0]), wear_rate=1e-3)
     # the box's x axis points up (its face, the -x side, lies on the table), centred over cell 70
     rot = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]).ravel()
-    box = np.tile(u.dirt_cells[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
+    box = np.tile(cells[70] + np.array([0.0, 0.0, half[0]]), (3, 1))
     rots = np.tile(rot, (3, 1))
     still = dirt.wear(np.full(3, 18.0), np.zeros(3), box, rots, half)
     assert still.max() == 0.0                                       # pressing without sliding removes nothing
@@ -146,8 +147,8 @@ def test_the_clearance_task_leaves_clear_paths_alone(adaptive):
     plain = PathIK(u.ik.kin, u.ik.posture, u.ik.inv_weight)
     for tilt, clear in (([0.0, 0.0], True), ([-0.15, -0.15], False)):
         adaptive.reset(seed=0, options={**NOMINAL, "table_tilt": tilt})
-        path = u.imitation_path()
-        world, normal = u.scene.to_world(path), u.scene.control_frame()[1][:, 2]
+        path, pose = u.task.imitation_path(u.context), TablePose.of(u.context)
+        world, normal = to_world(u.task.parts, pose, path), control_frame(u.task.parts, pose)[1][:, 2]
         before, after = plain.solve(world, normal), u.ik.solve(world, normal)
         assert (u.ik.min_clearance(before.q).min() >= u.ik.clearance_margin) == clear
         if clear:
@@ -207,13 +208,13 @@ def test_arm_contact_with_the_table_is_detected_and_penalised(adaptive):
     u = adaptive.unwrapped
     adaptive.reset(seed=0, options=NOMINAL)
     scene = u.scene
-    q = np.tile(scene.arm_qpos(), (150, 1))
+    q = np.tile(scene.data.qpos[scene.qpos_adr], (150, 1))
     q[:, 0] += np.linspace(0.0, -0.7, 150)                         # lean the torso forward onto the table
     solution = IKResult(q=q, normal_dq=np.zeros_like(q), pos_error=np.zeros(150), rot_error=np.zeros(150))
     plan = JointTargetPlan(solution, u.dt, np.zeros(10), scene.joint_lower, scene.joint_upper)
     adaptation = ForceAdaptation(ForceAdaptationSettings(enabled=False), u.dt)
-    dirt = DirtField(u.dirt_cells, np.array([0.0, 0.0, 1.0]))
-    trace = simulate_wipe(scene, plan, np.full(150, 0.1), adaptation, dirt, u.frame_skip)
+    dirt = DirtField(u.task.dirt_cells(u.context), np.array([0.0, 0.0, 1.0]))
+    trace = simulate_wipe(scene, u.task.parts, plan, np.full(150, 0.1), adaptation, dirt, u.frame_skip, cup=False)
     assert not trace.unstable
     assert trace.arm_contact[:50].sum() == 0 and trace.arm_contact[-20:].mean() > 0.8   # the palm hits the table
     smooth = Smoothness(np.zeros(150), 1.0, np.zeros(150))
@@ -227,25 +228,26 @@ def test_contact_sensor_force_and_coverage_match_the_contact_list(adaptive):
     the coverage evaluated after the episode equals the one tracked online during it."""
     u = adaptive.unwrapped
     adaptive.reset(seed=4, options={**NOMINAL, "table_tilt": [0.05, -0.03]})
-    scene = u.scene
-    normal = scene.table_frame(actual=True)[1][:, 2]
-    adr = scene.sponge_contact_adr
+    scene, parts, pose = u.scene, u.task.parts, TablePose.of(u.context)
+    normal = table_frame(parts, pose)[1][:, 2]
+    adr = parts.sponge_contact_adr
     seen = {"pairs": [], "dirt": None}
 
     def check(k, dirt_left):
-        reference, _ = contact_summary(scene, normal)
+        reference, _ = contact_summary(scene, parts, normal)
         sensor = abs(float(scene.data.sensordata[adr + 1:adr + 4] @ normal))
         seen["pairs"].append((reference, sensor))
         if k == u.n_steps - 1:
             seen["dirt"] = dirt_left()
 
-    solution = u.solve_path(u.rollout_path(u.action_map.theta0))
+    solution = u.task.solve_path(u.rollout_path(u.action_map.theta0), u.context)
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
-                           scene.control_frame()[1][:, 2])
+                           control_frame(parts, pose)[1][:, 2])
     scene.set_arm_state(solution.q[0])
     adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
-    trace = simulate_wipe(scene, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
-                          DirtField(u.dirt_cells, normal), u.frame_skip, callback=check)
+    trace = simulate_wipe(scene, parts, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
+                          DirtField(u.task.dirt_cells(u.context), normal), u.frame_skip, callback=check,
+                          cup=u.context.obstacle)
     pairs = np.array(seen["pairs"])
     assert pairs[:, 0].max() > 10.0
     assert pairs[:, 1] == pytest.approx(pairs[:, 0], abs=1e-9)
@@ -280,13 +282,14 @@ def test_the_inlined_force_law_is_force_adaptation_update(adaptive):
     u = adaptive.unwrapped
     _, info = run(adaptive, {**NOMINAL, "table_height": -0.03})
     path = u.rollout_path(u.action_map.theta0)
-    solution = u.solve_path(path)
-    scene = u.scene
+    solution = u.task.solve_path(path, u.context)
+    scene, parts = u.scene, u.task.parts
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
-                           scene.control_frame()[1][:, 2])
+                           control_frame(parts, TablePose.of(u.context))[1][:, 2])
     scene.set_arm_state(solution.q[0])
     adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
-    trace = simulate_wipe(scene, plan, path[:, 2], adaptation, DirtField(u.dirt_cells, plan.normal), u.frame_skip)
+    dirt = DirtField(u.task.dirt_cells(u.context), plan.normal)
+    trace = simulate_wipe(scene, parts, plan, path[:, 2], adaptation, dirt, u.frame_skip, cup=u.context.obstacle)
     assert np.array_equal(trace.contact_force, info["force_trace"])
     replay = ForceAdaptation(u.adaptation_settings, u.dt)
     measured = np.r_[0.0, trace.wrist_force[:-1]]
@@ -317,8 +320,9 @@ def test_the_imitation_path_is_the_rollout_of_theta0(adaptive):
     for seed in range(3):
         adaptive.reset(seed=seed)
         direct = u.rollout_path(u.action_map.theta0)
-        assert np.abs(u.imitation_path() - direct).max() < 1e-12
-        assert np.sum(Smoothness.jerk_squared(u.imitation_path(), u.dt)) == pytest.approx(
+        imitation = u.task.imitation_path(u.context)
+        assert np.abs(imitation - direct).max() < 1e-12
+        assert np.sum(Smoothness.jerk_squared(imitation, u.dt)) == pytest.approx(
             np.sum(Smoothness.jerk_squared(direct, u.dt)), rel=1e-10)
 
 

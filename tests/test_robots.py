@@ -11,10 +11,11 @@ import xml.etree.ElementTree as ElementTree
 import mujoco
 import numpy as np
 import pytest
+from rdmp_gym.envs.rhythmic_env import RhythmicTaskEnv
 from rdmp_gym.envs.robots import ROBOTS, get_robot
 from rdmp_gym.envs.robots import panda as panda_module
 from rdmp_gym.envs.robots.panda import PANDA, TORQUE_LIMIT, franka_assets
-from rdmp_gym.envs.tasks.wiping.scene import WipeScene
+from rdmp_gym.envs.task_scene import ROBOT_PREFIX, TOOL_PREFIX
 
 
 @pytest.fixture(scope="module")
@@ -24,8 +25,15 @@ def assets():
 
 
 @pytest.fixture(scope="module")
-def scene(assets):
-    return WipeScene("panda", composed=True)
+def staged(assets):
+    """The wiping task's scene on the Panda and where the task's parts are in it."""
+    face = RhythmicTaskEnv("wipe", "panda", version=3)
+    return face.scene, face.task.parts
+
+
+@pytest.fixture(scope="module")
+def scene(staged):
+    return staged[0]
 
 
 @pytest.fixture(scope="module")
@@ -94,11 +102,12 @@ def test_the_scene_composes_with_the_packaged_joint_ranges_and_one_limited_servo
     assert margin.min() > 0.3
 
 
-def test_collision_geometry_is_simple_and_filtered_like_the_arena(scene):
+def test_collision_geometry_is_simple_and_filtered_like_the_arena(staged):
+    scene, parts = staged
     m = scene.model
-    root = m.body(scene.name("robot", PANDA.root_body)).id
+    root = m.body(ROBOT_PREFIX + PANDA.root_body).id
     robot = _subtree(m, root)
-    tool = m.body(scene.name("tool", "sponge")).id
+    tool = m.body(TOOL_PREFIX + "sponge").id
     for g in range(m.ngeom):
         if int(m.geom_bodyid[g]) not in robot or int(m.geom_bodyid[g]) == tool:
             continue
@@ -107,8 +116,8 @@ def test_collision_geometry_is_simple_and_filtered_like_the_arena(scene):
             assert not colliding, m.geom(g).name                # meshes are visual only
         elif colliding:
             assert m.geom_contype[g] & 2 and m.geom_conaffinity[g] & 1, m.geom(g).name    # the table and floor
-    body = {m.body(scene.name("robot", n)).id for n in PANDA.body_links}
-    arm = _subtree(m, m.body(scene.name("robot", PANDA.arm_root)).id)
+    body = {m.body(ROBOT_PREFIX + n).id for n in PANDA.body_links}
+    arm = _subtree(m, m.body(ROBOT_PREFIX + PANDA.arm_root).id)
     for g in range(m.ngeom):
         if int(m.geom_bodyid[g]) in body and m.geom_contype[g]:
             assert m.geom_conaffinity[g] & 4                    # the arm collides with the robot's body
@@ -116,24 +125,25 @@ def test_collision_geometry_is_simple_and_filtered_like_the_arena(scene):
             assert m.geom_contype[g] & 4 and not m.geom_conaffinity[g] & 4    # ... but not with itself
     # at rest in the posture, nothing of the robot touches anything but the sponge the table
     scene.set_arm_state(PANDA.posture)
-    assert np.all(scene.data.sensordata[list(scene.self_contact_adr)] == 0)
+    assert np.all(scene.data.sensordata[list(parts.self_contact_adr)] == 0)
 
 
 def test_the_wrist_sensor_carries_the_plate_and_the_sponge_only(scene):
     m = scene.model
-    flange = _body_of(m, "site", scene.name("robot", PANDA.ft_site))
+    flange = _body_of(m, "site", ROBOT_PREFIX + PANDA.ft_site)
     below = _subtree(m, flange)
-    assert m.body(scene.name("tool", "sponge")).id in below
-    assert all(not m.body(b).name.startswith(scene.name("robot", "link")) for b in below)
+    assert m.body(TOOL_PREFIX + "sponge").id in below
+    assert all(not m.body(b).name.startswith(ROBOT_PREFIX + "link") for b in below)
 
 
-def test_the_sponge_face_points_along_the_flange_axis(scene):
+def test_the_sponge_face_points_along_the_flange_axis(staged):
+    scene, parts = staged
     scene.set_arm_state(PANDA.posture)
     d = scene.data
-    flange_z = d.site_xmat[scene.ft_site].reshape(3, 3)[:, 2]
-    face_normal = -d.site_xmat[scene.sponge_site].reshape(3, 3)[:, 0]
+    flange_z = d.site_xmat[parts.ft_site].reshape(3, 3)[:, 2]
+    face_normal = -d.site_xmat[parts.sponge_site].reshape(3, 3)[:, 0]
     np.testing.assert_allclose(face_normal, flange_z, atol=1e-9)
-    np.testing.assert_allclose(face_normal, -scene.nominal_normal, atol=0.02)     # flat on the table
+    np.testing.assert_allclose(face_normal, -parts.table_rotation[:, 2], atol=0.02)     # flat on the table
 
 
 _WRONG = [("arm_root", "link9"), ("joints", tuple(f"joint{i}" for i in (1, 2, 3, 4, 5, 6, 8))), ("ft_site", "wrist"),
@@ -145,7 +155,7 @@ _WRONG = [("arm_root", "link9"), ("joints", tuple(f"joint{i}" for i in (1, 2, 3,
 def test_a_description_naming_what_its_model_lacks_is_refused_by_the_field(assets, field, value):
     robot = dataclasses.replace(PANDA, **{field: value})
     with pytest.raises(ValueError, match=field):
-        WipeScene(robot, composed=True)
+        RhythmicTaskEnv("wipe", robot, version=3)
 
 
 def test_missing_package_raises_a_clear_error(monkeypatch):

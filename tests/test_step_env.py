@@ -60,7 +60,7 @@ def test_given_the_episodic_joint_path_the_return_is_the_episodic_reward_exactly
     seed = 0
     episodic, reward, info = _episodic(seed)
     task = episodic.unwrapped
-    solution = task.solve_path(task.rollout_path(task.action_map.theta0))
+    solution = task.task.solve_path(task.rollout_path(task.action_map.theta0), task.context)
     step_env = gym.make(STEP_ID, **KWARGS)
     calls = iter(range(task.n_steps))
 

@@ -5,7 +5,8 @@ A task description holds everything task-specific, so that one episodic face
 (:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`) serve every robot x task on one simulation core
 (:class:`~rdmp_gym.envs.servo.ServoSimulation`):
 
-- the **objects** it adds to the room (:meth:`compose`: its tool on the robot's mount, its objects, its sensors);
+- the **objects** it adds to the room (:meth:`compose`: its tool on the robot's mount, its objects, its sensors;
+  :attr:`room`: the room its scene starts from, where its fixed objects come before the robot);
 - the **context** (:meth:`context_bounds`, :meth:`sample_context`, :meth:`place`): what ``reset`` draws, checks and
   observes, and how the objects move for it;
 - the **imitation** (:meth:`imitation`): the DMP fitted to the task's demonstration, and the **action layout**
@@ -26,7 +27,8 @@ A task description holds everything task-specific, so that one episodic face
 - the **learner defaults** (:attr:`learner_defaults`): settings a learner may read from the task, by agent name.
 
 Adding a task is one folder with its description and one line in :data:`rdmp_gym.envs.tasks.TASKS` (or a call of
-:func:`rdmp_gym.envs.tasks.register_task` from user code).
+:func:`rdmp_gym.envs.tasks.register_task` from user code); the registry builds a description with :meth:`build` (a
+task whose versions have descriptions of their own picks the version's there).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -184,6 +187,9 @@ class TaskDescription(ABC):
     extras: Mapping[str, float] = {}
     #: the site of the task's tool that the inverse kinematics places on the path (without the tool prefix)
     tool_site: str = "tip"
+    #: the MJCF of the room the task's scene starts from (None: the standard room: floor, light, cameras, table; a
+    #: task with fixed objects of its own names a room that holds them, so that they come before the robot)
+    room: ClassVar[str | Path | None] = None
     #: episode length (s) and control rate (Hz)
     duration: float = 8.0
     control_rate: float = 100.0
@@ -304,10 +310,12 @@ class TaskDescription(ABC):
             return Rejection("joint_speed", speed / face.robot.max_joint_speed - 1.0)
         return Solution(plan, solution)
 
-    def simulate(self, solution: Solution, face: Any, capture: Callable[[int], None] | None) -> ToolPath:
-        """Execute ``solution`` on the ``face``'s simulation core and return what it executed; ``capture(k)`` (where
-        not None) after control step ``k``, and ``capture(-1)`` before the first. Default: the core's own record
-        (every sensor at every physics step) along the joint targets with the servos' velocity feed-forward."""
+    def simulate(self, solution: Solution, face: Any, capture: Callable[..., None] | None) -> ToolPath:
+        """Execute ``solution`` on the ``face``'s simulation core (in the face's ``context``) and return what it
+        executed; ``capture(k)`` (where not None) after control step ``k``, or ``capture(k, overlay)`` with what the
+        frames draw of the episode so far (:meth:`render_overlay`), and ``capture(-1)`` before the first. Default:
+        the core's own record (every sensor at every physics step) along the joint targets with the servos' velocity
+        feed-forward."""
         from ..controller import JointTargetPlan
         from ..servo import ServoSimulation
         from ..smoothness import Smoothness
@@ -325,14 +333,17 @@ class TaskDescription(ABC):
                         face.jerk_ratio(solution.plan.path), float(Smoothness.peak_accel(joints.q, face.dt).max()),
                         face.robot.max_joint_accel)
 
-    def invalid(self, reason: str, severity: float, n_steps: int) -> Outcome:
-        """The penalty and info of a path refused for ``reason`` with ``severity`` over ``n_steps`` control steps
-        (default: ``8 + 4 min(severity, 5)``, spread evenly, in the term ``"invalid"``)."""
+    def invalid(self, reason: str, severity: float, n_steps: int, context: Any) -> Outcome:
+        """The penalty and info of a path refused in ``context`` for ``reason`` with ``severity`` over ``n_steps``
+        control steps (default: ``8 + 4 min(severity, 5)``, spread evenly, in the term ``"invalid"``)."""
         cost = np.full(n_steps, (8.0 + 4.0 * min(float(severity), 5.0)) / n_steps)
         return Outcome({"invalid": -float(cost.sum())}, cost, {}, ("invalid",), valid=False, reason=reason)
 
-    def render_overlay(self, renderer: SceneRenderer) -> np.ndarray:
-        """The scene's current frame with what the task draws on it (default: nothing, the scene as it is)."""
+    def render_overlay(self, renderer: SceneRenderer, context: Any, overlay: Any) -> np.ndarray:
+        """The scene's current frame in ``context`` with what the task draws on it: ``overlay``, the task's record of
+        the episode so far (what :meth:`simulate` gave ``capture``, the executed episode's :attr:`ToolPath.record`
+        afterwards, or what the step twin's book gives; None before the first step). Default: nothing, the scene as
+        it is."""
         return renderer.render()
 
     def step_book(self, face: Any, reward_every: int) -> Any:

@@ -1,7 +1,8 @@
 """The table-wiping task: everything the envs know of wiping, in one folder.
 
-- :mod:`~rdmp_gym.envs.tasks.wiping.arena`, :mod:`~rdmp_gym.envs.tasks.wiping.scene`: the arena (table, cup), the
-  sponge tool and the sensors, composed with a robot; the table pose and the dirt grid;
+- :mod:`~rdmp_gym.envs.tasks.wiping.arena`, :mod:`~rdmp_gym.envs.tasks.wiping.scene`: the arena (the room and the
+  cup), the sponge tool and the sensors the task adds to the scene; where they are in the compiled scene, the table
+  pose and the cup placed for a context, the dirt grid;
 - :mod:`~rdmp_gym.envs.tasks.wiping.context`: the context (patch, table pose, sponge start, the cup), drawn and
   validated, and the observation;
 - :mod:`~rdmp_gym.envs.tasks.wiping.approach`, :mod:`~rdmp_gym.envs.tasks.wiping.coverage`: the task's own action

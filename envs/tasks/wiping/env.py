@@ -94,8 +94,8 @@ class ArmarWipeEnv(RhythmicTaskEnv):
         limit_margin: distance to a joint limit (rad) that counts as "at the limit".
         ik_tolerance: (position m, angle rad) IK residuals beyond which a path is unreachable.
         max_joint_speed: joint speed (rad/s) of the planned path beyond which it is invalid (default: the robot's).
-        xml_file: a hand-merged scene MJCF (default: the robot's own scene;
-        :class:`~rdmp_gym.envs.tasks.wiping.scene.WipeScene`).
+        xml_file: a hand-merged scene MJCF for the versions 1 and 2 (default: the robot's own scene;
+            :class:`~rdmp_gym.envs.tasks.wiping.legacy.scene.WipeScene`).
         render_mode: ``None``, ``"rgb_array"`` (RGB frames), ``"depth_array"`` (depth in m) or ``"human"``
             (MuJoCo's viewer, following every control step; needs a display); width, height, camera: of the
             rendered frames.

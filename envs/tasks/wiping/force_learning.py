@@ -39,7 +39,7 @@ from scipy.ndimage import uniform_filter1d
 from rdmp_gym.dmp.basis import periodic_width, von_mises
 
 from ...controller import ForceAdaptation, ForceAdaptationSettings
-from .scene import DEFAULT_XML
+from ...robots import ARMAR3
 
 __all__ = ["ForceProfileLearning", "ForceProfileSettings", "curved_table_scene", "period_force_errors",
            "wavy_contact"]
@@ -195,7 +195,7 @@ def curved_table_scene(directory: str | Path, crown: float = 0.06) -> Path:
     17 mm below the plane."""
     if not (np.isfinite(crown) and crown > 0.0):
         raise ValueError(f"crown: expected a finite positive height (m), got {crown!r}")
-    source = DEFAULT_XML
+    source = Path(ARMAR3.legacy_scene)
     text = source.read_text()
     if text.count(_TABLE_TOP) != 1:
         raise RuntimeError(f"{source}: the table top is not the expected box; update curved_table_scene")

@@ -4,7 +4,7 @@
 
 ==================  ==================================================================================
 ``robot``           the robot: its registry name (``"armar3"``) or a ``RobotDescription`` (not JSON)
-``xml_file``        a scene MJCF that replaces the packaged one (None: the packaged scene)
+``xml_file``        a hand-merged scene MJCF that replaces the packaged one (versions 1 and 2; None: the packaged)
 ``task``            :class:`TaskConfig`: version, imitation source, action groups, duration, dirt, limits
 ``timing``          :class:`TimingConfig`: control rate, frame skip, physics step
 ``force``           :class:`ForceConfig`: target force, force band, adaptation, force learning
@@ -497,7 +497,7 @@ class EnvConfig:
 
     Attributes:
         robot: the robot's registry name (:mod:`rdmp_gym.envs.robots`) or its ``RobotDescription``.
-        xml_file: a scene MJCF path that replaces the packaged scene, or None.
+        xml_file: a hand-merged scene MJCF path that replaces the packaged one (versions 1 and 2), or None.
         task, timing, force, reward, context, render: the groups.
     """
 

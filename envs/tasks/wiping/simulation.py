@@ -25,13 +25,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from ...controller import ForceAdaptation, JointTargetPlan
 from ...servo import ServoSimulation
-from .scene import WipeScene
+from .scene import WipeParts, wrist_force_world
 
 __all__ = ["IMPACT_WINDOW", "DirtField", "SimulationSettings", "WipeSimulation", "WipeTrace", "arm_table_penetration",
            "cells_under_sponge", "contact_summary", "simulate_wipe"]
@@ -203,34 +204,35 @@ def cells_under_sponge(cells: np.ndarray, pos: np.ndarray, rot: np.ndarray, half
             & (local[..., 0] >= -half[0] - tolerance)).T
 
 
-def contact_summary(scene: WipeScene, normal: np.ndarray) -> tuple[float, bool]:
+def contact_summary(scene: Any, parts: WipeParts, normal: np.ndarray) -> tuple[float, bool]:
     """(sponge–table normal force along ``normal`` [3], any other robot geom touching the table) from
-    ``data.contact`` and ``mj_contactForce`` (reference for the contact sensors; slow)."""
+    ``data.contact`` and ``mj_contactForce`` of the ``scene``'s model and data (reference for the contact sensors;
+    slow)."""
     m, d = scene.model, scene.data
     force6 = np.zeros(6)
     total, arm = 0.0, False
     for i in range(d.ncon):
         contact = d.contact[i]
         pair = {int(contact.geom1), int(contact.geom2)}
-        if scene.table_geom not in pair:
+        if parts.table_geom not in pair:
             continue
-        other = (pair - {scene.table_geom}).pop() if len(pair) == 2 else scene.table_geom
-        if other == scene.sponge_geom:
+        other = (pair - {parts.table_geom}).pop() if len(pair) == 2 else parts.table_geom
+        if other == parts.sponge_geom:
             mujoco.mj_contactForce(m, d, i, force6)
             total += force6[0] * abs(float(contact.frame[:3] @ normal))
-        elif scene.is_arm_geom[other]:
+        elif parts.is_arm_geom[other]:
             arm = True
     return total, arm
 
 
-def arm_table_penetration(scene: WipeScene) -> float:
+def arm_table_penetration(data: mujoco.MjData, parts: WipeParts) -> float:
     """Deepest penetration (m, >= 0) of a robot geom other than the sponge into the table, now."""
-    d = scene.data
+    d = data
     deepest = 0.0
     for i in range(d.ncon):
         contact = d.contact[i]
         g1, g2 = int(contact.geom1), int(contact.geom2)
-        if scene.table_geom in (g1, g2) and (scene.is_arm_geom[g1] or scene.is_arm_geom[g2]):
+        if parts.table_geom in (g1, g2) and (parts.is_arm_geom[g1] or parts.is_arm_geom[g2]):
             deepest = max(deepest, -float(contact.dist))
     return deepest
 
@@ -253,7 +255,9 @@ class WipeSimulation:
     measurements (:meth:`finish`); :meth:`trace` evaluates the rest vectorised.
 
     Args:
-        scene: the scene, already reset to rest at the first joint targets with the table and obstacle in place.
+        scene: the scene (its ``model``, ``data`` and the arm's indices), already reset to rest at the first joint
+            targets with the table and the cup in place.
+        parts: where the task's objects and sensors are in the scene.
         count: control steps of the episode (``T``).
         adaptation: the force controller (reset here).
         dirt: the dirt cells, the table normal and the wear law.
@@ -264,18 +268,20 @@ class WipeSimulation:
             targets are ``q - depth * normal_dq``).
         heights: the commanded sponge height above the nominal surface per control step ``[T]`` (m; read at each
             step, so that a step twin may change the steps ahead).
+        cup: whether a cup stands on the table (without one its displacement is 0).
     """
 
-    def __init__(self, scene: WipeScene, count: int, adaptation: ForceAdaptation, dirt: DirtField,
+    def __init__(self, scene: Any, parts: WipeParts, count: int, adaptation: ForceAdaptation, dirt: DirtField,
                  frame_skip: int, normal: np.ndarray, settings: SimulationSettings | None = None,
-                 normal_dq: np.ndarray | None = None, heights: np.ndarray | None = None):
+                 normal_dq: np.ndarray | None = None, heights: np.ndarray | None = None, *, cup: bool):
         m, d = scene.model, scene.data
         if frame_skip < 1:
             raise ValueError(f"frame_skip: expected an integer >= 1, got {frame_skip!r}")
         ids = scene.actuator_ids
         if not np.all(m.actuator_ctrllimited[ids]):       # MuJoCo clamps the servo targets to ctrlrange
             raise ValueError("scene: the arm actuators must be ctrl-limited to the joint ranges")
-        self.scene, self.count, self.adaptation, self.dirt = scene, count, adaptation, dirt
+        self.scene, self.parts, self.count, self.adaptation, self.dirt = scene, parts, count, adaptation, dirt
+        self.cup = cup
         self.frame_skip, self.normal = frame_skip, normal
         self.settings = SimulationSettings() if settings is None else settings
         self.normal_dq = None if normal_dq is None else np.ascontiguousarray(normal_dq)
@@ -284,25 +290,25 @@ class WipeSimulation:
         if np.array_equal(ids, np.arange(ids[0], ids[0] + len(ids))):
             self._ctrl_index = slice(int(ids[0]), int(ids[0]) + len(ids))
         adaptation.reset()
-        self._ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
-        self._wrist = d.sensordata[scene.force_adr]    # a view: the wrist sensor's force [3], updated by every step
+        self._ft_rot = d.site_xmat[parts.ft_site].reshape(3, 3)
+        self._wrist = d.sensordata[parts.force_adr]    # a view: the wrist sensor's force [3], updated by every step
         self._rotated = np.empty(3)                     # R @ f, written in place every step
-        self._bias = float(scene.wrist_force_world() @ normal)
+        self._bias = float(wrist_force_world(d, parts) @ normal)
         self._tn = tuple(float(x) for x in np.asarray(dirt.normal, dtype=np.float64))
         self.fine_window = max(1, round(IMPACT_WINDOW / (m.opt.timestep * frame_skip)))
         # One row per control step, copied with a single call: the sensors, qpos, the sponge site's position
         # and the sponge box's pose (the box pose is the one of the step's last kinematics pass).
         self._rows = _RecordLayout(m.nsensordata, m.nq)
         self.record = np.zeros((count, self._rows.width))
-        self._sources = (d.sensordata, d.qpos, d.site_xpos[scene.sponge_site], d.geom_xpos[scene.sponge_geom],
-                         d.geom_xmat[scene.sponge_geom])
+        self._sources = (d.sensordata, d.qpos, d.site_xpos[parts.sponge_site], d.geom_xpos[parts.sponge_geom],
+                         d.geom_xmat[parts.sponge_geom])
         self._concatenate = _undispatched(np.concatenate)
         self._dot = _undispatched(np.dot)
         self.wrist_force = np.zeros(count)
         self.depth = np.zeros(count)
         self.peak = np.zeros(count)          # per-step peak force while stepping one physics step at a time
         self.fine = np.zeros(count * frame_skip) if self.settings.fine_force else None
-        self.obstacle_start = d.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3].copy()
+        self.obstacle_start = d.qpos[parts.obstacle_qpos:parts.obstacle_qpos + 3].copy()
         ctrl = d.ctrl[self._ctrl_index]      # a view when the arm actuators are consecutive
         self._ctrl = ctrl if np.shares_memory(ctrl, d.ctrl) else None
         self.measured = 0.0
@@ -340,7 +346,7 @@ class WipeSimulation:
     def substep(self, k: int, i: int) -> None:
         """The sponge-table force after physics step ``i`` of control step ``k``: its peak over the step (and every
         value with ``fine_force``)."""
-        sensordata, a = self.scene.data.sensordata, self.scene.sponge_contact_adr
+        sensordata, a = self.scene.data.sensordata, self.parts.sponge_contact_adr
         tn0, tn1, tn2 = self._tn
         force = abs(sensordata[a + 1] * tn0 + sensordata[a + 2] * tn1 + sensordata[a + 3] * tn2)
         self._top = max(self._top, force)
@@ -351,8 +357,8 @@ class WipeSimulation:
         """Record control step ``k`` (first contact, the wrist force along the normal, the depth, the record row, the
         arm's penetration into the table); True when the simulation diverged (time that fails to advance, NaN or a
         wrist force above the limit)."""
-        d, scene = self.scene.data, self.scene
-        sensordata, a = d.sensordata, scene.sponge_contact_adr
+        d, parts = self.scene.data, self.parts
+        sensordata, a = d.sensordata, parts.sponge_contact_adr
         if self._fine_step == k:
             self.peak[k] = self._top
         if self.first_contact < 0 and sensordata[a] > 0:
@@ -363,8 +369,8 @@ class WipeSimulation:
         self.wrist_force[k] = measured
         self.depth[k] = self._depth
         self._concatenate(self._sources, out=self.record[k])
-        if sensordata[scene.robot_contact_adr] - sensordata[a] > 0.5:
-            self.table_penetration = max(self.table_penetration, arm_table_penetration(scene))
+        if sensordata[parts.robot_contact_adr] - sensordata[a] > 0.5:
+            self.table_penetration = max(self.table_penetration, arm_table_penetration(d, parts))
         now = d.time
         if now <= self._last_time or measured != measured or abs(measured) > self.settings.max_force:
             self.steps = k + 1
@@ -378,45 +384,45 @@ class WipeSimulation:
 
     def contact(self, k: int) -> np.ndarray:
         """The sponge-table contact's net force [3] (world, N) after control step ``k``."""
-        a = self.scene.sponge_contact_adr
+        a = self.parts.sponge_contact_adr
         return self.record[k, a + 1:a + 4]
 
     def self_penetration(self, k: int) -> float:
         """Deepest penetration (m, >= 0) of the arm into the robot's own body after control step ``k``."""
         deepest = 0.0
-        for adr in self.scene.self_contact_adr:
+        for adr in self.parts.self_contact_adr:
             if self.record[k, adr] > 0:
                 deepest = max(deepest, -float(self.record[k, adr + 1]))
         return deepest
 
     def dirt_left(self, k: int) -> np.ndarray:
         """Dirt left per cell [N] after control step ``k`` (recomputes the episode so far: for video frames)."""
-        a = self.scene.sponge_contact_adr
+        a = self.parts.sponge_contact_adr
         rows = self._rows
         return _dirt_left(self.dirt, self.record[:, a:a + 4], self.record[:, rows.box_pos],
-                          self.record[:, rows.box_rot], self.scene.sponge_half, k)
+                          self.record[:, rows.box_rot], self.parts.sponge_half, k)
 
     def trace(self, upto: int | None = None, wear: tuple[np.ndarray, np.ndarray] | None = None) -> WipeTrace:
         """The episode's :class:`WipeTrace` (its first :attr:`steps` control steps are live), or of its first
         ``upto`` steps; ``wear``: ``(removed [T], dirt left [N])`` worn step by step, instead of the episode's
         wear evaluated here."""
-        scene, record, rows, count = self.scene, self.record, self._rows, self.count
+        scene, parts, record, rows, count = self.scene, self.parts, self.record, self._rows, self.count
         settings = self.settings
         diverged = self.steps < count
         steps = self.steps if upto is None else min(self.steps, upto)
-        a = scene.sponge_contact_adr
+        a = parts.sponge_contact_adr
         contact = record[:, a:a + 4]          # found, net force (world)
         box_pos, box_rot = record[:, rows.box_pos], record[:, rows.box_rot]
         table_normal = np.asarray(self.dirt.normal, dtype=np.float64)
-        robot_found = record[:, scene.robot_contact_adr]
-        self_found_cols = list(scene.self_contact_adr)             # per link of the robot's body: found, distance
-        self_dist_cols = [adr + 1 for adr in scene.self_contact_adr]
+        robot_found = record[:, parts.robot_contact_adr]
+        self_found_cols = list(parts.self_contact_adr)             # per link of the robot's body: found, distance
+        self_dist_cols = [adr + 1 for adr in parts.self_contact_adr]
         self_distance = np.where(record[:, self_found_cols] > 0, -record[:, self_dist_cols], -np.inf)
         self_found = np.isfinite(self_distance).any(axis=1)
         penetration = max(0.0, self.table_penetration, float(np.fmax.reduce(self_distance.ravel())))
-        obstacle_found = record[:, scene.obstacle_contact_adr] > 0
+        obstacle_found = record[:, parts.obstacle_contact_adr] > 0
         qpos = record[:, rows.qpos]
-        obstacle_pos = qpos[:, scene.obstacle_qpos:scene.obstacle_qpos + 3]
+        obstacle_pos = qpos[:, parts.obstacle_qpos:parts.obstacle_qpos + 3]
         joint_pos = qpos[:, scene.qpos_adr]
         sponge_pos = record[:, rows.site_pos].copy()
         contact_force = np.abs(contact[:, 1:] @ table_normal)
@@ -432,10 +438,10 @@ class WipeSimulation:
         at_limit = live & np.any((joint_pos < lo) | (joint_pos > hi), axis=1)
         shift = _cup_shift(obstacle_pos, self.obstacle_start,
                            obstacle_found & live if settings.cup_from_touch else None, live)
-        if scene.obstacle_xy is None:
+        if not self.cup:
             shift[:] = 0.0
 
-        removed, left = (_removal(self.dirt, contact_force, box_pos, box_rot, scene.sponge_half, live) if wear is None
+        removed, left = (_removal(self.dirt, contact_force, box_pos, box_rot, parts.sponge_half, live) if wear is None
                          else wear)
         peak = np.maximum(self.peak, contact_force)
         impact_step = -1
@@ -452,14 +458,17 @@ class WipeSimulation:
                          self.fine, steps, unstable)
 
 
-def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarray, adaptation: ForceAdaptation,
-                  dirt: DirtField, frame_skip: int, settings: SimulationSettings | None = None,
-                  callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None) -> WipeTrace:
+def simulate_wipe(scene: Any, parts: WipeParts, plan: JointTargetPlan, path_height: np.ndarray,
+                  adaptation: ForceAdaptation, dirt: DirtField, frame_skip: int,
+                  settings: SimulationSettings | None = None,
+                  callback: Callable[[int, Callable[[], np.ndarray]], None] | None = None, *, cup: bool) -> WipeTrace:
     """Run a whole joint-target plan from the current simulation state on the simulation core with the hook
     :class:`WipeSimulation`.
 
     Args:
-        scene: the scene, already reset to rest at ``plan.q[0]`` with the table and obstacle in place.
+        scene: the scene (its ``model``, ``data`` and the arm's indices), already reset to rest at ``plan.q[0]`` with
+            the table and the cup in place.
+        parts: where the task's objects and sensors are in the scene.
         plan: joint targets per control step ([T] steps) and the control normal.
         path_height: commanded sponge height above the nominal surface per control step, [T] (m).
         adaptation: the force controller (reset here).
@@ -468,12 +477,13 @@ def simulate_wipe(scene: WipeScene, plan: JointTargetPlan, path_height: np.ndarr
         settings: :class:`SimulationSettings` (limit margin, force limit, fine force, the cup's displacement).
         callback: called as ``callback(k, dirt_left)`` after control step ``k``; ``dirt_left()`` returns the
             dirt left per cell ``[N]`` so far (e.g. to grab video frames; each call costs a wear evaluation).
+        cup: whether a cup stands on the table.
     """
     count = len(plan)
     if path_height.shape != (count,):
         raise ValueError(f"path_height: expected shape ({count},), got {path_height.shape}")
-    simulation = WipeSimulation(scene, count, adaptation, dirt, frame_skip, plan.normal, settings,
-                                normal_dq=plan.normal_dq, heights=path_height)
+    simulation = WipeSimulation(scene, parts, count, adaptation, dirt, frame_skip, plan.normal, settings,
+                                normal_dq=plan.normal_dq, heights=path_height, cup=cup)
     core = ServoSimulation(scene, count, frame_skip, hook=simulation)
 
     def after(k: int) -> None:

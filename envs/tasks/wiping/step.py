@@ -42,7 +42,7 @@ from ...step_book import StepBook
 from ..description import TaskPlan
 from .context import SIZE as CONTEXT_SIZE
 from .reward import TERMS, Smoothness, invalid_reward, wipe_reward
-from .scene import WipeScene
+from .scene import TablePose, WipeParts, control_frame, table_frame
 from .simulation import DirtField, WipeSimulation, WipeTrace
 
 __all__ = ["UNSUPPORTED", "WipeStepBook", "WipeStepEnv", "sponge_position"]
@@ -84,10 +84,10 @@ class WipeStepBook(StepBook):
         """The episodic action 0's sponge path ``[T, 3]`` (nominal table frame) in the control frame, and its joint
         path ``[T, n]``."""
         face, task = self.face, self.face.task
-        path = task.rollout_path(face.action_to_params(np.zeros(face.action_space.shape)))
-        solution = task.solve_path(path)
+        path = task.rollout_path(face.action_to_params(np.zeros(face.action_space.shape)), face.context)
+        solution = task.solve_path(path, face.context)
         self._ndq = solution.normal_dq
-        origin, rotation = task.scene.control_frame()
+        origin, rotation = control_frame(task.parts, TablePose.of(face.context))
         normal = rotation[:, 2]
         self._normal = normal / np.linalg.norm(normal)           # as the episodic plan (JointTargetPlan) has it
         return TaskPlan(path, origin, rotation), solution.q
@@ -96,15 +96,18 @@ class WipeStepBook(StepBook):
         """The core with the wiping hook, which reads the commanded heights ``path[:, 2]`` as the twin shifts them."""
         face, task = self.face, self.face.task
         scene = face.scene
-        dirt = DirtField(task.dirt_cells, scene.table_frame(actual=True)[1][:, 2], wear_rate=task.wear_rate,
+        context = face.context
+        cells = task.dirt_cells(context)
+        dirt = DirtField(cells, table_frame(task.parts, TablePose.of(context))[1][:, 2], wear_rate=task.wear_rate,
                          contact_threshold=task.reward_settings.contact_threshold)
-        self._simulation = WipeSimulation(scene, face.n_steps, task.force_adaptation(), dirt, face.frame_skip,
-                                          self._normal, task.simulation_settings, normal_dq=self._ndq,
-                                          heights=path[:, 2])
+        self._simulation = WipeSimulation(scene, task.parts, face.n_steps, task.force_adaptation(), dirt,
+                                          face.frame_skip, self._normal, task.simulation_settings, normal_dq=self._ndq,
+                                          heights=path[:, 2], cup=context.obstacle)
         core = ServoSimulation(scene, face.n_steps, face.frame_skip, hook=self._simulation)
         self._path, self._q = path, q
-        self._context = face.context.vector().astype(np.float32)
-        self._wear = np.zeros(len(task.dirt_cells))
+        self._context = context.vector().astype(np.float32)
+        self._reference = task.imitation_jerk(context)
+        self._wear = np.zeros(len(cells))
         self._removed = np.zeros(face.n_steps)
         self._terms = dict.fromkeys(TERMS, 0.0)
         return core
@@ -124,7 +127,7 @@ class WipeStepBook(StepBook):
         box_pos, box_rot = simulation.box_pose(k)
         self._removed[k] = simulation.dirt.add_step(self._wear, force, box_pos, box_rot,
                                                     simulation.box_pose(max(0, k - 1))[0],
-                                                    self.face.scene.sponge_half)
+                                                    self.face.task.parts.sponge_half)
 
     def ended(self, k: int) -> bool:
         """A robot geom penetrated the table or the robot's body beyond the limit in step ``k`` or before."""
@@ -168,34 +171,37 @@ class WipeStepBook(StepBook):
         """The smoothness of the first ``steps`` steps, padded to the episode (the episodic measure at the end)."""
         task = self.face.task
         if steps == self.face.n_steps:
-            return task.smoothness(self._path, self._q)
-        return task.smoothness(self._path[:steps], self._q[:steps]).padded(self.face.n_steps)
+            return task.smoothness(self._path, self._q, self._reference)
+        return task.smoothness(self._path[:steps], self._q[:steps], self._reference).padded(self.face.n_steps)
 
     # ------------------------------------------------------------------ observation
     def position(self) -> np.ndarray:
         """The sponge's face centre ``[3]`` in the nominal table frame (m)."""
-        return sponge_position(self.face.scene)
+        return sponge_position(self.face.scene.data, self.face.task.parts)
 
     def observation(self, k: int, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
         """The observation ``[26]`` at control step ``k`` with the sponge at ``position [3]`` moving at
         ``velocity [3]``."""
-        scene = self.face.scene
-        normal = -scene.data.geom_xmat[scene.sponge_geom].reshape(3, 3)[:, 0] @ scene.table_frame(actual=False)[1]
+        data, parts = self.face.scene.data, self.face.task.parts
+        normal = -data.geom_xmat[parts.sponge_geom].reshape(3, 3)[:, 0] @ parts.table_rotation
         force = self._simulation.measured / self.face.task.reward_settings.target_force
-        parts = [np.cos(self._phase[k]), np.sin(self._phase[k]), self._radius[k], *position, *normal, *velocity,
-                 force, *self._context]
-        return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)
+        values = [np.cos(self._phase[k]), np.sin(self._phase[k]), self._radius[k], *position, *normal, *velocity,
+                  force, *self._context]
+        return np.clip(np.asarray(values, dtype=np.float32), self.observation_space.low, self.observation_space.high)
 
     def prepare_render(self) -> None:
-        """The dirt left so far, for the frame's overlay."""
+        """The frames draw the dirt left so far (:meth:`dirt_left`)."""
         if self._wear is not None:
-            self.face.task.dirt_left = 1.0 - np.minimum(self._wear, 1.0)
+            self.face.overlay = self
+
+    def dirt_left(self) -> np.ndarray:
+        """Dirt left per cell ``[N]`` in [0, 1], as worn step by step so far."""
+        return 1.0 - np.minimum(self._wear, 1.0)
 
 
-def sponge_position(scene: WipeScene) -> np.ndarray:
-    """The sponge's face centre ``[3]`` in the nominal table frame (m)."""
-    origin, rot = scene.table_frame(actual=False)
-    return (scene.data.site_xpos[scene.sponge_site] - origin) @ rot
+def sponge_position(data: Any, parts: WipeParts) -> np.ndarray:
+    """The sponge's face centre ``[3]`` in the nominal table frame (m), in the scene's ``data``."""
+    return (data.site_xpos[parts.sponge_site] - parts.table_origin) @ parts.table_rotation
 
 
 class WipeStepEnv(RhythmicTaskStepEnv):

@@ -1,27 +1,26 @@
-"""The table-wiping task as one :class:`~rdmp_gym.envs.tasks.description.TaskDescription`, its versions as switches.
+"""The table-wiping task as one :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
 
 :class:`WipingTask` is everything the envs know of wiping: the objects it adds to the arena (the sponge tool on the
-robot's mount and the sensors it reads, :meth:`WipingTask.compose`; the table and the cup stand in the arena), the
-scene of a version (:class:`~rdmp_gym.envs.tasks.wiping.scene.WipeScene`), the context (drawn, validated and
-observed: :mod:`~rdmp_gym.envs.tasks.wiping.context`; the table pose, the cup and the dirt placed for it), the
-imitation DMP and the action layout (its parameter groups, the lifted approach and the covering sweep), the plan
-(the DMP anchored at the patch, started at the sponge), the controller's force adaptation (the wiping hook on the
-simulation core, :mod:`~rdmp_gym.envs.tasks.wiping.simulation`), the judgement (the reward terms of
+robot's mount and the sensors it reads, :meth:`WipingTask.compose`; the table and the cup stand in the wiping arena,
+:attr:`WipingTask.room`), the context (drawn, validated and observed: :mod:`~rdmp_gym.envs.tasks.wiping.context`; the
+table pose and the cup placed for it, :meth:`WipingTask.place`), the imitation DMP and the action layout (its
+parameter groups, the lifted approach and the covering sweep), the plan (the DMP anchored at the patch, started at
+the sponge), the controller's force adaptation and the dirt (the wiping hook on the simulation core,
+:mod:`~rdmp_gym.envs.tasks.wiping.simulation`), the judgement (the reward terms of
 :mod:`~rdmp_gym.envs.tasks.wiping.reward`, the statistics and info keys of :mod:`~rdmp_gym.envs.tasks.wiping.info`,
 ``is_success`` and its failure causes) and the defaults a learner reads (:data:`LEARNER_DEFAULTS
-<rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS>`). What each version changes is
-:mod:`~rdmp_gym.envs.tasks.wiping.versions`.
+<rdmp_gym.envs.tasks.wiping.versions.LEARNER_DEFAULTS>`).
 
 The wiping ids' episodic envs are the generic face (:class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`), which runs
-this description's hooks: its stage (the version's scene: the arena composed before the robot, or the robot's
-hand-merged scene in v1 and v2; the action map with the approach and the sweep), the rest pose at the sponge start,
-the amplitude check (``"r0"``), the path checks (the sponge flat within the engage height, the cup clearance), the
-wiping hook on the simulation core, the invalid penalty and the dirt drawn on the frames, so that every number the
-published versions gave reproduces bit for bit. The episode's state the task keeps (:attr:`WipingTask.context`, the
-dirt) is set by :meth:`WipingTask.place`. The v3 step ids are the generic step twin
-(:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`) with the task's step book
-(:meth:`WipingTask.step_book`, :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`); the v1/v2 step env
-(:class:`~rdmp_gym.envs.tasks.wiping.legacy.step.ArmarWipeStepEnv`) runs the DMP online on that face.
+this description's hooks on the standard stage (the arena composed with the robot and the task, the task's timing
+and action map, the path IK to the sponge's face centre), and which owns the episode: its context (passed to every
+hook that needs it) and what the frames draw (the dirt as worn, :meth:`WipingTask.render_overlay`). Beside the
+defaults the description sets the rest pose at the sponge start, the amplitude check (``"r0"``), the path checks (the
+sponge flat within the engage height, the cup clearance), the wiping hook on the simulation core and the invalid
+penalty. The step ids are the generic step twin (:class:`~rdmp_gym.envs.rhythmic_step.RhythmicTaskStepEnv`) with the
+task's step book (:meth:`WipingTask.step_book`, :class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`). The
+versions 1 and 2 are frozen apart (:mod:`~rdmp_gym.envs.tasks.wiping.legacy`); :meth:`WipingTask.build` gives the
+description of a version.
 """
 
 from __future__ import annotations
@@ -29,7 +28,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -43,21 +42,21 @@ from rdmp_gym.signals.demonstrations import check_frame
 
 from ...action import ActionMap
 from ...controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
-from ...ik import BodyClearance, IKResult, PathIK
-from ...kinematics import ChainKinematics
+from ...ik import IKResult, PathIK
 from ...recording import SceneRenderer
 from ...robots import RobotDescription, get_robot
+from ...task_scene import ROBOT_PREFIX, TOOL_PREFIX, standard_stage
 from ..description import Outcome, Rejection, Solution, Stage, TaskDescription, TaskPlan, ToolPath
 from .approach import approach_direction, lift_profile
-from .arena import add_task
+from .arena import ARENA_XML, add_task
 from .clearance import Cup, CupClearance, HandPoints
 from .context import CONTEXT_FIELDS, Context, ContextSpec
 from .coverage import COVERING_FIGURE, covering_sweep, sweep_directions
 from .force_learning import ForceProfileLearning, ForceProfileSettings
 from .info import void_statistics
 from .reward import RewardSettings, RewardWeights, Smoothness, invalid_reward, wipe_reward
-from .scene import TablePose, WipeScene, dirt_grid
-from .settings import EnvConfig, ForceConfig, RewardConfig, TaskConfig
+from .scene import TablePose, WipeParts, control_frame, dirt_grid, place_objects, table_frame, to_world
+from .settings import DEFAULT_TIMESTEP, EnvConfig, ForceConfig, RewardConfig, TaskConfig
 from .simulation import DirtField, SimulationSettings, WipeTrace, simulate_wipe
 from .step import WipeStepBook
 from .versions import LEARNER_DEFAULTS, MAX_JERK_RATIO, TASK_VERSIONS, TaskVersion, pad_clearance
@@ -188,6 +187,10 @@ class WipeRecord:
     smooth: Smoothness
     penetration_limit: float
 
+    def dirt_left(self) -> np.ndarray:
+        """Dirt left per cell ``[N]`` at the end of the episode (what its frames draw)."""
+        return self.trace.dirt
+
 
 class WipingTask(TaskDescription):
     """Table wiping with a sponge; see the module docstring.
@@ -201,6 +204,8 @@ class WipingTask(TaskDescription):
     name = "Wipe"
     versions = (3,)
     tool_site = "sponge_tcp"
+    #: the wiping arena: the standard room and the cup
+    room = ARENA_XML
     #: the approach and the sweep are action dimensions of the DMP's action map (fixed directions in theta)
     extras: Mapping[str, float] = {}
     #: the frames are square by default
@@ -227,9 +232,8 @@ class WipingTask(TaskDescription):
         self.robot: RobotDescription = get_robot(config.robot)
         self.dmp = self._imitation(config.task)
         self._set_groups(config.task)
-        #: the scene: the arena, the robot and the task's objects (:meth:`compose`)
-        self.scene = self._scene(config)
-        config.check_robot(np.c_[self.scene.joint_lower, self.scene.joint_upper])
+        #: the physics step (s)
+        self.timestep = self._prepare_scene(config)
         self._set_timing(config)
         #: the episode's length (s)
         self.duration = self.n_steps * self.dt
@@ -238,30 +242,13 @@ class WipingTask(TaskDescription):
         self._set_force_and_reward(config.force, config.reward)
         self._set_limits(config.task)
         self.obstacle = config.context.obstacle
-        clearance, near_patch = self._cup_placement()
-        self.context_spec = ContextSpec(config.context.ranges, table_extent=self.scene.table_extent,
-                                        obstacle=self.obstacle,
-                                        obstacle_probability=config.context.obstacle_probability,
-                                        obstacle_radius=self.scene.obstacle_radius, patch_clearance=clearance,
-                                        near_patch=near_patch)
-        _check_reach(self.context_spec, self.robot)
-        self.ik = self._path_ik()
         #: the clearance term that keeps the hand away from the cup (None: off)
         clearance = config.task.cup_clearance            # validated by TaskConfig: a margin (m), a term or None
         self.cup_clearance = CupClearance(margin=clearance) if isinstance(clearance, float) else clearance
-        self._hand_points = self._hand() if self.cup_clearance is not None else None
         self._engage = self.adaptation_settings.engage_height
         self._imitation_paths: tuple[np.ndarray, np.ndarray] | None = None
-        #: the episode's context (set by :meth:`place`; the methods that take a context default to it)
-        self.context: Context | None = None
-        #: the dirt cells' centres on the actual table, ``[N, 3]`` (world), placed with the context
-        self.dirt_cells = np.zeros((0, 3))
-        #: dirt left per cell ``[N]`` in [0, 1] (after the last episode; what the frames show)
-        self.dirt_left = np.zeros(0)
         #: record the sponge-table force at every physics step into ``info["fine_force_trace"]``
         self.fine_force = False
-        self._imitation_jerk: float | None = None
-        self._live_dirt: Callable[[], np.ndarray] | None = None
 
     @classmethod
     def build(cls, config: EnvConfig | None = None, **settings: Any) -> WipingTask:
@@ -303,13 +290,14 @@ class WipingTask(TaskDescription):
                                    method=task.fit_method, **FADE_BEFORE_T)
         return _fit_style(task.style, task.n_periodic, task.n_transient, task.fit_method)
 
-    def _scene(self, config: EnvConfig) -> WipeScene:
-        """The scene composed from the arena, the robot and the sponge tool."""
+    def _prepare_scene(self, config: EnvConfig) -> float:
+        """What the task's scene needs before the timing, and its physics step (s): the scene is composed from the
+        arena, the robot and the sponge tool on the arena's step or the one configured (:meth:`compose` sets it)."""
         if config.xml_file is not None:
             raise ValueError(f"xml_file: a hand-merged scene serves the versions 1 and 2; version {self.version} "
                              f"composes its scene from the arena, the robot and the sponge tool (got "
                              f"{config.xml_file!r})")
-        return WipeScene(self.robot, composed=True)
+        return DEFAULT_TIMESTEP if config.timing.timestep is None else config.timing.timestep
 
     def default_groups(self) -> tuple[str, ...]:
         """The action's parameter groups where none are given: :data:`DEFAULT_GROUPS` and the travelling anchor."""
@@ -318,7 +306,7 @@ class WipingTask(TaskDescription):
     def _cup_placement(self) -> tuple[float, bool]:
         """``(clearance, near_patch)`` of the cup (:class:`~rdmp_gym.envs.tasks.wiping.context.ContextSpec`): the
         pad's clearance (:func:`~rdmp_gym.envs.tasks.wiping.versions.pad_clearance`), anywhere near the patch."""
-        return pad_clearance(self.scene.sponge_half), True
+        return pad_clearance(self.parts.sponge_half), True
 
     def _set_groups(self, task: TaskConfig) -> None:
         groups = self.default_groups() if task.groups is None else task.groups
@@ -331,12 +319,10 @@ class WipingTask(TaskDescription):
         self._anchor_z = float(self.dmp.anchor[2])
 
     def _set_timing(self, config: EnvConfig) -> None:
-        """Physics step, control rate and the episode's control steps."""
-        model, timing, task = self.scene.model, config.timing, config.task
-        if timing.timestep is not None:
-            model.opt.timestep = timing.timestep
-        self.frame_skip = timing.frame_skip_for(model.opt.timestep)
-        self.dt = self.frame_skip * model.opt.timestep
+        """The control rate and the episode's control steps on the physics step :attr:`timestep`."""
+        timing, task = config.timing, config.task
+        self.frame_skip = timing.frame_skip_for(self.timestep)
+        self.dt = self.frame_skip * self.timestep
         self.control_rate = 1.0 / self.dt
         transient = self.dmp.transients[0].length
         duration = task.duration
@@ -383,30 +369,28 @@ class WipingTask(TaskDescription):
         self.wear_rate = task.wear_rate
         self.penetration_limit = task.penetration_limit
 
-    def _path_ik(self) -> PathIK:
-        """The path IK of the robot's chain to the sponge's face centre, with its arm-from-body clearance."""
-        scene, robot = self.scene, self.robot
-        joints = tuple(scene.name("robot", n) for n in robot.joints)
-        geoms = robot.body_clearance
-        bodies = () if geoms is None else tuple(scene.name("robot", n) for n in (geoms.box_body, *geoms.capsule_bodies))
-        kinematics = ChainKinematics(scene.model, scene.name("tool", "sponge_tcp"), joints, bodies=bodies)
-        clearance = None if geoms is None else BodyClearance(
-            scene.model, kinematics, scene.name("robot", geoms.box),
-            tuple(scene.name("robot", n) for n in geoms.capsules))
-        return PathIK(kinematics, robot.posture, robot.mobility, clearance=clearance)
-
     def hand_points(self) -> HandPoints:
-        """Points on the robot's hand geoms and the sponge, for the cup clearance (built on first use)."""
-        if self._hand_points is None:
-            self._hand_points = self._hand()
+        """Points on the robot's hand geoms and the sponge, for the cup clearance."""
         return self._hand_points
 
-    def _hand(self) -> HandPoints:
-        """Points on the robot's hand geoms and the sponge, for the cup clearance."""
-        scene = self.scene
-        geoms = (*(scene.name("robot", n) for n in self.robot.hand_geoms), scene.name("tool", "sponge"))
-        return HandPoints(scene.model, scene.qpos_adr, geoms)
-
+    def _staged(self, scene: Any, ik: PathIK, parts: WipeParts, robot_prefix: str, tool_prefix: str) -> None:
+        """What the task reads of the scene it is staged on: where its ``parts`` are, the robot's joint limits (checked
+        against the settings), the context's sampling (the table, the cup and the sponge as compiled; checked against
+        the robot's reach), the path inverse kinematics ``ik`` and the hand's points."""
+        #: where the task's objects and sensors are in its scene
+        self.parts = parts
+        self.config.check_robot(np.c_[scene.joint_lower, scene.joint_upper])
+        clearance, near_patch = self._cup_placement()
+        context = self.config.context
+        self.context_spec = ContextSpec(context.ranges, table_extent=parts.table_extent, obstacle=self.obstacle,
+                                        obstacle_probability=context.obstacle_probability,
+                                        obstacle_radius=parts.obstacle_radius, patch_clearance=clearance,
+                                        near_patch=near_patch)
+        _check_reach(self.context_spec, self.robot)
+        #: the path inverse kinematics of the sponge's face centre
+        self.ik = ik
+        geoms = (*(robot_prefix + n for n in self.robot.hand_geoms), tool_prefix + "sponge")
+        self._hand_points = HandPoints(scene.model, scene.qpos_adr, geoms)
 
     @property
     def simulation_settings(self) -> SimulationSettings:
@@ -443,23 +427,20 @@ class WipingTask(TaskDescription):
             weights = np.c_[weights, moved / np.maximum(moved.max(axis=0), 1e-12)]
         return weights
 
-    def rollout_path(self, theta: np.ndarray, context: Context | None = None) -> np.ndarray:
-        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in ``context`` (default: the
-        episode's).
+    def rollout_path(self, theta: np.ndarray, context: Context) -> np.ndarray:
+        """Sponge path ``[T_ctrl, 3]`` (nominal table frame) of parameters ``theta`` in ``context``.
 
         The DMP is anchored at the patch centre and starts at the sponge start with ``start_blend``:
         the offset from the demonstrated start (relative to the anchor) is faded out over the
         transient, so the path starts where the sponge is, keeps the demonstrated approach's shape
         and is the DMP's own periodic pattern from the end of the transient on.
         """
-        context = self._episode(context, "rollout_path")
         anchor = np.array([*context.patch_centre, self._anchor_z])
         return self.dmp.rollout_batch(np.asarray(theta, dtype=np.float64)[None], self.times, groups=self.groups,
                                       y0=context.sponge_start, anchor=anchor, start_blend=True)[0]
 
-    def imitation_path(self, context: Context | None = None) -> np.ndarray:
-        """The imitation's path ``[T_ctrl, 3]`` in ``context`` (default: the episode's; ``rollout_path(theta0,
-        context)`` to round-off).
+    def imitation_path(self, context: Context) -> np.ndarray:
+        """The imitation's path ``[T_ctrl, 3]`` in ``context`` (``rollout_path(theta0, context)`` to round-off).
 
         With the parameters fixed, the rollout is affine in the start and the anchor (a linear transformation
         system, a start offset blended out linearly), so the env rolls out the imitation once for a reference
@@ -475,33 +456,24 @@ class WipingTask(TaskDescription):
                                            start_blend=True)
             self._imitation_paths = (paths[0], (paths[1:] - paths[0]) / _IMITATION_SHIFT)
         base, unit = self._imitation_paths
-        context = self._episode(context, "imitation_path")
         shift = np.r_[context.sponge_start, context.patch_centre]
         return base + np.tensordot(shift, unit, axes=1)
 
-    def solve_path(self, path: np.ndarray) -> IKResult:
-        """The path IK of a sponge path ``[T, 3]`` (nominal table frame): the joint path the env plans for it."""
-        world = self.scene.to_world(path)
+    def solve_path(self, path: np.ndarray, context: Context) -> IKResult:
+        """The path IK of a sponge path ``[T, 3]`` (nominal table frame) in ``context``: the joint path the env plans
+        for it."""
+        pose = TablePose.of(context)
+        world = to_world(self.parts, pose, path)
         weight = np.clip(1.0 - (path[:, 2] - self._engage) / 0.05, 0.2, 1.0)
-        return self.ik.solve(world, self.scene.control_frame()[1][:, 2], rot_weight=weight)
+        return self.ik.solve(world, control_frame(self.parts, pose)[1][:, 2], rot_weight=weight)
 
-    def _episode(self, context: Context | None, what: str) -> Context:
-        """``context``, or the episode's (RuntimeError before the first ``reset``)."""
-        if context is not None:
-            return context
-        if self.context is None:
-            raise RuntimeError(f"call reset() before {what}()")
-        return self.context
-
-    def cup(self, context: Context | None = None) -> Cup | None:
-        """The cup of ``context`` (default: the episode's) as it stands before the wipe (world frame), or None
-        without one."""
-        context = self.context if context is None else context
-        if context is None or not context.obstacle:
+    def cup(self, context: Context) -> Cup | None:
+        """The cup of ``context`` as it stands before the wipe (world frame), or None without one."""
+        if not context.obstacle:
             return None
-        origin, rot = self.scene.table_frame(actual=True)
+        origin, rot = table_frame(self.parts, TablePose.of(context))
         base = origin + rot @ np.r_[context.obstacle_position, 0.0]
-        return Cup(base, self.scene.obstacle_radius, float(base[2] + 2.0 * self.scene.obstacle_half_height))
+        return Cup(base, self.parts.obstacle_radius, float(base[2] + 2.0 * self.parts.obstacle_half_height))
 
     # ------------------------------------------------------------------ the judgement
     def statistics(self, trace: WipeTrace, smooth: Smoothness) -> dict[str, Any]:
@@ -541,7 +513,9 @@ class WipingTask(TaskDescription):
     # ------------------------------------------------------------------ the description
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
         """The sponge tool on the robot's tool mount and the sensors the task reads
-        (:func:`~rdmp_gym.envs.tasks.wiping.arena.add_task`); the table and the cup stand in the wiping arena."""
+        (:func:`~rdmp_gym.envs.tasks.wiping.arena.add_task`), on the task's physics step; the table and the cup stand
+        in the wiping arena (:attr:`room`)."""
+        spec.option.timestep = self.timestep
         add_task(spec, robot, robot_prefix, tool_prefix)
 
     def imitation(self) -> RhythmicDMP:
@@ -557,30 +531,23 @@ class WipingTask(TaskDescription):
         return self.context_spec.sample(rng, options)
 
     def place(self, model: mujoco.MjModel, context: Context) -> None:
-        """Tilt and raise the table, stand (or park) the cup and lay the dirt for ``context`` (the scene's
-        ``model``); ``context`` becomes the episode's."""
-        if model is not self.scene.model:
-            raise ValueError("model: the wiping task places its objects in its own scene's model")
-        self.scene.set_table(TablePose(context.table_height, *context.table_tilt))
-        self.scene.place_obstacle(context.obstacle_position if context.obstacle else None)
-        self.context = context
-        self.dirt_cells = self.patch_cells(context)
-        self.dirt_left = np.ones(len(self.dirt_cells))
-        self._imitation_jerk = None
+        """Tilt and raise the table and stand (or park) the cup for ``context``
+        (:func:`~rdmp_gym.envs.tasks.wiping.scene.place_objects`)."""
+        place_objects(model, self.parts, context)
 
-    def patch_cells(self, context: Context) -> np.ndarray:
+    def dirt_cells(self, context: Context) -> np.ndarray:
         """The dirt cells' centres ``[N, 3]`` (world) of ``context`` on the placed table."""
         cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
-        origin, rot = self.scene.table_frame(actual=True)
+        origin, rot = table_frame(self.parts, TablePose.of(context))
         return np.c_[cells, np.zeros(len(cells))] @ rot.T + origin
 
     def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: Context, times: np.ndarray,
              table_origin: np.ndarray) -> TaskPlan:
         """The sponge path of ``theta`` in ``context`` (:meth:`rollout_path`, nominal table frame), in the control
         frame (the nominal table origin, the actual tilt)."""
-        if dmp is not self.dmp or times is not self.times:
+        if dmp is not self.dmp or not np.array_equal(times, self.times):
             raise ValueError("dmp, times: the wiping task plans with its own imitation DMP and control times")
-        return TaskPlan(self.rollout_path(theta, context), *self.scene.control_frame())
+        return TaskPlan(self.rollout_path(theta, context), *control_frame(self.parts, TablePose.of(context)))
 
     def evaluate(self, path: ToolPath, context: Context, sensor: Mapping[str, slice]) -> Outcome:
         """The reward terms, cost trace, statistics (info) and failure causes of an executed episode, from its
@@ -599,7 +566,7 @@ class WipingTask(TaskDescription):
             terms, cost = wipe_reward(trace, self.periodic, smooth, self.reward_settings, self.reward_weights, traces)
         if not valid:
             logger.debug("penetration %.4f m beyond the limit %.4f m", trace.penetration, record.penetration_limit)
-        info["n_cells"] = len(self.dirt_cells)
+        info["n_cells"] = len(self.dirt_cells(context))
         causes = self.success(info, valid, trace.unstable)[1]
         return Outcome(terms, cost, info, causes, valid=valid, reason="" if valid else "penetration")
 
@@ -612,21 +579,21 @@ class WipingTask(TaskDescription):
         """``(is_success, causes)`` of an episode's statistics with this version's criteria (:func:`outcome`)."""
         return outcome(stats, valid, unstable, self.success_joint_accel, self.max_jerk_ratio)
 
-    def workspace(self, robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
-        """The robot's workspace box (nominal table frame)."""
-        return robot.workspace
-
     # ------------------------------------------------------------------ execution on the faces
     def stage(self, robot: RobotDescription) -> Stage:
-        """The task's own scene (the version's: composed, or the robot's hand-merged scene in v1 and v2), timing,
-        action map (with the approach and the sweep) and path IK (to the sponge's face centre)."""
+        """The standard stage (:func:`~rdmp_gym.envs.task_scene.standard_stage`: the arena composed with the robot and
+        the task, the task's timing, the path IK to the sponge's face centre) with the task's action map (the
+        approach and the sweep)."""
         if robot.name != self.robot.name:
             raise ValueError(f"robot: the wiping task was built for {self.robot.name!r}, not {robot.name!r}")
-        return Stage(self.scene, self.frame_skip, self.dt, self.n_steps, self.times, self.action_map, self.ik)
+        stage = standard_stage(self, robot, self.action_map)
+        parts = WipeParts.read(stage.scene.model, robot, ROBOT_PREFIX, TOOL_PREFIX)
+        self._staged(stage.scene, stage.ik, parts, ROBOT_PREFIX, TOOL_PREFIX)
+        return stage
 
     def rest_pose(self, context: Context, plan: TaskPlan, face: Any) -> np.ndarray:
         """The joints with the sponge at the context's start (flat on the table where it is low)."""
-        return self.solve_path(context.sponge_start[None]).q[0]
+        return self.solve_path(context.sponge_start[None], context).q[0]
 
     def check_params(self, theta: np.ndarray) -> Rejection | None:
         """Parameters whose amplitude leaves the DMP's range are refused (reason ``"r0"``)."""
@@ -645,9 +612,10 @@ class WipingTask(TaskDescription):
         excess = _workspace_excess(path, self.robot.workspace)
         if excess > 0:
             return Rejection("workspace", excess / 0.1)
-        solution = self.solve_path(path)
+        context = face.context
+        solution = self.solve_path(path, context)
         if self.cup_clearance is not None:
-            path, solution = self._clear_cup(path, solution, info)
+            path, solution = self._clear_cup(path, solution, context, info)
             excess = _workspace_excess(path, self.robot.workspace)
             if excess > 0:
                 return Rejection("workspace", excess / 0.1, info)
@@ -661,54 +629,50 @@ class WipingTask(TaskDescription):
             return Rejection("joint_speed", speed / self.max_joint_speed - 1.0, info)
         return Solution(TaskPlan(path, plan.origin, plan.rotation, plan.extras), solution, info)
 
-    def simulate(self, solution: Solution, face: Any, capture: Callable[[int], None] | None) -> ToolPath:
-        """The simulation core with the wiping hook (:func:`~rdmp_gym.envs.tasks.wiping.simulation.simulate_wipe`):
-        the joint targets with the servos' feed-forward, the pressing depth adapted online from the wrist force
-        along the control normal, the dirt worn step by step (:attr:`dirt_left` afterwards)."""
+    def simulate(self, solution: Solution, face: Any, capture: Callable[..., None] | None) -> ToolPath:
+        """The simulation core with the wiping hook (:func:`~rdmp_gym.envs.tasks.wiping.simulation.simulate_wipe`) in
+        the face's context: the joint targets with the servos' feed-forward, the pressing depth adapted online from
+        the wrist force along the control normal, the dirt worn step by step (the frames draw it as worn so far)."""
         path, joints = solution.plan.path, solution.joints
-        smooth = self.smoothness(path, joints.q)
-        scene = self.scene
-        normal = scene.control_frame()[1][:, 2]
+        scene, context = face.scene, face.context
+        smooth = self.smoothness(path, joints.q, self.imitation_jerk(context))
+        pose = TablePose.of(context)
+        normal = control_frame(self.parts, pose)[1][:, 2]
         plan = JointTargetPlan(joints, self.dt, face.servo_lead, scene.joint_lower, scene.joint_upper, normal)
         scene.set_arm_state(joints.q[0])
         adaptation = self.force_adaptation()
-        dirt = DirtField(self.dirt_cells, scene.table_frame(actual=True)[1][:, 2], wear_rate=self.wear_rate,
+        dirt = DirtField(self.dirt_cells(context), table_frame(self.parts, pose)[1][:, 2], wear_rate=self.wear_rate,
                          contact_threshold=self.reward_settings.contact_threshold)
-        self.dirt_left = np.ones(len(self.dirt_cells))
         after = None
         if capture is not None:
             capture(-1)
 
             def after(k: int, dirt_left: Callable[[], np.ndarray]) -> None:
-                self._live_dirt = dirt_left
-                capture(k)
+                capture(k, _WornSoFar(dirt_left))
 
-        try:
-            trace = simulate_wipe(scene, plan, path[:, 2], adaptation, dirt, self.frame_skip,
-                                  self.simulation_settings, callback=after)
-        finally:
-            self._live_dirt = None
-        self.dirt_left = trace.dirt
-        return ToolPath(TaskPlan(path, *scene.control_frame()), joints.q, np.zeros((0, 0)), np.zeros((0, 0)),
+        trace = simulate_wipe(scene, self.parts, plan, path[:, 2], adaptation, dirt, self.frame_skip,
+                              self.simulation_settings, callback=after, cup=context.obstacle)
+        return ToolPath(TaskPlan(path, *control_frame(self.parts, pose)), joints.q, np.zeros((0, 0)), np.zeros((0, 0)),
                         np.zeros((0, 0)), trace.sponge_pos, trace.steps, trace.unstable, self.dt, self.frame_skip,
                         smooth.jerk_ratio, float(smooth.joint_accel.max()), self.robot.max_joint_accel,
                         WipeRecord(trace, smooth, self.penetration_limit))
 
-    def invalid(self, reason: str, severity: float, n_steps: int) -> Outcome:
+    def invalid(self, reason: str, severity: float, n_steps: int, context: Context) -> Outcome:
         """The invalid-parameter penalty (:func:`~rdmp_gym.envs.tasks.wiping.reward.invalid_reward`) with the void
         statistics of an episode not run (:func:`~rdmp_gym.envs.tasks.wiping.info.void_statistics`)."""
         traces: dict[str, np.ndarray] = {}
         info: dict[str, Any] = {"cost_terms": traces}
         terms, cost = invalid_reward(severity, n_steps, self.reward_weights, traces)
         info.update(void_statistics(n_steps))
-        info["n_cells"] = len(self.dirt_cells)
+        info["n_cells"] = len(self.dirt_cells(context))
         return Outcome(terms, cost, info, ("invalid",), valid=False, reason=reason)
 
-    def render_overlay(self, renderer: SceneRenderer) -> np.ndarray:
-        """The frame with the dirt left on the table (during an episode, as worn so far)."""
-        _, rot = self.scene.table_frame(actual=True)
-        dirt = self.dirt_left if self._live_dirt is None else self._live_dirt()
-        return renderer.render(self.dirt_cells, dirt, 0.5 * self.cell_size, rot)
+    def render_overlay(self, renderer: SceneRenderer, context: Context, overlay: Any) -> np.ndarray:
+        """The frame with the dirt left on the table: as ``overlay`` has worn it (its ``dirt_left() [N]``: the
+        episode's record, or the episode so far), all of it before the first step."""
+        cells = self.dirt_cells(context)
+        dirt = np.ones(len(cells)) if overlay is None else overlay.dirt_left()
+        return renderer.render(cells, dirt, 0.5 * self.cell_size, table_frame(self.parts, TablePose.of(context))[1])
 
     def step_book(self, face: Any, reward_every: int) -> WipeStepBook:
         """The wiping task's step interface (:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`: the canonical
@@ -722,14 +686,16 @@ class WipingTask(TaskDescription):
         speed (:meth:`Smoothness.speed_normalised`)."""
         return Smoothness.speed_normalised(path, dt)
 
-    def smoothness(self, path: np.ndarray, q: np.ndarray) -> Smoothness:
-        """Jerk of the commanded path relative to the imitation's in the episode's context (:meth:`jerk_measure`),
-        and joint accelerations."""
+    def imitation_jerk(self, context: Context) -> float:
+        """The jerk (:meth:`jerk_measure`) of the imitation's path in ``context``, what :meth:`smoothness` compares
+        with."""
+        return self.jerk_measure(self.imitation_path(context), self.dt)
+
+    def smoothness(self, path: np.ndarray, q: np.ndarray, reference: float) -> Smoothness:
+        """Jerk of the commanded path ``[T, 3]`` relative to the imitation's ``reference`` (:meth:`imitation_jerk` in
+        the episode's context), and joint accelerations of its joint path ``q [T, n]``."""
         jerk_sq = Smoothness.jerk_squared(path, self.dt)
-        measure = self.jerk_measure
-        if self._imitation_jerk is None:
-            self._imitation_jerk = measure(self.imitation_path(), self.dt)
-        ratio = measure(path, self.dt) / max(self._imitation_jerk, 1e-12)
+        ratio = self.jerk_measure(path, self.dt) / max(reference, 1e-12)
         return Smoothness(jerk_sq, ratio, Smoothness.peak_accel(q, self.dt))
 
     def context_kind(self, observation: np.ndarray) -> str:
@@ -738,38 +704,51 @@ class WipingTask(TaskDescription):
         validation."""
         return self.context_spec.kind(Context.from_vector(np.asarray(observation, dtype=np.float64)))
 
-    def executed_path(self, theta: np.ndarray) -> np.ndarray:
-        """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that an episode executes for parameters ``theta``
-        in the episode's context: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
-        path = self.rollout_path(theta)
+    def executed_path(self, theta: np.ndarray, context: Context) -> np.ndarray:
+        """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that an episode in ``context`` executes for parameters
+        ``theta``: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
+        path = self.rollout_path(theta, context)
         if (self.cup_clearance is None or not np.all(np.isfinite(path))
                 or _workspace_excess(path, self.robot.workspace) > 0):
             return path
-        return self._clear_cup(path, self.solve_path(path), {})[0]
+        return self._clear_cup(path, self.solve_path(path, context), context, {})[0]
 
-    def hand_cup_gaps(self, path: np.ndarray) -> dict[str, np.ndarray]:
+    def hand_cup_gaps(self, path: np.ndarray, context: Context) -> dict[str, np.ndarray]:
         """``{part: [T]}``: for each part of the hand (fingers, thumb, palm, sponge), the horizontal gap (m)
         between its points below the cup's top and the cup's side at every control step of ``path [T, 3]``
-        (nominal table frame) as planned (inverse kinematics, no simulation); inf where the part is above the
-        cup. Empty without a cup."""
-        cup = self.cup()
+        (nominal table frame) in ``context`` as planned (inverse kinematics, no simulation); inf where the part is
+        above the cup. Empty without a cup."""
+        cup = self.cup(context)
         if cup is None:
             return {}
         hand = self.hand_points()
-        gaps = hand.gaps(self.solve_path(np.asarray(path, dtype=np.float64)).q, cup)
+        gaps = hand.gaps(self.solve_path(np.asarray(path, dtype=np.float64), context).q, cup)
         return dict(zip(hand.names, gaps.T, strict=True))
 
-    def _clear_cup(self, path: np.ndarray, solution: IKResult, info: dict) -> tuple[np.ndarray, IKResult]:
-        """``path [T, 3]`` and its IK solution with :attr:`cup_clearance`'s push (unchanged without a cup);
-        records the largest push (m) in ``info["clearance_push"]``."""
+    def _clear_cup(self, path: np.ndarray, solution: IKResult, context: Context, info: dict
+                   ) -> tuple[np.ndarray, IKResult]:
+        """``path [T, 3]`` and its IK solution in ``context`` with :attr:`cup_clearance`'s push (unchanged without a
+        cup); records the largest push (m) in ``info["clearance_push"]``."""
         info["clearance_push"] = 0.0
-        cup = self.cup()
+        cup = self.cup(context)
         if cup is None:
             return path, solution
-        path, solution, push = self.cup_clearance.apply(path, solution, self.solve_path, self.hand_points(), cup,
-                                                        self.scene.control_frame()[1], self.dt)
+        rotation = control_frame(self.parts, TablePose.of(context))[1]
+        path, solution, push = self.cup_clearance.apply(path, solution, partial(self.solve_path, context=context),
+                                                        self.hand_points(), cup, rotation, self.dt)
         info["clearance_push"] = push
         return path, solution
+
+
+@dataclass(frozen=True)
+class _WornSoFar:
+    """What the frames draw during an episode: the dirt left so far (``worn() [N]``, recomputed on each call)."""
+
+    worn: Callable[[], np.ndarray]
+
+    def dirt_left(self) -> np.ndarray:
+        """Dirt left per cell ``[N]`` in [0, 1]."""
+        return self.worn()
 
 
 #: Shift (m) of each context number for the affine basis of :meth:`WipingTask.imitation_path`.

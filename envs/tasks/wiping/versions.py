@@ -23,7 +23,9 @@ v3 keeps v2's task and changes: the scene is composed from the arena, a robot (`
 jerk within :data:`MAX_JERK_RATIO` of the imitation's, so that no uniformly random action succeeds); the cup's
 displacement counts from the robot's first touch (a cup that settles untouched costs nothing); an episode voided
 for penetration reports coverage 0 like every other voided episode; the step twin runs the episodic env's
-simulation core.
+simulation core. The versions 1 and 2 are described by
+:class:`~rdmp_gym.envs.tasks.wiping.legacy.task.LegacyWipingTask` (on ARMAR-III's hand-merged scene), which reads
+their :data:`TASK_VERSIONS`; version 3 is :class:`~rdmp_gym.envs.tasks.wiping.task.WipingTask`.
 """
 
 from __future__ import annotations

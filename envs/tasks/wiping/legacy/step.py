@@ -53,6 +53,7 @@ from ....servo import ServoSimulation
 from ..context import SIZE as CONTEXT_SIZE
 from ..env import ArmarWipeEnv
 from ..reward import TERMS, Smoothness, invalid_reward, wipe_reward
+from ..scene import TablePose, control_frame, table_frame, to_world, wrist_force_world
 from ..simulation import IMPACT_WINDOW, DirtField, WipeTrace, arm_table_penetration
 from ..step import UNSUPPORTED, sponge_position
 
@@ -97,6 +98,8 @@ class ArmarWipeStepEnv(gym.Env):
         if isinstance(ik_iterations, bool) or not isinstance(ik_iterations, (int, np.integer)) or ik_iterations < 1:
             raise ValueError(f"ik_iterations: expected an integer >= 1, got {ik_iterations!r}")
         self.task = ArmarWipeEnv(**kwargs)
+        #: the wiping task's description (the face's)
+        self.wiping = self.task.task
         self.render_mode = self.task.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(self.task.control_rate))}
         self.dmp = self.task.dmp
@@ -125,11 +128,15 @@ class ArmarWipeStepEnv(gym.Env):
         self._stepper = self.dmp.start(task.dt, y0=context.sponge_start, anchor=anchor, start_blend=True)
         start = self.dmp.transients[0]
         self._phase, self._radius = self.dmp.canonical.state(task.times, start.phi0, start.r0)
-        self._normal = scene.control_frame()[1][:, 2]
-        self._table_normal = scene.table_frame(actual=True)[1][:, 2]
-        self._dirt = DirtField(task.dirt_cells, self._table_normal, wear_rate=task.wear_rate,
-                               contact_threshold=task.reward_settings.contact_threshold)
-        self._wear = np.zeros(len(task.dirt_cells))
+        self._parts, self._pose, self._cup = self.wiping.parts, TablePose.of(context), context.obstacle
+        self._normal = control_frame(self._parts, self._pose)[1][:, 2]
+        self._table_normal = table_frame(self._parts, self._pose)[1][:, 2]
+        cells = self.wiping.dirt_cells(context)
+        self._dirt = DirtField(cells, self._table_normal, wear_rate=self.wiping.wear_rate,
+                               contact_threshold=self.wiping.reward_settings.contact_threshold)
+        self._wear = np.zeros(len(cells))
+        self._reference = self.wiping.imitation_jerk(context)
+        task.overlay = self
         # the episode so far: commanded path and joints, and the per-step records of a WipeTrace
         self._path = np.zeros((count, 3))
         self._q = np.zeros((count, scene.qpos_adr.size))
@@ -146,9 +153,10 @@ class ArmarWipeStepEnv(gym.Env):
         self._sponge_pos = np.zeros((count, 3))
         self._penetration, self._first_contact = 0.0, -1
         self._fine_window = max(1, round(IMPACT_WINDOW / task.dt))
-        self._obstacle_start = scene.data.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3].copy()
-        self._adaptation = ForceAdaptation(task.adaptation_settings, task.dt)
-        self._bias = float(scene.wrist_force_world() @ self._normal)
+        cup = self._parts.obstacle_qpos
+        self._obstacle_start = scene.data.qpos[cup:cup + 3].copy()
+        self._adaptation = ForceAdaptation(self.wiping.adaptation_settings, task.dt)
+        self._bias = float(wrist_force_world(scene.data, self._parts) @ self._normal)
         self._lead = scene.servo_lead()
         self._measured = 0.0
         self._depth, self._top, self._before = 0.0, 0.0, 0.0
@@ -156,7 +164,7 @@ class ArmarWipeStepEnv(gym.Env):
         self._k = 0
         self._terms = dict.fromkeys(TERMS, 0.0)
         self._done = False
-        position = sponge_position(self.task.scene)
+        position = sponge_position(self.task.scene.data, self._parts)
         self._previous = position
         return self._observation(position, np.zeros(3)), info
 
@@ -178,9 +186,9 @@ class ArmarWipeStepEnv(gym.Env):
         velocity = plan_velocity(q, k, task.dt)             # np.gradient of the episodic JointTargetPlan
         unstable = self._core.step(k, q[k] + self._lead * velocity)
         self._k = k + 1
-        penetrated = self._penetration > task.penetration_limit
+        penetrated = self._penetration > self.wiping.penetration_limit
         terms, info = self._reward(k, unstable, penetrated)
-        position = sponge_position(self.task.scene)
+        position = sponge_position(self.task.scene.data, self._parts)
         observation = self._observation(position, (position - self._previous) / task.dt)
         self._previous = position
         terminated = unstable or penetrated
@@ -192,6 +200,10 @@ class ArmarWipeStepEnv(gym.Env):
         """As the episodic env's ``render`` (the current state, with the dirt left so far)."""
         return self.task.render()
 
+    def dirt_left(self) -> np.ndarray:
+        """Dirt left per cell ``[N]`` in [0, 1] so far (what the frames draw)."""
+        return 1.0 - np.minimum(self._wear, 1.0)
+
     def close(self) -> None:
         self.task.close()
 
@@ -202,8 +214,8 @@ class ArmarWipeStepEnv(gym.Env):
     def _solve(self, target: np.ndarray, q_init: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joint positions [10] and joint motion per metre along the normal [10] for a sponge target [3]
         (nominal table frame), as the episodic env's IK (control frame, orientation weight) from ``q_init``."""
-        weight = np.clip(1.0 - (target[2] - self.task.adaptation_settings.engage_height) / 0.05, 0.2, 1.0)
-        solution = self.task.ik.solve(self.task.scene.to_world(target[None]), self._normal,
+        weight = np.clip(1.0 - (target[2] - self.wiping.adaptation_settings.engage_height) / 0.05, 0.2, 1.0)
+        solution = self.task.ik.solve(to_world(self._parts, self._pose, target[None]), self._normal,
                                       rot_weight=np.array([weight]), q_init=q_init, stride=1,
                                       coarse_iterations=self.ik_iterations, fine_iterations=1,
                                       min_iterations=self.ik_iterations)
@@ -228,51 +240,50 @@ class ArmarWipeStepEnv(gym.Env):
 
     def substep(self, k: int, i: int) -> None:
         """The peak sponge-table force of the step so far."""
-        a = self.task.scene.sponge_contact_adr
+        a = self._parts.sponge_contact_adr
         self._top = max(self._top, abs(float(self.task.scene.data.sensordata[a + 1:a + 4] @ self._table_normal)))
 
     def finish(self, k: int) -> bool:
         """Record control step ``k`` after its physics (as ``simulate_wipe``); True if it diverged."""
-        task, scene = self.task, self.task.scene
+        scene, parts = self.task.scene, self._parts
         d, rec = scene.data, self._rec
-        a = scene.sponge_contact_adr
+        a = parts.sponge_contact_adr
         before, depth = self._before, self._depth
         if self._first_contact >= 0 and k < self._first_contact + self._fine_window:
             rec["peak"][k] = self._top
         sensors = d.sensordata
         if self._first_contact < 0 and sensors[a] > 0:
             self._first_contact = k
-        ft_rot = d.site_xmat[scene.ft_site].reshape(3, 3)
-        self._measured = self._bias - float(self._normal @ (ft_rot @ sensors[scene.force_adr]))
+        ft_rot = d.site_xmat[parts.ft_site].reshape(3, 3)
+        self._measured = self._bias - float(self._normal @ (ft_rot @ sensors[parts.force_adr]))
         force = abs(float(np.nan_to_num(sensors[a + 1:a + 4]) @ self._table_normal))
         rec["contact_force"][k] = force
         rec["wrist_force"][k] = self._measured
         rec["depth"][k] = depth
-        rec["arm_contact"][k] = sensors[scene.robot_contact_adr] - sensors[a] > 0.5
-        for adr in scene.self_contact_adr:
+        rec["arm_contact"][k] = sensors[parts.robot_contact_adr] - sensors[a] > 0.5
+        for adr in parts.self_contact_adr:
             if sensors[adr] > 0:
                 rec["self_contact"][k] = True
                 self._penetration = max(self._penetration, -float(sensors[adr + 1]))
         if rec["arm_contact"][k]:
-            self._penetration = max(self._penetration, arm_table_penetration(scene))
-        rec["obstacle_contact"][k] = sensors[scene.obstacle_contact_adr] > 0
-        if scene.obstacle_xy is not None:
-            shift = d.qpos[scene.obstacle_qpos:scene.obstacle_qpos + 3] - self._obstacle_start
+            self._penetration = max(self._penetration, arm_table_penetration(d, parts))
+        rec["obstacle_contact"][k] = sensors[parts.obstacle_contact_adr] > 0
+        if self._cup:
+            shift = d.qpos[parts.obstacle_qpos:parts.obstacle_qpos + 3] - self._obstacle_start
             rec["obstacle_shift"][k] = float(np.linalg.norm(shift))
         joints = d.qpos[scene.qpos_adr]
-        rec["at_limit"][k] = bool(np.any((joints < scene.joint_lower + task.limit_margin)
-                                         | (joints > scene.joint_upper - task.limit_margin)))
-        self._sponge_pos[k] = d.site_xpos[scene.sponge_site]
-        box_pos, box_rot = d.geom_xpos[scene.sponge_geom].copy(), d.geom_xmat[scene.sponge_geom].copy()
+        rec["at_limit"][k] = bool(np.any((joints < scene.joint_lower + self.wiping.limit_margin)
+                                         | (joints > scene.joint_upper - self.wiping.limit_margin)))
+        self._sponge_pos[k] = d.site_xpos[parts.sponge_site]
+        box_pos, box_rot = d.geom_xpos[parts.sponge_geom].copy(), d.geom_xmat[parts.sponge_geom].copy()
         self._box_pos[k] = box_pos
         unstable = (d.time <= before or self._measured != self._measured or abs(self._measured) > _MAX_FORCE
                     or force > _MAX_FORCE)
         if not unstable:                                   # Preston wear of this step (DirtField, as the episode)
             rec["removed"][k] = self._dirt.add_step(self._wear, force, box_pos, box_rot,
-                                                    self._box_pos[max(0, k - 1)], scene.sponge_half)
+                                                    self._box_pos[max(0, k - 1)], parts.sponge_half)
         else:
             rec["contact_force"][k] = 0.0 if not np.isfinite(force) else min(force, _MAX_FORCE)
-        task.dirt_left = 1.0 - np.minimum(self._wear, 1.0)     # what render() shows
         return bool(unstable)
 
     def _trace(self, steps: int, unstable: bool) -> tuple[WipeTrace, Smoothness]:
@@ -288,7 +299,8 @@ class ArmarWipeStepEnv(gym.Env):
                           1.0 - np.minimum(self._wear, 1.0), rec["arm_contact"], rec["self_contact"],
                           rec["obstacle_contact"], rec["obstacle_shift"], rec["at_limit"], self._sponge_pos,
                           self._penetration, impact_force, impact_step, None, steps, unstable)
-        return trace, task.smoothness(self._path[:steps], self._q[:steps]).padded(task.n_steps)
+        smooth = self.wiping.smoothness(self._path[:steps], self._q[:steps], self._reference)
+        return trace, smooth.padded(task.n_steps)
 
     def _reward(self, k: int, unstable: bool, penetrated: bool) -> tuple[dict[str, float], dict[str, Any]]:
         """This step's growth of the episodic reward terms, and the info dict."""
@@ -297,18 +309,20 @@ class ArmarWipeStepEnv(gym.Env):
         trace, smooth = self._trace(k + 1, unstable)
         last = unstable or penetrated or k + 1 >= task.n_steps
         if penetrated:
-            total, cost = invalid_reward(self._penetration / 0.05, task.n_steps, task.reward_weights, traces)
+            total, cost = invalid_reward(self._penetration / 0.05, task.n_steps, self.wiping.reward_weights, traces)
         else:
-            total, cost = wipe_reward(trace, task.periodic, smooth, task.reward_settings, task.reward_weights, traces)
+            wiping = self.wiping
+            total, cost = wipe_reward(trace, wiping.periodic, smooth, wiping.reward_settings, wiping.reward_weights,
+                                      traces)
         terms = {name: total[name] - self._terms[name] for name in TERMS}
         self._terms = total
         contact = self._rec["contact_force"][k]
         info: dict[str, Any] = {"reward_terms": terms, "coverage": trace.coverage, "contact_force": float(contact),
                                 "wrist_force": self._measured, "unstable": unstable}
         if last:
-            stats = task.statistics(trace, smooth)
+            stats = self.wiping.statistics(trace, smooth)
             valid = not penetrated
-            success, causes = task.task.success(stats, valid, unstable)
+            success, causes = self.wiping.success(stats, valid, unstable)
             info.update(stats)
             info.update({"episode_reward_terms": dict(total), "cost_trace": cost, "cost_terms": traces, "valid": valid,
                          "invalid_reason": "penetration" if penetrated else "", "unstable": unstable,
@@ -316,10 +330,10 @@ class ArmarWipeStepEnv(gym.Env):
         return terms, info
 
     def _observation(self, position: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-        scene = self.task.scene
+        data, parts = self.task.scene.data, self._parts
         k = min(self._k, self.task.n_steps - 1)
         phase, radius = float(self._phase[k]), float(self._radius[k])
-        face = -scene.data.geom_xmat[scene.sponge_geom].reshape(3, 3)[:, 0] @ scene.table_frame(actual=False)[1]
-        force = self._measured / self.task.reward_settings.target_force
+        face = -data.geom_xmat[parts.sponge_geom].reshape(3, 3)[:, 0] @ parts.table_rotation
+        force = self._measured / self.wiping.reward_settings.target_force
         parts = [np.cos(phase), np.sin(phase), radius, *position, *face, *velocity, force, *self._context_obs]
         return np.clip(np.asarray(parts, dtype=np.float32), self.observation_space.low, self.observation_space.high)

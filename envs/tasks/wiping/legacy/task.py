@@ -14,12 +14,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ....robots import RobotDescription
 from ....smoothness import Smoothness
+from ...description import Stage
 from ..context import PATCH_CLEARANCE
-from ..scene import WipeScene
 from ..settings import EnvConfig
 from ..task import DEFAULT_GROUPS, WipingTask
 from ..versions import pad_clearance
+from .scene import WipeScene
 
 __all__ = ["LegacyWipingTask"]
 
@@ -35,9 +37,23 @@ class LegacyWipingTask(WipingTask):
     max_jerk_ratio: ClassVar[float | None] = None
     cup_from_touch: ClassVar[bool] = False
 
-    def _scene(self, config: EnvConfig) -> WipeScene:
-        """The robot's hand-merged scene, or the scene MJCF ``xml_file``."""
-        return WipeScene(self.robot, xml_file=config.xml_file)
+    def _prepare_scene(self, config: EnvConfig) -> float:
+        """The task's scene (:attr:`scene`: the robot's hand-merged scene, or the scene MJCF ``xml_file``) and its
+        physics step (s): the scene's, or the one configured."""
+        #: the scene the task runs on
+        self.scene = WipeScene(self.robot, xml_file=config.xml_file)
+        if config.timing.timestep is not None:
+            self.scene.model.opt.timestep = config.timing.timestep
+        return self.scene.model.opt.timestep
+
+    def stage(self, robot: RobotDescription) -> Stage:
+        """The task's scene (:attr:`scene`), timing, action map (with the approach and the sweep) and path IK (to the
+        sponge's face centre)."""
+        if robot.name != self.robot.name:
+            raise ValueError(f"robot: the wiping task was built for {self.robot.name!r}, not {robot.name!r}")
+        scene = self.scene
+        self._staged(scene, scene.path_ik(), scene.parts, "", "")
+        return Stage(scene, self.frame_skip, self.dt, self.n_steps, self.times, self.action_map, self.ik)
 
     def default_groups(self) -> tuple[str, ...]:
         """:data:`~rdmp_gym.envs.tasks.wiping.task.DEFAULT_GROUPS`, and from version 2 on the travelling anchor."""
@@ -46,7 +62,7 @@ class LegacyWipingTask(WipingTask):
     def _cup_placement(self) -> tuple[float, bool]:
         """Version 1: 1 cm from the patch, 35-60 % of the way along the approach; version 2: the current task's."""
         if self.task_version.pad_clearance:
-            return pad_clearance(self.scene.sponge_half), True
+            return pad_clearance(self.parts.sponge_half), True
         return PATCH_CLEARANCE, False
 
     def jerk_measure(self, path: np.ndarray, dt: float) -> float:
