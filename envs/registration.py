@@ -16,7 +16,6 @@ import gymnasium as gym
 
 from .specs import find_spec, is_episodic
 from .tasks import TASKS
-from .tasks.wiping.faces import DEPRECATED as _DEPRECATED
 
 __all__ = [
     "DEPRECATED_ENV_ID",
@@ -68,9 +67,12 @@ _RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
 
 #: ids beside the tasks' (the tasks' ids come from :data:`rdmp_gym.envs.tasks.TASKS`): id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
-    DEPRECATED_ENV_ID: (_DEPRECATED, {}),
+    DEPRECATED_ENV_ID: ("rdmp_gym.envs.tasks.wiping.legacy.env:deprecated_v0", {}),
     TRACKING_ID: ("rdmp_gym.envs.tracking:TrackingEnv", {}),
 }
+#: ids beside the tasks' whose keywords are a task's settings: id -> the task
+#: (:meth:`~rdmp_gym.envs.tasks.TaskEntry.typed_settings`)
+_SPECS_TASK: dict[str, str] = {DEPRECATED_ENV_ID: "wipe"}
 
 
 def learner_defaults(env_id: str) -> dict[str, dict[str, Any]]:
@@ -116,10 +118,8 @@ def env_settings(env_id: str, kwargs: Mapping[str, Any] | None = None) -> Any:
         else:
             _bound(env_id, spec.entry_point, settings)
         return settings
-    if spec.entry_point == _DEPRECATED:
-        from .tasks.wiping.settings import EnvConfig
-
-        return EnvConfig.from_kwargs(**settings)
+    if env_id in _SPECS_TASK:
+        return TASKS[_SPECS_TASK[env_id]].typed_settings(settings)
     if spec.entry_point == _RHYTHMIC:
         return _face_settings(env_id, settings)
     bound = _bound(env_id, spec.entry_point, settings)

@@ -20,7 +20,7 @@
    ``info["failure_causes"]`` and the task's own info keys.
 
 The task's own attributes and methods read and its attributes write through the face where the face has none of
-that name (``env.unwrapped.task_version`` is ``env.unwrapped.task.task_version``).
+that name (``env.unwrapped.tolerance`` is ``env.unwrapped.task.tolerance``).
 
 Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`TaskDescription.render_overlay`),
 ``"depth_array"`` (depth in m) or ``"human"`` (MuJoCo's viewer, following every control step; needs a display);
@@ -59,7 +59,7 @@ class RhythmicTaskEnv(gym.Env):
     """Episodic rhythmic task on a robot; see the module docstring.
 
     Args:
-        task: a registered task name (``"drum"``, ``"wipe"``) or a
+        task: a registered task name (:data:`~rdmp_gym.envs.tasks.TASKS`, e.g. ``"drum"``) or a
             :class:`~rdmp_gym.envs.tasks.description.TaskDescription`.
         robot: a registered robot name (``"armar3"``, ``"panda"``) or a ``RobotDescription``.
         version: the task's version (one of its ``versions``; ``gym.make`` of an id sets it); None: its latest.
@@ -68,8 +68,7 @@ class RhythmicTaskEnv(gym.Env):
             frames.
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how many control
             steps (also :meth:`record_episode`'s).
-        **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``, the wiping
-            task's ``obstacle``).
+        **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
@@ -128,14 +127,14 @@ class RhythmicTaskEnv(gym.Env):
         self._imitation_jerk: float | None = None
 
     def __getattr__(self, name: str) -> Any:
-        """The task's own attribute ``name`` where the face has none (``env.unwrapped.task_version``)."""
+        """The task's own attribute ``name`` where the face has none (``env.unwrapped.tolerance``)."""
         task = self.__dict__.get("task")
         if task is None or (name.startswith("__") and name.endswith("__")):
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         return getattr(task, name)
 
     def __setattr__(self, name: str, value: Any) -> None:
-        """Set the task's own attribute ``name`` where the face has none (``env.unwrapped.fine_force = True``), once
+        """Set the task's own attribute ``name`` where the face has none (``env.unwrapped.tolerance = 0.04``), once
         the face is built; else the face's."""
         state = self.__dict__
         if (state.get("_faced") and name not in state and not hasattr(type(self), name)

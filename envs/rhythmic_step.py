@@ -1,6 +1,6 @@
 """The step twin of every rhythmic task on every robot: one control step per ``step``, on the same simulation core.
 
-``rdmp_gym/{Robot}{Task}Step-v{N}`` (e.g. ``rdmp_gym/ArmarDrumStep-v1``, ``rdmp_gym/PandaWipeStep-v3``) runs the
+``rdmp_gym/{Robot}{Task}Step-v{N}`` (e.g. ``rdmp_gym/ArmarDrumStep-v1``) runs the
 episodic face's scene, context, imitation and simulation core (:class:`~rdmp_gym.envs.servo.ServoSimulation`) one
 control step at a time. What is the task's own in a step, its step interface, is its book
 (:class:`~rdmp_gym.envs.step_book.StepBook`, from
@@ -10,24 +10,24 @@ where the task writes none). Per ``step`` (control step ``k``):
 1. the action ``a in [-1, 1]^3`` is a coupling term on the DMP, ``c = max_shift * alpha_z * beta_z * a``: the tool's
    target is the book's imitation plan (the episodic action 0) plus the response of the DMP's transformation system
    to the coupling (a critically damped filter, exact for an input held over the control step; a constant ``a``
-   moves the path by ``max_shift * a`` metres along the task frame's axes), as the book adjusts it (the wiping task
-   keeps it in the robot's reach); ``a_k`` sets the target of step ``k + 1``;
+   moves the path by ``max_shift * a`` metres along the task frame's axes), as the book adjusts it (e.g. kept in
+   the robot's reach); ``a_k`` sets the target of step ``k + 1``;
 2. the joint targets are the plan's joints plus a damped least-squares correction for the shift at fixed tool
    orientation, with the servos' velocity feed-forward of the plan; the core runs the control step with the task's
-   hook, and the book keeps its books of it (the wiping task: the dirt worn);
+   hook, and the book keeps its books of it (e.g. what the tool has done to the task's objects);
 3. the reward is the book's: the generic book's is the growth of the episodic reward of the episode so far, judged
    by the task every ``reward_every`` control steps; the last step closes the sum on the episodic reward of the
    executed motion and its info holds the episodic info (``is_success``, ``failure_causes``, ``cost_trace``, the
-   task's keys). The episode ends early (``terminated``) where the simulation diverges or the book ends it (the
-   wiping task: a penetration beyond its limit).
+   task's keys). The episode ends early (``terminated``) where the simulation diverges or the book ends it (e.g. a
+   collision that voids the episode).
 
 With ``a = 0`` throughout the twin executes the episodic action 0 exactly (the same joint targets and physics), so
 it meets the same success criteria with the same return.
 
 Observation (float32): the book's. The generic book's: ``cos phi, sin phi`` of the imitation's canonical phase, the
 task's cue at this step (the drumming task's beat signal), the tool tip in the task frame (m), its velocity (m/s),
-and the context; the wiping task's (26): the canonical phase and radius, the sponge's position, face normal and
-velocity, the wrist force and the context.
+and the context; a task's own book observes what its task needs (its
+:attr:`~rdmp_gym.envs.step_book.StepBook.observation_space`).
 """
 
 from __future__ import annotations
