@@ -31,8 +31,8 @@ def _batch(actions, returns, traces=None, seeds=None):
     k = len(returns)
     traces = np.zeros((k, 1)) if traces is None else traces
     seeds = np.zeros(k) if seeds is None else seeds
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), traces, np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.asarray(seeds, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), traces, np.ones(k, dtype=bool),
+                        np.asarray(seeds, dtype=np.int64))
 
 
 def _run(learner, updates, seed=0, random_returns=False):

@@ -1,6 +1,7 @@
 """Contextual learners, smooth exploration, smooth bounds and the protocol's statistics (MuJoCo-free)."""
 
 import os
+from types import SimpleNamespace
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -11,6 +12,7 @@ from rdmp_gym.agents.learners.contextual import policy_from_state
 from rdmp_gym.agents.learners.smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
+from rdmp_gym.envs.contract import TaskContract
 from rdmp_gym.envs.registration import TRACKING_ID
 
 N = 12
@@ -23,8 +25,8 @@ def _space(contexts=2):
 
 def _batch(actions, returns):
     k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.ones(k, dtype=bool),
+                        np.zeros(k, dtype=np.int64))
 
 
 def _toy(agent, target, updates=60, seed=0, **options):
@@ -109,16 +111,29 @@ def test_state_round_trip_continues_identically():
         assert isinstance(value, (str, int, float, np.ndarray, dict))
 
 
+class _Declared:
+    """An env that declares only its context fields (its contract) and an action space of ``N``."""
+
+    action_space = SimpleNamespace(shape=(N,))
+
+    def __init__(self, fields):
+        self.fields = fields
+
+    @property
+    def unwrapped(self):
+        return self
+
+    def task_contract(self):
+        return TaskContract(name="fields", context_fields=self.fields)
+
+
 def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_contexts():
     """ArmarWipe-v1's layout: [..., obstacle (0/1), obstacle x, y]; x, y are (0, 0) without a cup."""
-    from types import SimpleNamespace
-
     rng = np.random.default_rng(0)
     present = (rng.uniform(size=200) < 0.4).astype(float)
     position = np.where(present[:, None] > 0, rng.normal([-0.04, 0.13], [0.02, 0.01], (200, 2)), 0.0)
     obs = np.column_stack([rng.normal(0, 0.01, 200), present, position])
-    env = SimpleNamespace(unwrapped=SimpleNamespace(context_fields={"obstacle": (1, 1), "obstacle_position": (2, 2)}),
-                          action_space=SimpleNamespace(shape=(N,)))
+    env = _Declared({"obstacle": (1, 1), "obstacle_position": (2, 2)})
     space = SearchSpace.from_env(env, obs)
     assert space.context_gate.tolist() == [-1, -1, 1, 1]
     np.testing.assert_allclose(space.context_center[2:], position[present > 0].mean(axis=0))
@@ -129,8 +144,7 @@ def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_c
     np.testing.assert_allclose(phi[present > 0, 2:].std(axis=0), 1.0, rtol=1e-9)  # cup: unit scale
     learner.gains = rng.normal(size=learner.gains.shape)
     np.testing.assert_allclose(policy_from_state(learner.state_dict(), obs), learner.policy_actions(obs))
-    plain = SimpleNamespace(unwrapped=SimpleNamespace(), action_space=SimpleNamespace(shape=(N,)))
-    assert SearchSpace.from_env(plain, obs).context_gate is None                  # no layout: no gate
+    assert SearchSpace.from_env(_Declared({}), obs).context_gate is None         # no fields: no gate
 
 
 def test_contextual_learner_rejects_bad_input():
@@ -167,17 +181,17 @@ def test_bootstrap_intervals_cover_the_true_value():
         interval(np.array([1.0, np.nan]))
 
 
-def test_protocol_context_sets_are_disjoint_and_success_needs_all_three():
+def test_protocol_context_sets_are_disjoint_and_success_is_the_envs_own():
     train, val, test = TRAIN_SEED_LIMIT, validation_seeds(50), final_test_seeds(50)
     assert test.min() >= train and val.min() >= train and not set(val) & set(test)
     k = 4
-    batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([0.96, 0.94, 0.99, 0.99]),
-                         np.array([0.95, 0.95, 0.85, 0.95]), np.array([True, True, True, False]), np.zeros(k, int))
-    assert success(batch).tolist() == [True, False, False, False]
-    given = EpisodeBatch(*(getattr(batch, name) for name in ("actions", "returns", "cost_traces", "coverage",
-                                                             "force_in_band", "valid", "seeds")),
+    metrics = {"coverage": np.array([0.96, 0.94, 0.99, 0.99]), "force_in_band_fraction": np.full(k, 0.95)}
+    batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([True, True, True, False]),
+                         np.zeros(k, int), metrics)
+    assert success(batch) is None                      # no is_success: none made up from the task's metrics
+    given = EpisodeBatch(batch.actions, batch.returns, batch.cost_traces, batch.valid, batch.seeds, metrics,
                          success=np.array([False, True, True, False]))
-    assert success(given).tolist() == [False, True, True, False]     # the env's is_success wins
+    assert success(given).tolist() == [False, True, True, False]
 
 
 @pytest.mark.parametrize("agent", ["creps", "cpi2"])

@@ -46,8 +46,7 @@ def _traces(actions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 def _batch(actions: np.ndarray, traces: np.ndarray) -> EpisodeBatch:
     k = actions.shape[0]
-    return EpisodeBatch(actions, -traces.sum(axis=1), traces, np.full(k, np.nan), np.full(k, np.nan),
-                        np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, -traces.sum(axis=1), traces, np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
 
 
 def _train(learner, updates: int, seed: int = 0) -> float:

@@ -24,7 +24,6 @@ def _batch(env, actions):
     return EpisodeBatch(actions=np.asarray(actions, dtype=np.float64),
                         returns=np.array([r[1] for r in results]),
                         cost_traces=np.stack([r[4]["cost_trace"] for r in results]),
-                        coverage=np.full(k, np.nan), force_in_band=np.full(k, np.nan),
                         valid=np.ones(k, dtype=bool), seeds=np.zeros(k, dtype=np.int64))
 
 
@@ -96,8 +95,7 @@ def test_pi2_update_is_the_time_weighted_average_of_per_step_updates():
     actions = learner.ask()
     traces = rng.uniform(0.0, 1.0, (k, steps))
     returns = -(traces.sum(axis=1) + rng.uniform(0.0, 0.5, k))   # part of the cost is terminal
-    batch = EpisodeBatch(actions, returns, traces, np.full(k, np.nan), np.full(k, np.nan),
-                         np.ones(k, bool), np.zeros(k, np.int64))
+    batch = EpisodeBatch(actions, returns, traces, np.ones(k, bool), np.zeros(k, np.int64))
     learner.tell(batch)
     # the update written out with loops
     expected = np.zeros(n)
@@ -122,8 +120,7 @@ def test_pi2_rejects_cost_traces_of_the_wrong_length(task):
     learner = make_learner("pi2", np.zeros(task.action_space.shape[0]), 10, np.random.default_rng(0), None,
                            task.action_time_weights())
     batch = _batch(task, learner.ask())
-    short = EpisodeBatch(batch.actions, batch.returns, batch.cost_traces[:, :-1], batch.coverage,
-                         batch.force_in_band, batch.valid, batch.seeds)
+    short = EpisodeBatch(batch.actions, batch.returns, batch.cost_traces[:, :-1], batch.valid, batch.seeds)
     with pytest.raises(ValueError, match="cost_traces"):
         learner.tell(short)
 

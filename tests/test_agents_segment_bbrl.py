@@ -50,7 +50,7 @@ def _traces(actions, rng, noise):
 def _batch(actions, traces, seeds=None):
     k = len(actions)
     costs = traces.sum(axis=1)
-    return EpisodeBatch(actions, -costs, traces, np.full(k, np.nan), np.full(k, np.nan), np.ones(k, dtype=bool),
+    return EpisodeBatch(actions, -costs, traces, np.ones(k, dtype=bool),
                         np.arange(k, dtype=np.int64) if seeds is None else seeds)
 
 

@@ -59,8 +59,8 @@ def test_smooth_cmaes_resumes_exactly_and_keeps_the_box():
 
 def _batch(actions, returns):
     k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.ones(k, dtype=bool),
+                        np.zeros(k, dtype=np.int64))
 
 
 def test_the_v2_task_explores_smoothly_by_default_and_v1_keeps_its_published_settings():

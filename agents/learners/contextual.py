@@ -112,8 +112,9 @@ class ContextualConfig(ContextualSettings):
         gain_groups: the searched groups whose actions depend on the context (rows of ``K``);
             the others get one value for every context (``θ̄`` only). Empty = every searched group. Few
             context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
-        features: the context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
-            ``["patch_size", "obstacle"]``); empty = every field. The rest is left out of the policy and baselines.
+        features: the context fields in ``φ(s)`` (names of the context fields of the env's task contract, e.g.
+            the wiping task's ``["patch_size", "obstacle"]``); empty = every field. The rest is left out of the
+            policy and baselines.
         control_cost: weight of ``½ aᵀRa`` in the cost.
         gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
         adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
@@ -213,7 +214,7 @@ class SearchSpace:
         base = env.unwrapped
         slices, n_dims = action_layout(env)
         observations = np.asarray(observations, dtype=np.float64)
-        gate = _context_gate(base, observations.shape[1])
+        gate = _context_gate(env, observations.shape[1])
         center, scale = observations.mean(axis=0), observations.std(axis=0)
         for j in np.flatnonzero(gate >= 0):
             defined = observations[observations[:, gate[j]] > 0.5, j]
@@ -221,7 +222,7 @@ class SearchSpace:
         scale[scale < 1e-9 * (1.0 + np.abs(center))] = 0.0
         weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
         return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None,
-                   _context_names(base, observations.shape[1]))
+                   _context_names(env, observations.shape[1]))
 
 
 def action_layout(env: Any) -> tuple[dict[str, slice], int]:
@@ -267,23 +268,20 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
     return per_block
 
 
-def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
-    """The env's context fields: its own ``context_fields``, else for the wiping envs (which have a
-    ``context_spec``) their ``CONTEXT_FIELDS``.
+def _context_fields(env: Any) -> Mapping[str, tuple[int, int]]:
+    """The context fields ``{name: (start, size)}`` of the env's task contract (empty: unnamed).
 
-    The table is imported here, where such an env already runs (its package is loaded), rather than at the top:
-    importing the learners loads neither gymnasium nor MuJoCo.
+    The contract is read here, where the env already runs (its package is loaded), rather than imported at the
+    top: importing the learners loads neither gymnasium nor MuJoCo.
     """
-    fields = getattr(base, "context_fields", None)
-    if fields is None and hasattr(base, "context_spec"):
-        from rdmp_gym.envs.tasks.wiping.context import CONTEXT_FIELDS  # the env's package: loaded with the env itself
-        fields = CONTEXT_FIELDS
-    return fields
+    from rdmp_gym.envs.contract import contract_of  # the env's package: loaded with the env itself
+
+    return contract_of(env).context_fields
 
 
-def _context_names(base: Any, size: int) -> tuple[str, ...] | None:
+def _context_names(env: Any, size: int) -> tuple[str, ...] | None:
     """``[o]`` the field name of each observation entry (None if the env names no fields)."""
-    fields = _context_fields(base)
+    fields = _context_fields(env)
     if not fields:
         return None
     names = [""] * size
@@ -293,12 +291,12 @@ def _context_names(base: Any, size: int) -> tuple[str, ...] | None:
     return tuple(names)
 
 
-def _context_gate(base: Any, size: int) -> np.ndarray:
+def _context_gate(env: Any, size: int) -> np.ndarray:
     """``[o]`` the indicator index of each gated context feature (-1 = not gated): ArmarWipe-v1's cup
-    position (``obstacle_position``) is gated by its presence (``obstacle``), read from the env's
-    ``CONTEXT_FIELDS``; an env without them has none."""
+    position (``obstacle_position``) is gated by its presence (``obstacle``), read from the context fields of the
+    env's contract; an env without them has none."""
     gate = np.full(size, -1, dtype=np.int64)
-    fields = _context_fields(base)
+    fields = _context_fields(env)
     if fields and "obstacle" in fields and "obstacle_position" in fields:
         start, length = fields["obstacle_position"]
         if start + length <= size:

@@ -5,7 +5,7 @@ maps actions affinely onto the selected DMP parameter groups). From each rollout
 ``c_k(t)`` (``T`` control steps) and its total cost ``J_k = -return_k``:
 
 * cost-to-go ``S_k(t) = sum_{t' >= t} c_k(t') + (J_k - sum_t c_k(t))``; the part of ``J_k`` that the
-  env does not spread over time (e.g. coverage, known only at the end) counts at every step, so
+  env does not spread over time (e.g. the wiping task's coverage, known only at the end) counts at every step, so
   ``S_k(0) = J_k``;
 * ``P_k(t) ∝ exp(-h (S_k(t) - min_k S(t)) / (max_k S(t) - min_k S(t)))`` for every step (h = 10);
 * per-step update ``d(t) = sum_k P_k(t) eps_k`` (``[T, n]``);

@@ -33,10 +33,11 @@ from rdmp_gym import RhythmicDMP
 from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper
 from rdmp_gym.dmp.stopping import fit_ending
 
+from ...contract import Metric
 from ...robots import RobotDescription
 from ...task_scene import rotation_from_tilt
 from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
-from .context import DrumContext, DrumContextSpec
+from .context import FIELDS, DrumContext, DrumContextSpec
 from .demonstration import drumming_demonstration
 from .metronome import Metronome
 from .scene import add_drum, add_stick, place_drum
@@ -72,6 +73,9 @@ class DrumTask(TaskDescription):
     extras: Mapping[str, float] = {"coupling": 1.5, "phase_gain": 1.5, "phase": 0.6}
     duration = 10.0
     control_rate = 100.0
+    #: per episode: the share of the counted beats struck, and the mean |strike - beat| over them
+    metrics = (Metric("struck_fraction", "struck fraction"),
+               Metric("mean_abs_timing_error", "timing error (s)", higher_is_better=False, unit="s"))
 
     def __init__(self, context: DrumContextSpec | None = None, tolerance: float = 0.05,
                  impulse_band: tuple[float, float] = (0.1, 1.0), max_jerk_ratio: float = 2.0,
@@ -92,6 +96,10 @@ class DrumTask(TaskDescription):
 
     def context_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.context_spec.low, self.context_spec.high
+
+    def context_fields(self) -> Mapping[str, tuple[int, int]]:
+        """The observation's fields (:data:`~.context.FIELDS`: the drum's position, height and tilt, the tempo)."""
+        return FIELDS
 
     def sample_context(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> DrumContext:
         return self.context_spec.sample(rng, options)
