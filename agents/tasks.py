@@ -111,6 +111,10 @@ class TaskSpec:
         action space, a setting it needs)."""
         from rdmp_gym.envs.blackbox import make_blackbox, split_settings
 
+        twin = self.env_id.replace("Step-v", "-v")
+        if self.env_id.startswith("rdmp_gym/") and twin != self.env_id and twin in gym.registry:
+            raise ValueError(f"env_id: {self.env_id} is the step twin of {twin} (one control step per env step, for a "
+                             f"step-based learner of your own); the agents of rdmp-gym run episodic envs: use {twin}")
         wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)   # ValueError naming a setting nobody takes
         if self.demo:
             wrapper["demonstration"] = load_demonstration(self.demo)
