@@ -372,26 +372,27 @@ def _parse_run(kind: type[RunCommand], argv: Sequence[str], prog: str
 
 
 def _with_flag_hint(error: ValueError) -> str:
-    """``error``'s message, and where the black-box wrapper's reason names a setting it needs, the flag that gives
-    it (``--env-option NAME VALUE``)."""
+    """``error``'s message, and where its reason (the black-box wrapper's) names a setting of the wrapper, the flag
+    that sets it (``--env-option NAME VALUE``)."""
     from rdmp_gym.envs.blackbox import WRAPPER_SETTINGS
 
-    reason = str(error.__cause__ or "")
-    name = reason.partition(":")[0].strip()
+    name = str(error.__cause__ or error).partition(":")[0].strip()
     if name in WRAPPER_SETTINGS:
-        return f"{error}; give it with --env-option {name} VALUE"
+        return f"{error} (set it with --env-option {name} VALUE)"
     return str(error)
 
 
 def _check_recording(env: Any, env_id: str) -> None:
-    """``--video``: ValueError unless the env records episodes (``record_episode``) and MuJoCo renders here."""
+    """``--video``: ValueError unless the env records episodes (``record_episode``, and ``can_record()`` where the env
+    has that cheap check) and MuJoCo renders here."""
     base = env.unwrapped
     if not callable(getattr(base, "record_episode", None)):
         raise ValueError(f"--video: {env_id} cannot record an episode ({type(base).__name__} has no "
                          f"record_episode); leave out --video")
     can_record = getattr(base, "can_record", None)
-    if callable(can_record):
-        can_record()                                   # the env's own check (ValueError saying why not)
+    if callable(can_record) and not can_record():
+        raise ValueError(f"--video: {env_id} cannot record an episode here (its env renders no RGB frames: "
+                         f"render_mode {getattr(base, 'render_mode', None)!r}); leave out --video")
     import mujoco
 
     try:

@@ -10,7 +10,7 @@ from typing import Any
 import gymnasium as gym
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
 from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
-from rdmp_gym.envs.specs import is_episodic
+from rdmp_gym.envs.specs import env_class, is_episodic
 
 from .episodes import episode_metrics, failure_contexts, run_episode
 from .imitation import load_demonstration
@@ -108,7 +108,9 @@ class TaskSpec:
         """A step-based env under the rhythmic black-box wrapper with its defaults: the wrapper's settings among
         ``env_kwargs`` replace them, the rest go to the env's ``gym.make`` (``demo``: the wrapper's demonstration, in
         the actuated joints); ValueError passing on the wrapper's reason where it cannot drive the env (a discrete
-        action space, a setting it needs)."""
+        action space, a setting it needs). Without ``render_mode``, an env whose class renders RGB frames is made with
+        ``render_mode="rgb_array"``, so that the wrapper can record its episodes (a Gymnasium MuJoCo env renders only
+        when asked: nothing is spent otherwise)."""
         from rdmp_gym.envs.blackbox import make_blackbox, split_settings
 
         twin = self.env_id.replace("Step-v", "-v")
@@ -116,6 +118,10 @@ class TaskSpec:
             raise ValueError(f"env_id: {self.env_id} is the step twin of {twin} (one control step per env step, for a "
                              f"step-based learner of your own); the agents of rdmp-gym run episodic envs: use {twin}")
         wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)   # ValueError naming a setting nobody takes
+        kind = env_class(self.env_id)
+        if render_mode is None and "render_mode" not in env_kwargs and kind is not None \
+                and "rgb_array" in getattr(kind, "metadata", {}).get("render_modes", ()):
+            render_mode = "rgb_array"
         if self.demo:
             wrapper["demonstration"] = load_demonstration(self.demo)
         try:
