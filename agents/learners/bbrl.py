@@ -55,9 +55,10 @@ from typing import Any
 import numpy as np
 import torch
 
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
 from .bbrl_config import BASELINES, CREDITS, BBRLConfig
 from .contextual import SearchSpace, group_factors, select_groups
+from .credit import remaining_steps, step_credit, weighted_ridge
 from .smooth_exploration import smooth_factor, squash, unsquash
 
 __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
@@ -90,11 +91,7 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     episode = cost_weights(cost_advantage(costs, hat, offset[:, 0]), h)
     if traces is None or time_weights is None:
         return episode[None], episode
-    to_go = cost_to_go(costs, traces) - offset                                          # [N, T]
-    per_step = cost_weights((to_go - hat @ to_go).T, h)                                 # [T, N]
-    norm = time_weights.sum(axis=0)                                                     # [n]
-    per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
-    return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
+    return step_credit(costs, traces, h, time_weights, episode[None], hat=hat, offset=offset), episode
 
 
 def pair_hat(n: int) -> np.ndarray:
@@ -296,7 +293,7 @@ class BBRL(Learner):
         if weights.ndim != 2 or weights.shape[1] != self.n_params:
             raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
         if self.config.step_weighting == "remaining":
-            weights = (len(weights) - np.arange(len(weights)))[:, None] * weights
+            weights = remaining_steps(weights)
         return weights[:, self.active]
 
     def _full(self, u: np.ndarray) -> np.ndarray:
@@ -462,11 +459,9 @@ class BBRL(Learner):
         x = np.c_[np.ones(len(contexts)), contexts.numpy()]                             # [N, 1 + o]
         rest = (samples - mean).numpy() + x @ previous.T                                # [N, n]
         weights = np.broadcast_to(weights, (previous.shape[0], len(x)))                 # [n, N]
-        prior = ridge_penalty(x.shape[1], self.config.linear_prior)
-        gram = np.einsum("ik,kf,kg->ifg", weights, x, x) + prior                        # [n, 1 + o, 1 + o]
-        moment = np.einsum("ik,ki,kf->if", weights, rest, x) + previous @ prior         # [n, 1 + o]
+        fit = weighted_ridge(x, weights, rest, previous, self.config.linear_prior, per_dimension=True)
         with torch.no_grad():
-            self.policy.affine.copy_(torch.as_tensor(np.linalg.solve(gram, moment[..., None])[..., 0]))
+            self.policy.affine.copy_(torch.as_tensor(fit))
 
     def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor,
             old_scale: torch.Tensor) -> float:

@@ -40,7 +40,8 @@ from rdmp_gym.validation import check_choice, check_range
 
 from ..config import Settings
 from ..registry import register
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights, ridge_hat
+from .credit import remaining_steps, step_credit, weighted_ridge
 from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = [
@@ -426,8 +427,7 @@ class ContextualSearch(Learner):
             weights = np.asarray(space.time_weights, dtype=np.float64)
             if weights.ndim != 2 or weights.shape[1] != self.n_params:
                 raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
-            steps = weights.shape[0]
-            self.time_weights = (steps - np.arange(steps))[:, None] * weights       # [T, n]
+            self.time_weights = remaining_steps(weights)                            # [T, n]
         self._pending: dict[str, np.ndarray] | None = None
         self._buffer: list[dict[str, np.ndarray]] = []
 
@@ -505,30 +505,21 @@ class ContextualSearch(Learner):
     def _fit(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """``[S, n, F + 1]`` the MAP fits of ``u [N, n]`` on ``x [N, F + 1]`` for ``S`` weightings ``[S, N]``
         (the context-independent dimensions: on the constant alone, their gains stay 0)."""
-        fit = self._regress(u, x, weights, self.gains)
+        fit = weighted_ridge(x, weights, u, self.gains, self.config.gain_prior)
         if np.all(self._context_dependent) or x.shape[1] == 1:
             return fit
-        shared = self._regress(u, x[:, :1], weights, self.gains[:, :1])                 # [S, n, 1]
+        shared = weighted_ridge(x[:, :1], weights, u, self.gains[:, :1], self.config.gain_prior)   # [S, n, 1]
         fit[:, ~self._context_dependent] = 0.0
         fit[:, ~self._context_dependent, :1] = shared[:, ~self._context_dependent]
         return fit
-
-    def _regress(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray, previous: np.ndarray) -> np.ndarray:
-        prior = ridge_penalty(x.shape[1], self.config.gain_prior)
-        gram = np.einsum("sk,kf,kg->sfg", weights, x, x) + prior                 # [S, F+1, F+1]
-        moment = np.einsum("sk,kn,kf->snf", weights, u, x) + previous @ prior    # [S, n, F+1]
-        return np.linalg.solve(gram, np.swapaxes(moment, 1, 2)).swapaxes(1, 2)
 
     def _pi2_fit(self, data: dict[str, np.ndarray], episode_fit: np.ndarray) -> np.ndarray:
         """Per-step weighted fits averaged over time with ``(T - t) · activation``; ``[n, F + 1]``."""
         assert self.time_weights is not None
         traces = np.concatenate([b["traces"] for b in self._buffer])                     # [N, T]
-        to_go = cost_to_go(data["costs"], traces)                                       # [N, T]
-        advantage = to_go - ridge_hat(data["x"], self.config.gain_prior) @ to_go
-        per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
-        norm = self.time_weights.sum(axis=0)                                              # [n]
-        averaged = np.einsum("tn,tnf->nf", self.time_weights, per_step) / np.where(norm > 0, norm, 1.0)[:, None]
-        return np.where((norm > 0)[:, None], averaged, episode_fit)
+        return step_credit(data["costs"], traces, self.config.h, self.time_weights, episode_fit,
+                           hat=ridge_hat(data["x"], self.config.gain_prior),
+                           per_step=lambda weights: self._fit(data["u"], data["x"], weights))   # [T, n, F+1] fits
 
     def _adapt(self, weights: np.ndarray, noise: np.ndarray) -> None:
         rate = self.config.adapt_rate
