@@ -153,7 +153,7 @@ def make_controller(controller: str | TrackingController, n_joints: int, n_actio
         if p_gains is None:
             raise ValueError("p_gains: the 'pd' controller needs its position gains (action units per joint unit) and "
                              "the env has no MuJoCo motors to derive them from; pass p_gains=... (a number or one per "
-                             "joint; on the command line --env-option p_gains VALUE)")
+                             "joint)")
         return PDController(check_gains(p_gains, n_joints, "p_gains"),
                             check_gains(0.0 if d_gains is None else d_gains, n_joints, "d_gains"))
     if d_gains is not None:
