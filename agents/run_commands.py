@@ -432,8 +432,7 @@ def _train_or_resume(command: RunCommand, config: TrainConfig, saved: TrainConfi
 
 def command_train(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(TrainCommand, argv, "rdmp-gym train")
-    _setup(command)
-    _check_task(config.task, command.video)
+    _setup(command, config.task)
     run = _train_or_resume(command, config, saved)
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
@@ -444,9 +443,7 @@ def command_train(argv: Sequence[str]) -> None:
 
 def command_evaluate(argv: Sequence[str]) -> None:
     command = parse_evaluate(argv)
-    _setup(command)
-    if command.video:
-        _check_task(load_run_config(RunDirectory(command.run)).task, video=True)
+    _setup(command, load_run_config(RunDirectory(command.run)).task if command.video else None)
     result = evaluate_run(command.run, command.episodes, workers=command.workers, policy=command.policy,
                           video=command.video, progress=True, backend=command.backend,
                           ray_address=command.ray_address)
@@ -523,8 +520,7 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
 
 def command_main(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(MainCommand, argv, "rdmp-gym main")
-    _setup(command)
-    _check_task(config.task, command.video)
+    _setup(command, config.task)
     out = Path(command.out)
     out.mkdir(parents=True, exist_ok=True)
     print("[1/4] imitation: the env's rhythmic DMP fitted to the demonstration (the start of training)")
@@ -551,12 +547,13 @@ def command_main(argv: Sequence[str]) -> None:
     print(f"wrote {out / 'summary.json'}, {out / 'fit.png'}, {run.curve_png}, {run.path / 'evaluation.png'}")
 
 
-def _setup(command: Any) -> None:
-    """Logging, the headless-video check and one torch thread per process (where torch is installed)."""
+def _setup(command: Any, task: TaskSpec | None) -> None:
+    """Logging, the checks of ``task`` before any work (:func:`_check_task`; None: none) and one torch thread per
+    process (where torch is installed; imported after the checks, so that a refusal is quick)."""
     logging.basicConfig(level=logging.INFO if command.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    if getattr(command, "video", False) and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
-        raise ValueError("--video: no display; run with MUJOCO_GL=egl (or osmesa) set in the environment")
+    if task is not None:
+        _check_task(task, command.video)
     try:
         import torch  # optional: only the torch learners need it
     except ModuleNotFoundError:

@@ -5,7 +5,9 @@ env train, resume and evaluate, and ``--video`` is refused before any work where
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import io
 import json
 
 import gymnasium as gym
@@ -123,18 +125,46 @@ def test_an_env_is_told_episodic_or_step_based_by_its_class():
 
 
 # ------------------------------------------------------------------ runs
+def _run_cli(argv: list[str]) -> tuple[int, str]:
+    """``cli.main(argv)`` and what it printed (for the module's fixtures, which capsys does not reach)."""
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = cli.main(argv)
+    return code, printed.getvalue()
+
+
+@pytest.fixture(scope="module")
+def tracking_run(tmp_path_factory):
+    """A finished one-update run on the tracking task (an env that cannot record episodes)."""
+    out = tmp_path_factory.mktemp("tracking") / "run"
+    assert _run_cli(["train", "--out", str(out), *TINY_TRACKING])[0] == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def pendulum_run(tmp_path_factory):
+    """InvertedPendulum-v5 (a Gymnasium env, under the black-box wrapper) trained for one update from the command
+    line, and what the command printed."""
+    out = tmp_path_factory.mktemp("pendulum") / "run"
+    code, printed = _run_cli(["train", "--agent", "cmaes", "--env", "InvertedPendulum-v5", "--updates", "1",
+                              "--rollouts", "2", "--workers", "1", "--env-option", "duration", "1.0",
+                              "--env-option", "p_gains", "1.0", "--out", str(out)])
+    assert code == 0
+    return out, printed
+
+
 def test_video_is_refused_before_any_run_directory_is_written(tmp_path, capsys):
-    out = tmp_path / "run"
-    assert cli.main(["train", "--out", str(out), "--video", *TINY_TRACKING]) == 2
+    assert cli.main(["train", "--out", str(tmp_path / "run"), "--video", *TINY_TRACKING]) == 2
     assert "--video: rdmp_gym/DMPTracking-v0 cannot record an episode" in capsys.readouterr().err
-    assert not out.exists()
+    assert not (tmp_path / "run").exists()
     assert cli.main(["main", "--out", str(tmp_path / "main"), "--video", *TINY_TRACKING]) == 2
     assert not (tmp_path / "main").exists()
-    assert cli.main(["train", "--out", str(out), *TINY_TRACKING]) == 0
-    capsys.readouterr()
-    assert cli.main(["evaluate", str(out), "--episodes", "1", "--workers", "1", "--video"]) == 2
+
+
+def test_video_is_refused_before_the_evaluation(tracking_run, capsys):
+    assert cli.main(["evaluate", str(tracking_run), "--episodes", "1", "--workers", "1", "--video"]) == 2
     assert "cannot record an episode" in capsys.readouterr().err
-    assert not (out / "evaluation.json").exists()
+    assert not (tracking_run / "evaluation.json").exists()
 
 
 def test_a_users_env_with_a_class_entry_point_trains_and_evaluates(tmp_path, capsys):
@@ -149,21 +179,29 @@ def test_a_users_env_with_a_class_entry_point_trains_and_evaluates(tmp_path, cap
     assert json.loads((out / "evaluation.json").read_text())["episodes"] == 2
 
 
-def test_a_wrapped_gymnasium_env_trains_resumes_and_evaluates(tmp_path, capsys):
-    out = tmp_path / "pendulum"
-    tiny = ["--agent", "cmaes", "--env", "InvertedPendulum-v5", "--rollouts", "2", "--workers", "1",
-            "--env-option", "duration", "1.0", "--env-option", "p_gains", "1.0", "--out", str(out)]
-    assert cli.main(["train", "--updates", "1", *tiny]) == 0
-    assert "return" in capsys.readouterr().out
+def test_a_wrapped_gymnasium_env_trains_from_the_command_line(pendulum_run):
+    out, printed = pendulum_run
+    assert "return" in printed
+    config = json.loads((out / "config.json").read_text())
+    assert config["env_id"] == "InvertedPendulum-v5" and config["env_kwargs"] == {"duration": 1.0, "p_gains": 1.0}
+
+
+def test_a_wrapped_gymnasium_env_resumes_with_its_env_options(pendulum_run, capsys):
+    out, _ = pendulum_run
     assert cli.main(["train", "--agent", "cmaes", "--out", str(out), "--resume", "--updates", "2"]) == 0
-    assert len((out / "log.jsonl").read_text().splitlines()) == 3          # updates 0, 1, 2
+    assert [json.loads(line)["update"] for line in (out / "log.jsonl").read_text().splitlines()] == [0, 1, 2]
     assert json.loads((out / "config.json").read_text())["env_kwargs"] == {"duration": 1.0, "p_gains": 1.0}
     capsys.readouterr()
-    assert cli.main(["train", "--out", str(out), "--resume", "--agent", "cmaes", "--env-option", "duration",
-                     "0.8"]) == 2
+    assert cli.main(["train", "--agent", "cmaes", "--out", str(out), "--resume", "--updates", "2",
+                     "--env-option", "duration", "0.8"]) == 2
     assert "--env-option duration" in capsys.readouterr().err        # a resumed run keeps its env settings
+
+
+def test_a_wrapped_gymnasium_env_evaluates_from_the_command_line(pendulum_run, capsys):
+    out, _ = pendulum_run
     assert cli.main(["evaluate", str(out), "--episodes", "2", "--workers", "1"]) == 0
     assert "return" in capsys.readouterr().out
+    assert json.loads((out / "evaluation.json").read_text())["episodes"] == 2
 
 
 def test_a_setting_the_wrapper_refuses_names_the_env_option_that_sets_it(tmp_path, capsys):
