@@ -127,7 +127,7 @@ MODEL_RULES: dict[str, float] = {"full_command_error": 0.1, "stability": 0.5, "a
 _G0 = 9.81
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ModelDefaults:
     """The wrapper's settings derived from a MuJoCo model, per actuated joint (``[d]``, in the action's order).
 
@@ -211,14 +211,8 @@ def model_defaults(env: Any, joints: Any, dt: float) -> ModelDefaults:
     inertia = _effective_inertia(model, data)[joints.dof_adr]
     force = model.actuator_gear[:, 0] * model.actuator_gainprm[:, 0]
     controller, why = _controller(model)
-    p_gains = d_gains = None
-    if controller == "pd":
-        space = env.action_space
-        half = np.where(np.isfinite(space.high - space.low), (space.high - space.low) / 2.0, np.inf)
-        stiffness = np.minimum(np.abs(force) * half / (MODEL_RULES["full_command_error"] * joint_range),
-                               inertia * (MODEL_RULES["stability"] / dt) ** 2)
-        p_gains = stiffness / np.abs(force)
-        d_gains = 2.0 * np.sqrt(stiffness * inertia) / np.abs(force)
+    p_gains, d_gains = _pd_gains(env.action_space, np.abs(force), joint_range, inertia, dt) if controller == "pd" \
+        else (None, None)
     passive = _passive_joints(model)
     natural = 2.0 * np.pi * np.sqrt(length / _G0)
     hold = bool(passive)
@@ -226,6 +220,17 @@ def model_defaults(env: Any, joints: Any, dt: float) -> ModelDefaults:
     period = natural * (MODEL_RULES["hold_periods"] if hold else 1.0)
     return ModelDefaults(controller, why, p_gains, d_gains, posture, amplitude, float(period), inertia,
                          np.abs(force), joint_range, float(length), passive)
+
+
+def _pd_gains(space: Any, force: np.ndarray, joint_range: np.ndarray, inertia: np.ndarray, dt: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """``[d]`` p and d gains (action units): the stiffness of the full command at ``full_command_error`` of the
+    range, capped for the sampled loop's stability, critically damped (see :func:`model_defaults`)."""
+    width = np.asarray(space.high, dtype=np.float64) - np.asarray(space.low, dtype=np.float64)
+    half = np.where(np.isfinite(width), width / 2.0, np.inf)
+    stiffness = np.minimum(force * half / (MODEL_RULES["full_command_error"] * joint_range),
+                           inertia * (MODEL_RULES["stability"] / dt) ** 2)
+    return stiffness / force, 2.0 * np.sqrt(stiffness * inertia) / force
 
 
 def _effective_inertia(model: Any, data: Any) -> np.ndarray:
