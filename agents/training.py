@@ -2,7 +2,7 @@
 
 An agent does one update per call of ``train_update`` (``rollouts`` training episodes) and maps
 context observations to actions with ``policy_actions``. :class:`ESAgent` wraps the ask/tell learners
-(PI², PI^BB, CMA-ES); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
+(PI², CMA-ES, the contextual learners); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
 
 Seeds: the run seed makes a ``SeedSequence`` whose children drive the learner, the training episodes'
 reset seeds (drawn from ``[0, 2**30)``), the perturbed start and the contexts that standardise a

@@ -201,7 +201,7 @@ def inventory() -> dict[str, Any]:
     """Per agent and option: the runs, env ids and values of the committed results, and the scripts that set it."""
     cited, scripts = cited_results(), script_settings()
     table: dict[str, Any] = {}
-    all_uses = uses()
+    all_uses = [use for use in uses() if use.agent in REGISTRY]
     for name, spec in REGISTRY.items():
         defaults = spec.config().to_dict()
         mine = [use for use in all_uses if use.agent == name]
@@ -227,19 +227,22 @@ def inventory() -> dict[str, Any]:
             _add(runs.setdefault(use.source, {"env_ids": [], "cited": use.source in cited})["env_ids"], use.env_id)
         for entry in runs.values():
             entry["kinds"] = sorted({_kind(env_id) for env_id in entry["env_ids"]})
-        table[name] = {"kind": spec.kind, "runs": runs, "options": options, "unknown_in_results": retired}
+        table[name] = {"kind": spec.kind, "runs": runs, "options": options, "fixed": spec.config.fixed_values(),
+                       "unknown_in_results": retired}
     return table
 
 
 def counts(table: dict[str, Any]) -> dict[str, Any]:
     """Agents, option fields and distinct option names: registered, and those some committed run used."""
     fields = [(agent, name) for agent, entry in table.items() for name in entry["options"]]
+    unregistered = sorted({use.agent for use in uses()} - set(REGISTRY))
     used_agents = [agent for agent, entry in table.items() if entry["runs"]]
     set_fields = [(a, n) for a, n in fields if table[a]["options"][n]["use"] == "set"]
     return {"agents": len(table), "option_fields": len(fields), "option_names": len({n for _, n in fields}),
             "agents_in_results": len(used_agents), "option_fields_set_in_results": len(set_fields),
             "option_names_set_in_results": len({n for _, n in set_fields}),
-            "agents_in_no_result": sorted(set(table) - set(used_agents))}
+            "agents_in_no_result": sorted(set(table) - set(used_agents)),
+            "unregistered_agents_in_results": unregistered}
 
 
 def _print(table: dict[str, Any]) -> None:
@@ -257,8 +260,9 @@ def _print(table: dict[str, Any]) -> None:
             print(f"| {agent} | {name} | {json.dumps(option['default'])} | {option['use']} | {where} | "
                   f"{', '.join(option['scripts'])} |")
         for name, sources in entry["unknown_in_results"].items():
-            print(f"| {agent} | {name} (not an option now) | | in results | "
-                  f"{'; '.join(f'{s}: {v}' for s, v in sources.items())} | |")
+            fixed = f"fixed at {json.dumps(entry['fixed'][name])}" if name in entry["fixed"] else "unknown"
+            values = sorted({json.dumps(v) for found in sources.values() for v in found})
+            print(f"| {agent} | {name} (not an option) | | {fixed} | {len(sources)} results: {', '.join(values)} | |")
 
 
 def main() -> None:

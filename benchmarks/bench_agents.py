@@ -72,7 +72,7 @@ METRICS = ("success", "coverage", "jerk_ratio", "returns")
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--agents", nargs="+",
-                        default=["creps", "cpibb", "cpi2", "pibb", "cmaes", "ppo", "amplitude", "random"],
+                        default=["creps", "cpibb", "cpi2", "cmaes", "ppo", "amplitude", "random"],
                         help="learners, or LABEL=LEARNER to run one learner under a second name with its own "
                              "--option LABEL.KEY=VALUE settings")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")

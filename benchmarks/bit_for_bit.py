@@ -25,7 +25,7 @@ import numpy as np
 
 GROUPS = ("fits", "envs", "learners")
 RESET_SEEDS = (7000, 7003, 7010, 7021)
-LEARNERS = ("pi2", "cpi2", "pibb", "creps", "cmaes", "bbrl")
+LEARNERS = ("pi2", "cpi2", "creps", "cmaes", "bbrl")
 #: the log columns a learner run is compared on: the counters, the returns, success and validity of the rollouts and
 #: of the policy on the validation contexts, and the wiping task's coverage (columns a refactor may add or rename
 #: beside them do not change the digest)

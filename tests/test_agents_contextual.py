@@ -76,8 +76,8 @@ def test_bounded_samples_stay_in_the_box_and_the_update_finds_an_optimum_near_a_
     assert np.all(np.abs(a) < 1.0) and np.all(np.diff(a) > 0)               # monotone into the open box
     np.testing.assert_allclose(squash(np.array([-0.3, 0.5, 0.8])), [-0.3, 0.5, 0.8])   # identity inside
     np.testing.assert_allclose(unsquash(a), u, atol=1e-9)
-    history, asked, learner = _toy("creps", lambda s: np.full((len(s), N), 0.7), updates=50, contextual=False,
-                                   length=0.0, sigma=0.6)
+    history, asked, learner = _toy("amplitude", lambda s: np.full((len(s), N), 0.7), updates=50, groups=[],
+                                   sigma=0.6)                           # REPS with one θ for all contexts
     assert np.all(np.abs(asked) <= 1.0)
     assert np.max(np.abs(learner.mean - 0.7)) < 0.05                          # no pull toward 0 or toward the face
     assert history[-1] > -0.01
@@ -85,7 +85,7 @@ def test_bounded_samples_stay_in_the_box_and_the_update_finds_an_optimum_near_a_
 
 def test_contextual_reps_solves_a_contextual_quadratic_far_better_than_a_shared_theta():
     contextual, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01)
-    shared, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01, contextual=False)
+    shared, _, _ = _toy("amplitude", _contextual_target, gain_prior=0.01, groups=[])    # REPS, one θ
     best_shared = -np.sum(GAINS**2) / 3                                        # the best single θ's expected loss
     assert contextual[-1] > 0.3 * best_shared                                  # < 30 % of the best shared loss
     assert shared[-1] < 0.7 * best_shared
@@ -157,8 +157,11 @@ def test_contextual_learner_rejects_bad_input():
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"groups": "transient"}, space=_space())
     with pytest.raises(ValueError, match="space"):
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0))
-    with pytest.raises(ValueError, match="weighting"):
-        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"weighting": "ppo"}, space=_space())
+    with pytest.raises(ValueError, match=r"creps\.weighting: not an option of creps, which always runs with "
+                                         r"weighting = 'reps'"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"weighting": "pi2"}, space=_space())
+    with pytest.raises(ValueError, match=r"sigma"):                  # above the exploration's ceiling
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"sigma": 0.7}, space=_space())
 
 
 def test_amplitude_baseline_moves_only_the_amplitude():
@@ -287,10 +290,15 @@ def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_th
     assert TrainConfig.from_dict(old).options.sigma_factors == {"approach": 3.0}  # a config.json of earlier versions
     with pytest.raises(TypeError, match=r"cpi2\.sigma"):
         TrainConfig(agent="cpi2", options={"sigma": "big"})
+    fixed = {"weighting": "pi2", "contextual": True, "random_returns": False, "max_sigma": 0.6}
+    saved = {**config.to_dict(), "options": {**config.options.to_dict(), **fixed}}
+    assert TrainConfig.from_dict(saved) == config                                # what cpi2 always runs with
+    with pytest.raises(ValueError, match=r"cpi2\.max_sigma"):
+        TrainConfig.from_dict({**saved, "options": {**saved["options"], "max_sigma": 0.4}})
 
 
-def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
-    """With ``replay=0.5`` half of the second update's rollouts revisit contexts of the first (tracking task)."""
+def test_bbrl_antithetic_pairs_share_their_contexts_on_a_task():
+    """With ``antithetic`` the training loop runs every reset seed twice in a row (tracking task)."""
     from rdmp_gym.agents.pool import Evaluator
     from rdmp_gym.agents.protocol import context_observations
     from rdmp_gym.agents.tasks import TaskSpec
@@ -300,8 +308,9 @@ def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
     with Evaluator(spec, 1) as evaluator:
         space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, np.arange(8), spec.options()))
         n = evaluator.env.action_space.shape[0]
-        learner = make_learner("bbrl", np.zeros(n), 4, np.random.default_rng(0), {"replay": 0.5}, space=space)
+        learner = make_learner("bbrl", np.zeros(n), 4, np.random.default_rng(0), {"antithetic": True}, space=space)
         agent = ESAgent(learner, evaluator, np.random.default_rng(1), shared_context=False)
         first, second = agent.train_update(), agent.train_update()
-    assert np.unique(first.seeds).size == 4
-    assert np.sum(np.isin(second.seeds, first.seeds)) == 2
+    for batch in (first, second):
+        assert np.array_equal(batch.seeds[0::2], batch.seeds[1::2]) and np.unique(batch.seeds).size == 2
+        assert not np.array_equal(batch.actions[0], batch.actions[1])           # mirrored, not repeated

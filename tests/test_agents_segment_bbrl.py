@@ -188,8 +188,6 @@ def test_bad_options_and_inputs_raise_clear_errors():
         _learner(segments=0)
     with pytest.raises(ValueError, match="episode_share"):
         _learner(episode_share=1.5)
-    with pytest.raises(ValueError, match="replay"):
-        _learner(replay=0.2)
     with pytest.raises(ValueError, match="time_weights"):
         make_learner("bbrl_segments", np.zeros(N), 10, np.random.default_rng(0), space=_space(None))
     with pytest.raises(ValueError, match="state"):

@@ -21,22 +21,23 @@ standard deviation per block. Each update keeps the last ``reuse`` batches and w
 The new ``W`` is the weighted maximum-likelihood (MAP) fit ``argmin Σ d_k |u_k - W x_k|² + |(W - W_old) Λ^½|²``,
 where the prior ``Λ = diag(0, gain_prior, ...)`` keeps the gains from following a few samples. Each
 block's standard deviation is adapted by weighted ML of its whitened sampling noise
-(``σ_b² <- (1 - rate) σ_b² + rate Σ d_k |L_b⁻¹ ε_kb|² / m_b``) within ``[min_sigma, max_sigma]``.
+(``σ_b² <- (1 - rate) σ_b² + rate Σ d_k |L_b⁻¹ ε_kb|² / m_b``) within ``[min_sigma, MAX_SIGMA]``.
 The control cost ``control_cost · ½ Σ_b a_bᵀ A_bᵀA_b a_b`` is added to every sample's cost.
-With ``random_returns`` the learner sees standard-normal returns instead (a control: it never sees the
-reward). With ``contextual=False`` the gains stay 0 (one θ for all contexts).
+The weighting, whether the gains are learned and whether the returns are seen are the learner's (its
+registered name's) own: ``creps``, ``cpibb``, ``cpi2``; ``random`` (contextual REPS fed standard-normal returns: a
+control that never sees the reward) and ``amplitude`` (one θ for all contexts, the gains stay 0).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy.optimize import minimize
 
-from rdmp_gym.validation import check_choice, check_range
+from rdmp_gym.validation import check_range
 
 from ..config import Settings
 from ..registry import register
@@ -45,7 +46,7 @@ from .credit import remaining_steps, step_credit, weighted_ridge
 from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = [
-    "WEIGHTINGS",
+    "MAX_SIGMA",
     "AmplitudeConfig",
     "CPI2Config",
     "CPIBBConfig",
@@ -61,13 +62,14 @@ __all__ = [
     "select_groups",
 ]
 
-WEIGHTINGS = ("reps", "pibb", "pi2")
+#: upper bound of each exploration block's standard deviation (times its ``sigma_factors``)
+MAX_SIGMA = 0.6
 _BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
 
 
 @dataclass(frozen=True)
 class ContextualSettings(Settings):
-    """Settings every contextual learner shares (the linear-Gaussian searches here and ``bbrl``).
+    """Settings the contextual learners share (the linear-Gaussian searches here and ``bbrl``).
 
     Attributes:
         sigma: initial per-weight standard deviation (action units).
@@ -76,10 +78,9 @@ class ContextualSettings(Settings):
         h: eliteness of the cost weighting.
         reuse: batches (this one and earlier ones) whose samples enter each update.
         min_sigma: floor of the exploration's standard deviation.
-        groups: the action groups to search (empty = all; e.g. ``["amplitude"]``); the others stay at the start.
         sigma_factors: per-group factors of ``sigma`` and its bounds (e.g. ``{"approach": 3}``: a dimension whose
             effect is only seen far from the imitation, such as a lift that clears an obstacle only near its full
-            height, is explored over its whole range). Choosing groups and factors is task structure.
+            height, is explored over its whole range). Choosing factors is task structure.
     """
 
     sigma: float = 0.3
@@ -88,7 +89,6 @@ class ContextualSettings(Settings):
     h: float = 10.0
     reuse: int = 4
     min_sigma: float = 0.02
-    groups: tuple[str, ...] = ()
     sigma_factors: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -105,11 +105,14 @@ class ContextualSettings(Settings):
 
 @dataclass(frozen=True)
 class ContextualConfig(ContextualSettings):
-    """Settings of :class:`ContextualSearch` (beyond :class:`ContextualSettings`).
+    """Settings of :class:`ContextualSearch` (beyond :class:`ContextualSettings`; ``sigma`` at most
+    :data:`MAX_SIGMA`). The class attributes ``weighting`` (``reps``, ``pibb`` or ``pi2``, see the module docstring),
+    ``contextual`` (learn the gains ``K``; False: one θ for every context) and ``random_returns`` (replace every
+    return by a standard-normal draw) are each learner's own.
 
     Attributes:
-        weighting: ``reps``, ``pibb`` or ``pi2`` (see the module docstring).
-        contextual: learn the gains ``K`` (False: one θ for every context).
+        groups: the action groups to search (empty = all; e.g. ``["amplitude"]``); the others stay at the start.
+            Choosing groups is task structure.
         gain_groups: the searched groups whose actions depend on the context (rows of ``K``);
             the others get one value for every context (``θ̄`` only). Empty = every searched group. Few
             context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
@@ -119,8 +122,6 @@ class ContextualConfig(ContextualSettings):
         control_cost: weight of ``½ aᵀRa`` in the cost.
         gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
         adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
-        max_sigma: upper bound of each block's standard deviation.
-        random_returns: the control: replace every return by a standard-normal draw.
         fourier_features: ``D`` random Fourier features ``√(2/D) cos(Ω φ(s) + b)`` appended to ``φ(s)`` (0 = a
             policy and baselines linear in the context): with them the policy's mean and the cost baselines are
             smooth nonlinear functions of the raw context (``Ω ~ N(0, 1/fourier_length²)``, ``b ~ U[0, 2π)``,
@@ -128,27 +129,31 @@ class ContextualConfig(ContextualSettings):
         fourier_length: length scale of the Fourier features in standardised context units.
     """
 
-    weighting: str = "reps"
-    contextual: bool = True
+    weighting: ClassVar[str] = "reps"
+    contextual: ClassVar[bool] = True
+    random_returns: ClassVar[bool] = False
+    groups: tuple[str, ...] = ()
     gain_groups: tuple[str, ...] = ()
     features: tuple[str, ...] = ()
     control_cost: float = 0.05
     gain_prior: float = 0.3
     adapt_rate: float = 0.5
-    max_sigma: float = 0.6
-    random_returns: bool = False
     fourier_features: int = 0
     fourier_length: float = 1.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_choice(self.weighting, "weighting", WEIGHTINGS)
+        check_range(self.sigma, "sigma", 0.0, MAX_SIGMA, low_open=True)
         check_range(self.fourier_features, "fourier_features", 0, None)
         check_range(self.fourier_length, "fourier_length", 0.0, None, low_open=True)
         check_range(self.control_cost, "control_cost", 0.0, None)
         check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
         check_range(self.adapt_rate, "adapt_rate", 0.0, 1.0)
-        check_range(self.max_sigma, "max_sigma", self.sigma, None)
+
+    @classmethod
+    def fixed_values(cls) -> dict[str, Any]:
+        return {"weighting": cls.weighting, "contextual": cls.contextual, "random_returns": cls.random_returns,
+                "max_sigma": MAX_SIGMA}
 
 
 @dataclass(frozen=True)
@@ -160,29 +165,29 @@ class CREPSConfig(ContextualConfig):
 class CPIBBConfig(ContextualConfig):
     """Contextual PI^BB: episode-level weights over a context-dependent baseline."""
 
-    weighting: str = "pibb"
+    weighting: ClassVar[str] = "pibb"
 
 
 @dataclass(frozen=True)
 class CPI2Config(ContextualConfig):
     """Contextual PI²: per-step weights over per-step context-dependent baselines."""
 
-    weighting: str = "pi2"
+    weighting: ClassVar[str] = "pi2"
 
 
 @dataclass(frozen=True)
 class RandomReturnConfig(ContextualConfig):
     """The random-return control: contextual REPS fed standard-normal returns."""
 
-    random_returns: bool = True
+    random_returns: ClassVar[bool] = True
 
 
 @dataclass(frozen=True)
 class AmplitudeConfig(ContextualConfig):
     """The amplitude-only baseline: one shared θ over the ``amplitude`` group (3 numbers), isotropic."""
 
+    contextual: ClassVar[bool] = False
     groups: tuple[str, ...] = ("amplitude",)
-    contextual: bool = False
     length: float = 0.0
 
 
@@ -528,7 +533,7 @@ class ContextualSearch(Learner):
         variance = weights @ self.noise.whitened_energy(noise)                           # [B]
         updated = np.sqrt((1 - rate) * self.sigmas**2 + rate * variance)
         self.sigmas = np.clip(updated, self.config.min_sigma * self._sigma_factor,
-                              self.config.max_sigma * self._sigma_factor)
+                              MAX_SIGMA * self._sigma_factor)
 
     # ------------------------------------------------------------------ state
     def _extra_state(self) -> dict[str, Any]:

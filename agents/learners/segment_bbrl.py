@@ -29,6 +29,7 @@ import numpy as np
 
 from .base import cost_weights, ridge_hat
 from .bbrl import BBRL, pair_hat
+from .bbrl_config import VALUE_RIDGE
 from .contextual import SearchSpace
 from .segment_bbrl_config import SegmentBBRLConfig
 
@@ -139,6 +140,6 @@ class SegmentBBRL(BBRL):
         if self.starts is None:
             return super()._sample_weights(data, predicted)
         parts = segment_costs(data["costs"], data["traces"], self.starts)
-        return segment_weights(parts, data["contexts"], self.activation, self.config.h, self.config.value_ridge,
+        return segment_weights(parts, data["contexts"], self.activation, self.config.h, VALUE_RIDGE,
                                self.config.episode_share, predicted, paired=self.config.antithetic,
                                common_scale=self.config.scale == "common")

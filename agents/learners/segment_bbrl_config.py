@@ -48,8 +48,6 @@ class SegmentBBRLConfig(BBRLConfig):
         check_range(self.segments, "segments", 1, None)
         check_range(self.episode_share, "episode_share", 0.0, 1.0)
         check_choice(self.scale, "scale", SCALES)
-        if self.replay > 0:
-            raise ValueError("replay: bbrl_segments judges samples per segment and ranks no contexts; use replay = 0")
 
 
 register("bbrl_segments", SegmentBBRLConfig, "rdmp_gym.agents.learners.segment_bbrl:SegmentBBRL", uses_context=True)
