@@ -125,11 +125,12 @@ class RhythmicTaskEnv(gym.Env):
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.frames: list[np.ndarray] = []
         self.record_frames = bool(record_frames)
-        self._faced = True                    # from here on the task's own attributes write through the face
+        #: the episode's context (set by ``reset``; the face's own, also where the task keeps one of that name)
         self.context: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
+        self._faced = True                    # from here on the task's own attributes write through the face
 
     def __getattr__(self, name: str) -> Any:
         """The task's own attribute ``name`` where the face has none (``env.unwrapped.task_version``)."""

@@ -21,9 +21,10 @@ import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from rdmp_gym.agents import report
 from rdmp_gym.agents.callbacks import batch_summary
 from rdmp_gym.agents.cli import main
+from rdmp_gym.agents.episodes import run_episode
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
 from rdmp_gym.agents.plots import plot_policy_comparison
-from rdmp_gym.agents.protocol import context_observations, path_jerk, success
+from rdmp_gym.agents.protocol import context_observations, path_jerk, stratified_validation_seeds, success
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.arena import FORCE, FOUND, NETFORCE, add_contact_sensor
 from rdmp_gym.envs.contract import Metric, contract_of
@@ -135,19 +136,34 @@ def _train_and_evaluate(run: Path, env_id: str) -> str:
     return _run_command(["evaluate", str(run), *EVALUATE])
 
 
+def _unforwarded(self: RhythmicTaskEnv, name: str) -> Any:
+    """The face without its forwarding of the task's attributes (``env.unwrapped.task_version`` and the like)."""
+    raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r} (no forwarding here)")
+
+
 @pytest.fixture(scope="module")
 def drum_run(tmp_path_factory):
     """The drumming task trained and evaluated from the command line, with the face's forwarding of the task's
     attributes switched off: what the tools know of the task comes from its contract alone."""
-
-    def unforwarded(self, name):
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r} (no forwarding here)")
-
     run = tmp_path_factory.mktemp("drum") / "run"
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(RhythmicTaskEnv, "__getattr__", unforwarded)
+        patch.setattr(RhythmicTaskEnv, "__getattr__", _unforwarded)
         printed = _train_and_evaluate(run, DRUM)
     return run, printed
+
+
+def test_what_the_agents_read_of_a_wiping_env_needs_no_forwarding_of_the_task(monkeypatch):
+    monkeypatch.setattr(RhythmicTaskEnv, "__getattr__", _unforwarded)
+    env = gym.make("rdmp_gym/ArmarWipe-v3", cup_clearance=0.01)
+    base, zeros = env.unwrapped, np.zeros(env.action_space.shape)
+    seeds = stratified_validation_seeds(env, 2, pool=4)
+    space = SearchSpace.from_env(env, context_observations(env, seeds))
+    assert "patch_size" in space.context_names and space.context_gate is not None
+    theta = base.action_to_params(zeros)
+    assert base.policy_dmp(theta).period == base.dmp.period and "periodic" in base.param_slices()
+    assert np.isfinite(path_jerk(env, zeros, int(seeds[0])))
+    episode = run_episode(env, zeros, int(seeds[0]), None)
+    assert set(episode["metrics"]) == {"coverage", "force_in_band_fraction"} and episode["success"] is not None
 
 
 def test_the_drumming_evaluation_table_names_the_return_and_the_tasks_metrics(drum_run):
