@@ -1,4 +1,4 @@
-"""rdmp_gym.agents: imitation start, PI²/PI^BB/CMA-ES learners, SB3 PPO, training runs and the CLI.
+"""rdmp_gym.agents: imitation start, PI²/CMA-ES/contextual learners, SB3 PPO, training runs and the CLI.
 
 Main entry points (stable-baselines3/torch are imported only when PPO is used)::
 
@@ -20,8 +20,8 @@ _EXPORTS = {
     "evaluate_run": "report", "record_best_episode": "report",
     "Evaluator": "pool",
     "fit_dmp": "imitation", "load_demonstration": "imitation",
-    **dict.fromkeys(("CMAES", "PI2", "PIBB", "BBRLConfig", "CMAESConfig", "ContextualConfig", "EpisodeBatch", "Learner",
-                     "PI2Config", "PIBBConfig", "make_learner"), "learners"),
+    **dict.fromkeys(("CMAES", "PI2", "BBRLConfig", "CMAESConfig", "ContextualConfig", "EpisodeBatch", "Learner",
+                     "PI2Config", "make_learner"), "learners"),
     "PPOConfig": "sb3_config", "SACConfig": "sb3_config", "Settings": "config", "register": "registry",
     "RunDirectory": "runs",
     "WIPE_ID": "tasks", "TaskSpec": "tasks",

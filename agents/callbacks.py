@@ -42,7 +42,7 @@ from rdmp_gym import save_dmp
 from .errors import NoValidEpisodesError
 from .learners import EpisodeBatch
 from .pool import Evaluator
-from .protocol import success
+from .protocol import defined_mean, success
 from .runs import RunDirectory
 from .train_config import Agent, TrainConfig
 
@@ -153,17 +153,22 @@ def _number(value: float) -> float | None:
     return None if np.isnan(value) else value
 
 
-def _nanmean(values: np.ndarray) -> float:
-    return float(np.mean(values)) if np.all(np.isfinite(values)) else float("nan")
+#: the numbers of :func:`batch_summary` beside the task's metrics (a metric may not take these names)
+_SUMMARY = ("return_mean", "success", "return_best", "valid")
 
 
 def batch_summary(batch: EpisodeBatch, prefix: str) -> dict[str, float | None]:
-    """Mean/best return, mean coverage, force-in-band fraction, success rate and valid fraction of a batch."""
+    """Mean and best return, success rate (None where the env reports no success), valid fraction and the mean of
+    each of the task's metrics over the episodes that have it (keyed by the metric's key, e.g. the wiping task's
+    ``coverage``) of a batch, each key prefixed with ``prefix``."""
+    clash = sorted(set(batch.metrics) & set(_SUMMARY))
+    if clash:
+        raise ValueError(f"batch.metrics: the task's metric keys {clash} are names of the summary {list(_SUMMARY)}")
+    rate = success(batch)
     return {f"{prefix}return_mean": _number(np.mean(batch.returns)),
-            f"{prefix}success": _number(np.mean(success(batch))),
+            f"{prefix}success": None if rate is None else _number(np.mean(rate)),
             f"{prefix}return_best": _number(np.max(batch.returns)),
-            f"{prefix}coverage": _number(_nanmean(batch.coverage)),
-            f"{prefix}force_in_band": _number(_nanmean(batch.force_in_band)),
+            **{f"{prefix}{key}": _number(defined_mean(values)) for key, values in batch.metrics.items()},
             f"{prefix}valid": _number(np.mean(batch.valid))}
 
 
@@ -191,9 +196,10 @@ class EvaluateCallback(Callback):
 
 class BestPolicyCallback(Callback):
     """Keep the best evaluated policy (highest mean validation return; the earlier one on a tie) in ``state.best``
-    and the run directory: ``best_params.npy``, ``best_params.json`` and ``dmp.json``, the env's DMP with the
-    best policy's parameters (core format: ``gym.make(env_id, dmp=path)``, ``rdmp_gym.load_dmp``; envs without
-    a DMP write none). Sets ``best_eval_return`` in every log line."""
+    and the run directory: ``best_params.npy``, ``best_params.json`` and ``dmp.json``, the DMP the env executes for
+    the best policy's parameters (``env.unwrapped.policy_dmp(theta)``; core format: ``gym.make(env_id, dmp=path)``,
+    ``rdmp_gym.load_dmp``; an env without ``policy_dmp`` writes none). Sets ``best_eval_return`` in every log
+    line."""
 
     def on_update(self, state: TrainingState) -> None:
         found, best = state.evaluation, state.best
@@ -202,10 +208,9 @@ class BestPolicyCallback(Callback):
             env = state.evaluator.env.unwrapped
             params = env.action_to_params(found.actions[0])
             state.run.save_best(found.actions[0], params, state.best)
-            if hasattr(env, "policy_dmp"):        # an env whose action holds more than the DMP's groups (a tempo)
-                save_dmp(env.policy_dmp(params), state.run.path / "dmp.json")
-            elif hasattr(env, "dmp") and hasattr(env, "groups"):
-                save_dmp(env.dmp.with_params(params, env.groups), state.run.path / "dmp.json")
+            policy_dmp = getattr(env, "policy_dmp", None)
+            if policy_dmp is not None:
+                save_dmp(policy_dmp(params), state.run.path / "dmp.json")
         state.record["best_eval_return"] = None if state.best is None else state.best["eval_return_mean"]
 
 

@@ -6,13 +6,17 @@ This launcher imports a command's module only when that command runs: ``fit``
 
     rdmp-gym train --out runs/bbrl                      # the main job's learner (bbrl) on the current task
     rdmp-gym train --agent cpi2 --updates 30 --options.sigma 0.2 --out runs/cpi2
+    rdmp-gym train --env-option style 2 --env-option groups '["periodic", "amplitude"]' --out runs/style2
+    rdmp-gym train --agent cmaes --env InvertedPendulum-v5 --out runs/pendulum   # a step-based env, wrapped
     rdmp-gym train --out runs/bbrl --resume --updates 300       # continue (and extend) a run
     rdmp-gym evaluate runs/bbrl --episodes 20 --video   # final policy on the 20 test contexts
     rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
     rdmp-gym main --out runs/main
 
 Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses
-(:class:`~rdmp_gym.agents.run_commands.TrainCommand`, :class:`~rdmp_gym.agents.fit_command.FitCommand`, ...).
+(:class:`~rdmp_gym.agents.run_commands.TrainCommand`, :class:`~rdmp_gym.agents.fit_command.FitCommand`, ...); a
+training run's flags are the fields of :class:`~rdmp_gym.agents.train_config.TrainConfig`, and the env's settings are
+``--env-option KEY VALUE`` pairs (repeatable, JSON values).
 """
 
 from __future__ import annotations

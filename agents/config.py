@@ -4,7 +4,9 @@ Settings are frozen dataclasses whose fields carry their types (lists of group n
 factors are dicts); the command line derives its flags from them (:mod:`rdmp_gym.agents.cli`) and a run saves
 them in ``config.json``. :meth:`Settings.from_dict` reads such a file back: an unknown name or a value of the
 wrong type is an error naming the option; the comma strings that runs of earlier versions saved
-(``"amplitude,approach"``, ``"approach=3"``) are read as the lists and dicts they meant.
+(``"amplitude,approach"``, ``"approach=3"``) are read as the lists and dicts they meant. A name that is not a
+setting but a value the settings fix (:meth:`Settings.fixed_values`) is read where it holds that value, and refused
+with an error naming it where it holds another.
 """
 
 from __future__ import annotations
@@ -63,6 +65,16 @@ def _typed(value: Any, hint: Any, name: str) -> Any:
     return value
 
 
+def _same_value(value: Any, fixed: Any) -> bool:
+    """Whether a saved ``value`` is the ``fixed`` one (a list or comma string for a tuple, an int for a float)."""
+    if isinstance(fixed, tuple):
+        value = _legacy_items(value) if isinstance(value, str) else tuple(value) if isinstance(value, list) else value
+    if isinstance(fixed, bool) or isinstance(value, bool):
+        return value is fixed
+    same_kind = type(value) in (int, float) if isinstance(fixed, float) else type(value) is type(fixed)
+    return same_kind and value == fixed
+
+
 @dataclasses.dataclass(frozen=True)
 class Settings:
     """Base of typed, validated settings that save as a JSON object (subclasses check values in ``__post_init__``)."""
@@ -78,12 +90,22 @@ class Settings:
         """
         what = what or cls.label
         values = dict(values or {})
+        for name, fixed in cls.fixed_values().items():
+            if name in values and not _same_value(value := values.pop(name), fixed):
+                raise ValueError(f"{what}.{name}: not an option of {what}, which always runs with {name} = {fixed!r} "
+                                 f"(got {value!r})")
         fields = {field.name for field in dataclasses.fields(cls)}
         unknown = sorted(set(values) - fields)
         if unknown:
             raise ValueError(f"{what}: unknown option(s) {unknown}; expected some of {sorted(fields)}")
         hints = get_type_hints(cls)
         return cls(**{name: _typed(value, hints[name], f"{what}.{name}") for name, value in values.items()})
+
+    @classmethod
+    def fixed_values(cls) -> dict[str, Any]:
+        """``{name: value}``: names a saved ``config.json`` may hold that are not options here, with the value these
+        settings always run with (:meth:`from_dict` reads such a name at that value and refuses another)."""
+        return {}
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as a JSON-friendly dict (tuples become lists)."""

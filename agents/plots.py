@@ -14,21 +14,37 @@ import numpy as np
 
 from rdmp_gym.signals.filters import smooth_derivatives
 
-__all__ = ["plot_fit", "plot_learning_curve", "plot_policy_comparison", "plot_recording_fit"]
+__all__ = ["COMPARED", "logged_metrics", "plot_fit", "plot_learning_curve", "plot_policy_comparison",
+           "plot_recording_fit"]
 
 
 def _column(records: Sequence[dict[str, Any]], key: str) -> np.ndarray:
     return np.array([np.nan if r.get(key) is None else r[key] for r in records], dtype=np.float64)
 
 
-def plot_learning_curve(records: Sequence[dict[str, Any]], path: str | Path, title: str = "") -> None:
-    """Return, coverage and force-in-band of the policy (and of the rollouts) against training episodes."""
+#: the validation numbers of a log line that are the loop's own, not the task's metrics
+_OWN_EVAL = ("episodes", "return_mean", "return_best", "success", "valid")
+
+
+def logged_metrics(records: Sequence[dict[str, Any]]) -> list[tuple[str, str]]:
+    """``(key, label)`` of the task's metrics a log holds: its ``eval_<key>`` columns other than the loop's own, in
+    the order they first appear, labelled by their keys."""
+    keys = dict.fromkeys(key[5:] for record in records for key in record if key.startswith("eval_"))
+    return [(key, key.replace("_", " ")) for key in keys if key not in _OWN_EVAL]
+
+
+def plot_learning_curve(records: Sequence[dict[str, Any]], path: str | Path, title: str = "",
+                        metrics: Sequence[tuple[str, str]] | None = None) -> None:
+    """The return, the success rate (where the env reports success) and the task's metrics of the policy on the
+    validation contexts (and of the rollouts) against training episodes, from the log ``records``; ``metrics``:
+    ``(key, label)`` of the task's metrics (None: the ``eval_*`` columns of the log that are not the loop's own)."""
     episodes = _column(records, "episodes")
+    chosen = logged_metrics(records) if metrics is None else list(metrics)
     panels = [("return", "eval_return_mean", "return_mean"), ("success rate", "eval_success", "success"),
-              ("coverage", "eval_coverage", "coverage"), ("force in band", "eval_force_in_band", "force_in_band")]
+              *((label, f"eval_{key}", key) for key, label in chosen)]
     panels = [p for p in panels if np.any(np.isfinite(_column(records, p[1])))]
-    figure, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.4), squeeze=False)
-    for axis, (label, policy_key, rollout_key) in zip(axes[0], panels, strict=True):
+    figure, axes = plt.subplots(1, max(len(panels), 1), figsize=(4.2 * max(len(panels), 1), 3.4), squeeze=False)
+    for axis, (label, policy_key, rollout_key) in zip(axes[0], panels, strict=False):
         values = _column(records, policy_key)
         shown = np.isfinite(values)      # the policy is evaluated every eval_every updates
         axis.plot(episodes[shown], values[shown], "o-", ms=3, label="policy (validation contexts)")
@@ -38,7 +54,8 @@ def plot_learning_curve(records: Sequence[dict[str, Any]], path: str | Path, tit
         axis.set_xlabel("training episodes")
         axis.set_ylabel(label)
         axis.grid(alpha=0.3)
-    axes[0][0].legend(fontsize=8)
+    if panels:
+        axes[0][0].legend(fontsize=8)
     figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
@@ -99,41 +116,75 @@ def plot_recording_fit(t: np.ndarray, recording: np.ndarray, reproduce, path: st
     plt.close(figure)
 
 
+def _draw_path(axis: Any, values: np.ndarray, colour: str, labels: Sequence[str], dt: float,
+               limits: tuple[np.ndarray, np.ndarray]) -> None:
+    """One policy's path ``[T, 1]`` against time (``dt`` s per step) or ``[T, 2]``, one column against the other;
+    ``labels``: the columns' names; ``limits``: their (low, high), shared by every policy's panel."""
+    low, high = limits
+    margin = 0.05 * float(np.max(high - low)) or 1e-3
+    if values.shape[1] == 1:
+        axis.plot(dt * np.arange(len(values)), values[:, 0], color=colour, lw=0.8)
+        axis.set_ylim(low[0] - margin, high[0] + margin)
+        axis.set_xlabel("t (s)")
+        axis.set_ylabel(labels[0])
+        return
+    axis.plot(values[:, 0], values[:, 1], color=colour, lw=0.8)
+    axis.plot(values[0, 0], values[0, 1], "ko", ms=4)
+    axis.set_xlim(low[0] - margin, high[0] + margin)
+    axis.set_ylim(low[1] - margin, high[1] + margin)
+    axis.set_aspect("equal")
+    axis.set_xlabel(labels[0])
+    axis.set_ylabel(labels[1])
+
+
+def _drawn_columns(paths: Sequence[np.ndarray]) -> list[int]:
+    """The (at most two) columns of the paths ``[T, d]`` that move the most over all of them, in column order."""
+    spread = np.nanmax([np.ptp(values, axis=0) for values in paths], axis=0)
+    return sorted(int(i) for i in np.argsort(-spread, kind="stable")[:2])
+
+
+#: what :func:`plot_policy_comparison` shows below the paths by default: ``(interval key, label)``
+COMPARED = (("success", "success rate"), ("jerk_ratio", "jerk / imitation"))
+
+
 def plot_policy_comparison(paths: dict[str, np.ndarray], summaries: dict[str, dict[str, Any]], path: str | Path,
-                           title: str = "") -> None:
-    """Sponge paths ``[T, >=2]`` of named policies side by side (same axes), then their success rate,
-    coverage and jerk ratio with 95 % intervals (``summaries[name]["intervals"][metric]``)."""
-    figure, axes = plt.subplots(1, len(paths) + 1, figsize=(4.2 * (len(paths) + 1), 4))
-    points = np.concatenate([p[:, :2] for p in paths.values()])
-    low, high = points.min(axis=0), points.max(axis=0)
-    margin = 0.05 * float(np.max(high - low))
-    for index, (axis, (name, values)) in enumerate(zip(axes[:-1], paths.items(), strict=True)):
-        axis.plot(values[:, 0], values[:, 1], color=f"C{index}", lw=0.8)
-        axis.plot(values[0, 0], values[0, 1], "ko", ms=4)
-        axis.set_xlim(low[0] - margin, high[0] + margin)
-        axis.set_ylim(low[1] - margin, high[1] + margin)
-        axis.set_aspect("equal")
+                           title: str = "", quantities: Sequence[tuple[str, str]] = COMPARED,
+                           labels: Sequence[str] = ("x", "y", "z"), dt: float = 1.0) -> None:
+    """The executed paths ``[T]`` or ``[T, d]`` of named policies side by side on the same axes (``d >= 2``: the two
+    columns that move the most, one against the other, named by ``labels``; one column: against time, ``dt`` s per
+    step), and below them one panel per quantity ``(key, label)`` with each policy's mean and 95 % interval
+    (``summaries[name]["intervals"][key]``; a quantity no policy has is left out)."""
+    paths = {name: np.asarray(values, dtype=np.float64).reshape(len(values), -1) for name, values in paths.items()}
+    if not paths or len({values.shape[1] for values in paths.values()}) != 1:
+        raise ValueError(f"paths: expected paths [T] or [T, d] of one d, got shapes "
+                         f"{[values.shape for values in paths.values()]}")
+    columns = _drawn_columns(list(paths.values()))
+    names = [labels[i] if i < len(labels) else str(i) for i in columns]
+    paths = {name: values[:, columns] for name, values in paths.items()}
+    drawn = np.concatenate(list(paths.values()))
+    limits = (np.nanmin(drawn, axis=0), np.nanmax(drawn, axis=0))
+    shown = [(key, label) for key, label in quantities
+             if any(summary["intervals"].get(key) is not None for summary in summaries.values())]
+    figure = plt.figure(figsize=(4.2 * max(len(paths), len(shown), 1), 7.6))
+    top, bottom = figure.subfigures(2, 1, height_ratios=(1.1, 1.0))
+    path_axes = top.subplots(1, max(len(paths), 1), squeeze=False)[0]
+    for index, (axis, (name, values)) in enumerate(zip(path_axes, paths.items(), strict=False)):
+        _draw_path(axis, values, f"C{index}", names, dt, limits)
         axis.set_title(name, fontsize=10)
-        axis.set_xlabel("x (m)")
-        axis.set_ylabel("y (m)")
         axis.grid(alpha=0.3)
-    bars = axes[-1]
-    keys = ("success", "coverage", "jerk_ratio")
-    width = 0.8 / max(len(summaries), 1)
-    for index, (name, summary) in enumerate(summaries.items()):
-        found = [summary["intervals"].get(key) for key in keys]
-        heights = [np.nan if f is None else f["estimate"] for f in found]
-        errors = np.array([[0.0, 0.0] if f is None else [f["estimate"] - f["low"], f["high"] - f["estimate"]]
-                           for f in found]).T
-        bars.bar(np.arange(len(keys)) + index * width, heights, width, yerr=errors, capsize=3, label=name,
-                 color=f"C{index}")
-    bars.set_xticks(np.arange(len(keys)) + 0.4 - width / 2, ["success rate", "coverage", "jerk / imitation"],
-                    fontsize=8)
-    bars.axhline(1.0, color="k", lw=0.6, ls=":")
-    bars.grid(alpha=0.3, axis="y")
-    bars.legend(fontsize=8)
-    bars.set_title("test contexts: mean, 95 % CI", fontsize=10)
-    figure.suptitle(title)
-    figure.tight_layout()
+    bar_axes = bottom.subplots(1, max(len(shown), 1), squeeze=False)[0]
+    for axis, (key, label) in zip(bar_axes, shown, strict=False):
+        for index, summary in enumerate(summaries.values()):
+            found = summary["intervals"].get(key)
+            if found is not None:
+                error = [[found["estimate"] - found["low"]], [found["high"] - found["estimate"]]]
+                axis.bar(index, found["estimate"], 0.7, yerr=error, capsize=3, color=f"C{index}")
+        axis.set_xticks(range(len(summaries)), list(summaries), fontsize=8)
+        axis.set_title(label, fontsize=10)
+        axis.grid(alpha=0.3, axis="y")
+        if key == "jerk_ratio":
+            axis.axhline(1.0, color="k", lw=0.6, ls=":")
+    figure.suptitle(f"{title}\n(below: the test contexts' mean with its 95 % CI)" if title
+                    else "the test contexts' mean with its 95 % CI", fontsize=10)
     figure.savefig(path, dpi=110)
     plt.close(figure)

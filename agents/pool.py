@@ -29,10 +29,12 @@ from types import TracebackType
 from typing import Any, Protocol
 
 import numpy as np
+from rdmp_gym.envs.contract import TaskContract, contract_of
 
+from .episodes import episode_batch, run_episode
 from .errors import WorkerError
 from .learners.base import EpisodeBatch
-from .tasks import TaskSpec, run_episode
+from .tasks import TaskSpec
 
 __all__ = ["BACKENDS", "WATCHDOG_PERIOD", "Evaluator", "WorkerError", "run_episode"]
 
@@ -99,7 +101,8 @@ class Evaluator:
         ray_address: the Ray cluster to join (``ray`` backend); default ``RAY_ADDRESS``, else a new local
             Ray instance with ``workers`` CPUs.
 
-    ``env`` (built here too) gives the spaces, ``action_time_weights()`` and parameter mapping.
+    ``env`` (built here too) gives the spaces, ``action_time_weights()``, the parameter mapping and the task's
+    :attr:`contract`.
     Use as a context manager, or call :meth:`close`.
     """
 
@@ -128,6 +131,12 @@ class Evaluator:
             raise
 
     @property
+    def contract(self) -> TaskContract:
+        """The task's contract (:func:`rdmp_gym.envs.contract.contract_of` of :attr:`env`): what the batches, logs and
+        reports may know of the task."""
+        return contract_of(self.env)
+
+    @property
     def n_actions(self) -> int:
         """Dimension of the action space."""
         return int(self.env.action_space.shape[0])
@@ -144,18 +153,7 @@ class Evaluator:
             results = [run_episode(self.env, a, s, self.spec.options()) for a, s in zip(actions, seeds, strict=True)]
         else:
             results = self._pool.map(actions, seeds.tolist())
-        lengths = {r["cost_trace"].size for r in results}
-        if len(lengths) != 1:
-            raise ValueError(f"info['cost_trace']: episodes returned different lengths {sorted(lengths)}")
-        return EpisodeBatch(actions=actions, returns=np.array([r["return"] for r in results]),
-                            cost_traces=np.stack([r["cost_trace"] for r in results]),
-                            coverage=np.array([r["coverage"] for r in results]),
-                            force_in_band=np.array([r["force_in_band"] for r in results]),
-                            valid=np.array([r["valid"] for r in results]), seeds=seeds,
-                            success=None if any(r["success"] is None for r in results)
-                            else np.array([r["success"] for r in results]),
-                            failures=None if any(r["failures"] is None for r in results)
-                            else np.array([r["failures"] for r in results]))
+        return episode_batch(actions, results, seeds, self.contract)
 
     def close(self) -> None:
         """Stop the workers and close the environment."""

@@ -6,12 +6,14 @@ seeds above that, disjoint from each other and from training:
 
     validation_seeds(n) = 2**30 + 500_000 + [0, n)        final_test_seeds(n) = 2**30 + [0, n)
 
-Success of an episode: ``info["is_success"]`` where the env gives it; otherwise (ArmarWipe-v0) the same
-definition, coverage >= 0.95 and force in band >= 0.9 of the wiping time and a valid (simulated) plan.
+What the protocol knows of a task it reads through the task's contract (:func:`rdmp_gym.envs.contract.contract_of`).
 
-Smoothness: the integrated squared jerk ``∫ |d³y/dt³|² dt`` of the commanded path (the env's
-``rollout_path`` at its control rate, third finite differences) relative to the imitation's in the same
-context.
+Success of an episode: ``info["is_success"]`` where the env reports it (its contract's ``has_success``); none is
+made up where it does not (a task without success has no success rate).
+
+Smoothness: the contract's measure of the executed path (the env's ``executed_path(action)`` at the contract's
+``dt``): the integrated squared jerk ``∫ |d³y/dt³|² dt`` (third finite differences), or per integrated squared
+speed (``speed_normalised_jerk``), relative to the imitation's in the same context.
 
 Aggregates: the interquartile mean (``scipy.stats.trim_mean(x, 0.25)``) with a 95 % percentile
 bootstrap interval (``scipy.stats.bootstrap``). ``rliable`` computes the same thing (its IQM is
@@ -22,10 +24,12 @@ deprecate_kwarg()``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from rdmp_gym.envs.contract import contract_of
 from rdmp_gym.envs.smoothness import Smoothness
 from scipy import stats
 
@@ -34,12 +38,11 @@ from rdmp_gym.synthetic.smoothness import integrated_squared_jerk
 from .learners.base import EpisodeBatch
 
 __all__ = [
-    "COVERAGE_TARGET",
-    "FORCE_TARGET",
     "TRAIN_SEED_LIMIT",
     "Interval",
     "PolicyScores",
     "context_observations",
+    "defined_mean",
     "evaluate_actions",
     "final_test_seeds",
     "interval",
@@ -50,7 +53,6 @@ __all__ = [
     "validation_seeds",
 ]
 
-COVERAGE_TARGET, FORCE_TARGET = 0.95, 0.90
 TRAIN_SEED_LIMIT = 2**30
 _VALIDATION_OFFSET = 500_000
 
@@ -75,14 +77,14 @@ def stratified_validation_seeds(env: Any, n: int, options: dict[str, Any] | None
                                 ) -> np.ndarray:
     """``[n]`` validation reset seeds spread evenly over the kinds of context the env names.
 
-    The env's ``context_kind(observation) -> str`` (e.g. the wiping task's cup on the approach, cup beside the
+    The contract's ``context_kind(observation) -> str`` (e.g. the wiping task's cup on the approach, cup beside the
     patch, largest patch, no cup) sorts the first ``pool`` seeds of the validation range; the seeds are then taken
     from each kind in turn (kinds in the order they first appear, seeds in order), so a rare kind is represented
     as often as a common one. The choice depends on the env's contexts alone: it is made before any run and never
-    touches the test seeds. An env without ``context_kind`` gives :func:`validation_seeds`.
+    touches the test seeds. A task that sorts its contexts into no kinds gives :func:`validation_seeds`.
     """
     count = _count(n, "n")
-    kind_of = getattr(getattr(env, "unwrapped", env), "context_kind", None)
+    kind_of = contract_of(env).context_kind
     if kind_of is None:
         return validation_seeds(count)
     by_kind: dict[str, list[int]] = {}
@@ -104,65 +106,92 @@ def context_observations(env: Any, seeds: np.ndarray, options: dict[str, Any] | 
                                 dtype=np.float64) for s in seeds])
 
 
-def success(batch: EpisodeBatch) -> np.ndarray:
-    """``[K]`` success of each episode: ``batch.success`` (the env's ``is_success``) if known, else
-    coverage >= 0.95, force in band >= 0.9 and valid (NaN coverage counts as failure)."""
-    if batch.success is not None:
-        return np.asarray(batch.success, dtype=bool)
-    with np.errstate(invalid="ignore"):
-        return ((np.nan_to_num(batch.coverage, nan=-1.0) >= COVERAGE_TARGET)
-                & (np.nan_to_num(batch.force_in_band, nan=-1.0) >= FORCE_TARGET) & batch.valid.astype(bool))
+def success(batch: EpisodeBatch) -> np.ndarray | None:
+    """``[K]`` success of each episode: the env's ``is_success`` (``batch.success``); None where the env does not
+    report it (no success is made up from the task's metrics)."""
+    return None if batch.success is None else np.asarray(batch.success, dtype=bool)
+
+
+def defined_mean(values: np.ndarray) -> float:
+    """The mean of ``values [K]`` over the episodes that have one (finite), NaN where none has (e.g. a metric of
+    refused paths only)."""
+    values = np.asarray(values, dtype=np.float64)
+    defined = values[np.isfinite(values)]
+    return float(np.mean(defined)) if defined.size else float("nan")
+
+
+def path_smoothness(path: np.ndarray, measure: str, dt: float) -> float:
+    """The smoothness ``measure`` (a contract's: ``"jerk"``, integrated squared jerk; ``"speed_normalised_jerk"``,
+    per integrated squared speed) of ``path [T]`` or ``[T, d]`` sampled every ``dt`` s."""
+    path = np.asarray(path, dtype=np.float64)
+    path = path[:, None] if path.ndim == 1 else path
+    if measure == "speed_normalised_jerk":
+        return Smoothness.speed_normalised(path, dt)
+    if measure == "jerk":
+        return integrated_squared_jerk(path, dt)
+    raise ValueError(f"measure: expected 'jerk' or 'speed_normalised_jerk', got {measure!r}")
 
 
 def path_jerk(env: Any, action: np.ndarray, seed: int, options: dict[str, Any] | None = None) -> float:
-    """The task's jerk measure of the path executed for ``action [n]`` in the context of ``seed`` (with the
-    env's clearance term where it has one on): integrated squared jerk (m²/s⁵), or per integrated squared speed
-    (1/s⁴, size-independent) where the task's smoothness term uses that (``task_version.speed_normalised_jerk``,
-    ``ArmarWipe-v2``)."""
+    """The task's smoothness measure (its contract's ``smoothness``) of the path executed for ``action [n]`` in the
+    context of ``seed`` (``env.unwrapped.executed_path``: e.g. with the wiping task's cup clearance where it is
+    on): integrated squared jerk (m²/s⁵), or per integrated squared speed (1/s⁴, size-independent)."""
     env.reset(seed=int(seed), options=None if options is None else dict(options))
-    base = env.unwrapped
-    task = getattr(base, "task", None)
-    if hasattr(task, "executed_path"):        # a task that may change the planned path before executing it
-        path = task.executed_path(base.action_to_params(np.asarray(action, dtype=np.float64)), base.context)
-    elif hasattr(base, "action_path"):        # an env whose path depends on more than the DMP's parameters
-        path = base.action_path(np.asarray(action, dtype=np.float64))
-    else:
-        path = base.rollout_path(base.action_to_params(np.asarray(action, dtype=np.float64)))
-    dt = float(getattr(base, "dt", 0.0) or 1.0)   # an env without ``dt``: unit steps (ratios are unaffected)
-    version = getattr(base, "task_version", None)
-    if version is not None and version.speed_normalised_jerk:
-        return Smoothness.speed_normalised(path, dt)
-    return integrated_squared_jerk(path, dt)
+    contract = contract_of(env)
+    path = env.unwrapped.executed_path(np.asarray(action, dtype=np.float64))
+    return path_smoothness(path, contract.smoothness, contract.dt)
+
+
+#: the per-context scores of :class:`PolicyScores` beside the task's metrics (a metric may not take these names)
+_SCORES = ("seeds", "returns", "valid", "success", "jerk_ratio", "failures")
 
 
 @dataclass(frozen=True)
 class PolicyScores:
-    """Per-context results of one policy on a context set (all ``[E]``)."""
+    """Per-context results of one policy on a context set (all ``[E]``).
+
+    Attributes:
+        seeds, returns, valid, jerk_ratio: the contexts' reset seeds, returns, validity and path smoothness relative
+            to the imitation's.
+        success: the env's ``is_success``, or None where the env does not report it.
+        metrics: ``{key: [E]}`` the task's metrics (its contract's; NaN where a context has none).
+        failures: the success criteria missed in each context (``""`` for a success), or None.
+    """
 
     seeds: np.ndarray
     returns: np.ndarray
-    coverage: np.ndarray
-    force_in_band: np.ndarray
     valid: np.ndarray
-    success: np.ndarray
+    success: np.ndarray | None
     jerk_ratio: np.ndarray
-    #: the success criteria missed in each context (``"cup+coverage"``, ``""`` for a success), or None
+    metrics: Mapping[str, np.ndarray] = field(default_factory=dict)
     failures: np.ndarray | None = None
 
-    def means(self) -> dict[str, float]:
-        """Mean of every metric over the contexts (the numbers one seed contributes to a table)."""
-        return {name: float(np.mean(getattr(self, name).astype(np.float64)))
-                for name in ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio")}
+    def __post_init__(self) -> None:
+        clash = sorted(set(self.metrics) & set(_SCORES))
+        if clash:
+            raise ValueError(f"metrics: the task's metric keys {clash} are names of the scores {list(_SCORES)}")
 
-    def to_dict(self) -> dict[str, list]:
-        """JSON-friendly lists."""
-        return {name: np.asarray(getattr(self, name)).tolist() for name in self.__dataclass_fields__}
+    def means(self) -> dict[str, float]:
+        """Mean of every score over the contexts (the numbers one seed contributes to a table): ``returns``, the
+        task's metrics (over the contexts that have them), ``valid``, ``success`` (NaN where the env reports none)
+        and ``jerk_ratio``."""
+        success = np.nan if self.success is None else float(np.mean(self.success.astype(np.float64)))
+        return {"returns": float(np.mean(self.returns.astype(np.float64))),
+                **{key: defined_mean(values) for key, values in self.metrics.items()},
+                "valid": float(np.mean(self.valid.astype(np.float64))), "success": success,
+                "jerk_ratio": float(np.mean(self.jerk_ratio.astype(np.float64)))}
+
+    def to_dict(self) -> dict[str, list | None]:
+        """JSON-friendly lists: the scores and the task's metrics by their keys (None: not reported)."""
+        scores = {name: getattr(self, name) for name in _SCORES}
+        return {name: None if values is None else np.asarray(values).tolist()
+                for name, values in {**scores, **self.metrics}.items()}
 
 
 def evaluate_actions(evaluator: Any, actions: np.ndarray, seeds: np.ndarray, reference_jerk: np.ndarray | None = None
                      ) -> PolicyScores:
     """Run ``actions [E, n]`` in the contexts ``seeds [E]`` through ``evaluator.run`` (the one place that
-    dispatches episodes) and measure their paths' jerk relative to ``reference_jerk [E]`` (the
+    dispatches episodes) and measure their paths' smoothness relative to ``reference_jerk [E]`` (the
     imitation's; None: relative to the imitation computed here)."""
     actions = np.asarray(actions, dtype=np.float64)
     seeds = np.asarray(seeds, dtype=np.int64)
@@ -171,9 +200,9 @@ def evaluate_actions(evaluator: Any, actions: np.ndarray, seeds: np.ndarray, ref
     jerk = np.array([path_jerk(env, a, s, options) for a, s in zip(actions, seeds, strict=True)])
     if reference_jerk is None:
         reference_jerk = np.array([path_jerk(env, np.zeros(actions.shape[1]), s, options) for s in seeds])
-    return PolicyScores(seeds=seeds, returns=batch.returns, coverage=batch.coverage, force_in_band=batch.force_in_band,
-                        valid=batch.valid.astype(bool), success=success(batch),
-                        jerk_ratio=jerk / np.maximum(reference_jerk, 1e-300), failures=batch.failures)
+    return PolicyScores(seeds=seeds, returns=batch.returns, valid=batch.valid.astype(bool), success=success(batch),
+                        jerk_ratio=jerk / np.maximum(reference_jerk, 1e-300), metrics=dict(batch.metrics),
+                        failures=batch.failures)
 
 
 def iqm(values: np.ndarray) -> float:

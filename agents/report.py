@@ -1,10 +1,11 @@
 """Evaluate a finished (or running) run: its policy against the imitation on the test contexts, with figures.
 
-Writes into the run directory ``evaluation.json`` (per-context and mean return, coverage, force in
-band, validity, success and path jerk relative to the imitation of both policies, with 95 % bootstrap
-intervals over the contexts), ``evaluation.png`` (imitation and learned sponge paths side by side in
-the first test context, the metrics with their intervals) and, on request, ``best_episode.mp4`` (the
-trained policy's best episode, re-run with the env's ``record_episode``).
+Writes into the run directory ``evaluation.json`` (per-context and mean return, the task's metrics by their keys,
+validity, success where the env reports it and path smoothness relative to the imitation of both policies, with
+95 % bootstrap intervals over the contexts; the task's metrics as its contract declares them), then
+``evaluation.png`` (imitation and learned executed paths side by side in the first test context, the numbers with
+their intervals; a figure that cannot be drawn is logged and leaves the evaluation written) and, on request,
+``best_episode.mp4`` (the trained policy's best episode, re-run with the env's ``record_episode``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from rdmp_gym.envs.contract import TaskContract
 from tqdm.auto import tqdm
 
 from rdmp_gym.validation import check_choice
@@ -23,11 +25,19 @@ from rdmp_gym.validation import check_choice
 from .learners import CONTEXTUAL, policy_from_state
 from .plots import plot_policy_comparison
 from .pool import Evaluator
-from .protocol import PolicyScores, context_observations, evaluate_actions, final_test_seeds, interval, path_jerk
+from .protocol import (
+    PolicyScores,
+    context_observations,
+    defined_mean,
+    evaluate_actions,
+    final_test_seeds,
+    interval,
+    path_jerk,
+)
 from .runs import RunDirectory, write_atomic
 from .training import TrainConfig, load_run_config
 
-__all__ = ["POLICIES", "evaluate_run", "record_best_episode", "trained_actions"]
+__all__ = ["POLICIES", "compared_quantities", "evaluate_run", "record_best_episode", "trained_actions"]
 
 logger = logging.getLogger(__name__)
 
@@ -96,24 +106,69 @@ def record_best_episode(path: str | Path) -> Path:
         env.close()
 
 
+def _clean(values: np.ndarray) -> list[float | None]:
+    """JSON numbers, None for NaN."""
+    return [None if not np.isfinite(v) else float(v) for v in np.asarray(values, dtype=np.float64)]
+
+
+def _mean_interval(values: np.ndarray) -> dict[str, float | int] | None:
+    """The mean of ``values [E]`` over the contexts that have one, with its 95 % bootstrap interval (None: none has)."""
+    values = np.asarray(values, dtype=np.float64)
+    defined = values[np.isfinite(values)]
+    return interval(defined, "mean").to_dict() if defined.size else None
+
+
 def _summary(scores: PolicyScores) -> dict[str, Any]:
-    """Means over the contexts, 95 % bootstrap intervals of the means over contexts, per-context lists."""
-    def clean(values: np.ndarray) -> list[float | None]:
-        return [None if not np.isfinite(v) else float(v) for v in np.asarray(values, dtype=np.float64)]
+    """Means over the contexts, 95 % bootstrap intervals of the means over contexts, per-context lists: the return,
+    success (None where the env reports none), the task's metrics by their keys (``<key>_mean`` and ``<key>``), the
+    path smoothness relative to the imitation's, validity and the failures."""
+    rates = None if scores.success is None else scores.success.astype(np.float64)
+    quantities = {"return": scores.returns, **({} if rates is None else {"success": rates}), **scores.metrics,
+                  "jerk_ratio": scores.jerk_ratio}
+    intervals = {name: found for name, values in quantities.items() if (found := _mean_interval(values)) is not None}
 
     def mean(values: np.ndarray) -> float | None:
-        values = np.asarray(values, dtype=np.float64)
-        return float(np.mean(values)) if np.all(np.isfinite(values)) else None
+        value = defined_mean(values)
+        return None if np.isnan(value) else value
 
-    intervals = {name: interval(getattr(scores, name).astype(np.float64), "mean").to_dict()
-                 for name in ("success", "coverage", "jerk_ratio") if np.all(np.isfinite(getattr(scores, name)))}
-    return {"return_mean": mean(scores.returns), "coverage_mean": mean(scores.coverage),
-            "force_in_band_mean": mean(scores.force_in_band), "valid_fraction": mean(scores.valid),
-            "success_rate": mean(scores.success), "jerk_ratio_mean": mean(scores.jerk_ratio),
-            "intervals": intervals, "returns": clean(scores.returns), "coverage": clean(scores.coverage),
-            "force_in_band": clean(scores.force_in_band), "valid": [bool(v) for v in scores.valid],
-            "success": [bool(v) for v in scores.success], "jerk_ratio": clean(scores.jerk_ratio),
+    metrics = scores.metrics
+    return {"return_mean": mean(scores.returns), **{f"{key}_mean": mean(values) for key, values in metrics.items()},
+            "valid_fraction": mean(scores.valid), "success_rate": None if rates is None else mean(rates),
+            "jerk_ratio_mean": mean(scores.jerk_ratio), "intervals": intervals, "returns": _clean(scores.returns),
+            **{key: _clean(values) for key, values in metrics.items()}, "valid": [bool(v) for v in scores.valid],
+            "success": None if scores.success is None else [bool(v) for v in scores.success],
+            "jerk_ratio": _clean(scores.jerk_ratio),
             "failures": None if scores.failures is None else [str(v) for v in scores.failures]}
+
+
+def _declared(contract: TaskContract) -> dict[str, Any]:
+    """What the evaluation's JSON says of the task: its metrics (key, label, direction, unit), success and the
+    smoothness measure, so that a reader needs no env to show them."""
+    return {"task": contract.name, "has_success": contract.has_success, "smoothness": contract.smoothness,
+            "metrics": [{"key": m.key, "label": m.label, "higher_is_better": m.higher_is_better, "unit": m.unit}
+                        for m in contract.metrics]}
+
+
+def compared_quantities(result: dict[str, Any]) -> list[tuple[str, str]]:
+    """``(interval key, label)`` of what an evaluation shows, in order: the return, the success rate (where the env
+    reports success), the task's metrics by their labels and the path smoothness relative to the imitation's."""
+    success = [("success", "success rate")] if result["has_success"] else []
+    return [("return", "return"), *success, *((m["key"], m["label"]) for m in result["metrics"]),
+            ("jerk_ratio", "jerk / imitation")]
+
+
+def _figure(result: dict[str, Any], paths: dict[str, np.ndarray], contract: TaskContract, folder: Path,
+            title: str) -> None:
+    """``evaluation.png`` (an earlier one removed first); a figure that cannot be drawn is logged, not raised: the
+    evaluation is written already."""
+    target = folder / "evaluation.png"
+    target.unlink(missing_ok=True)
+    try:
+        plot_policy_comparison(paths, {name: result[name] for name in paths}, target, title=title,
+                               quantities=compared_quantities(result), labels=contract.path_labels, dt=contract.dt)
+    except Exception as error:       # the figure is secondary to the numbers, which are written
+        logger.warning("evaluation.png: the figure could not be drawn (%s: %s); evaluation.json holds the results",
+                       type(error).__name__, error, exc_info=True)
 
 
 def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, policy: str = "last",
@@ -132,9 +187,10 @@ def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, poli
         progress: show a progress bar.
         backend, ray_address: where the episodes run (see :class:`Evaluator`).
     Returns:
-        the contents of ``evaluation.json``: per policy the means over the test contexts, their 95 %
-        bootstrap intervals over contexts, success rate, the paths' jerk relative to the imitation's,
-        and the per-context lists.
+        the contents of ``evaluation.json``: what the task declares (its metrics with their labels, success, the
+        smoothness measure) and per policy the means over the test contexts, their 95 % bootstrap intervals over
+        contexts, the success rate where the env reports success, the paths' smoothness relative to the
+        imitation's, and the per-context lists.
     """
     check_choice(policy, "policy", POLICIES)
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
@@ -145,7 +201,7 @@ def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, poli
     spec = config.task
     seeds = final_test_seeds(episodes)
     with Evaluator(spec, workers, backend, ray_address) as evaluator:
-        env = evaluator.env
+        env, contract = evaluator.env, evaluator.contract
         observations = context_observations(env, seeds, spec.options())
         trained = trained_actions(run, config, policy, observations, evaluator.n_actions)
         imitation = np.zeros_like(trained)
@@ -158,13 +214,14 @@ def evaluate_run(path: str | Path, episodes: int = 20, *, workers: int = 1, poli
         paths = {}
         for name, actions in (("imitation", imitation), ("trained", trained)):
             env.reset(seed=int(seeds[0]), options=spec.options())
-            paths[name] = env.unwrapped.rollout_path(env.unwrapped.action_to_params(actions[0]))
+            paths[name] = np.asarray(env.unwrapped.executed_path(actions[0]), dtype=np.float64)
         result = {"run": str(run.path), "agent": config.agent, "policy": policy, "episodes": episodes,
-                  "seeds": seeds.tolist(), **{name: _summary(score) for name, score in scores.items()}}
+                  "seeds": seeds.tolist(), **_declared(contract),
+                  **{name: _summary(score) for name, score in scores.items()}}
         if video:
             best = int(np.argmax(scores["trained"].returns))
             result["video"] = str(_record(env, spec.options(), trained[best], int(seeds[best]), run.path))
-    plot_policy_comparison(paths, {name: result[name] for name in scores}, run.path / "evaluation.png",
-                           title=f"{config.agent} ({policy} policy) vs imitation on {episodes} test contexts")
     write_atomic(run.path / "evaluation.json", (json.dumps(result, indent=2) + "\n").encode())
+    _figure(result, paths, contract, run.path,
+            f"{config.agent} ({policy} policy) vs imitation on {episodes} test contexts")
     return result

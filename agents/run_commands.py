@@ -48,9 +48,9 @@ from rdmp_gym.figures.paper import write_paper_figures
 
 from .config import Settings
 from .imitation import load_demonstration
-from .plots import plot_fit
+from .plots import logged_metrics, plot_fit
 from .protocol import interval
-from .report import evaluate_run, record_best_episode
+from .report import compared_quantities, evaluate_run, record_best_episode
 from .runs import RunDirectory
 from .tasks import TaskSpec, failure_contexts, main_env_kwargs, main_options
 from .train_config import TrainConfig
@@ -372,26 +372,27 @@ def _parse_run(kind: type[RunCommand], argv: Sequence[str], prog: str
 
 
 def _with_flag_hint(error: ValueError) -> str:
-    """``error``'s message, and where the black-box wrapper's reason names a setting it needs, the flag that gives
-    it (``--env-option NAME VALUE``)."""
+    """``error``'s message, and where its reason (the black-box wrapper's) names a setting of the wrapper, the flag
+    that sets it (``--env-option NAME VALUE``)."""
     from rdmp_gym.envs.blackbox import WRAPPER_SETTINGS
 
-    reason = str(error.__cause__ or "")
-    name = reason.partition(":")[0].strip()
+    name = str(error.__cause__ or error).partition(":")[0].strip()
     if name in WRAPPER_SETTINGS:
-        return f"{error}; give it with --env-option {name} VALUE"
+        return f"{error} (set it with --env-option {name} VALUE)"
     return str(error)
 
 
 def _check_recording(env: Any, env_id: str) -> None:
-    """``--video``: ValueError unless the env records episodes (``record_episode``) and MuJoCo renders here."""
+    """``--video``: ValueError unless the env records episodes (``record_episode``, and ``can_record()`` where the env
+    has that cheap check) and MuJoCo renders here."""
     base = env.unwrapped
     if not callable(getattr(base, "record_episode", None)):
         raise ValueError(f"--video: {env_id} cannot record an episode ({type(base).__name__} has no "
                          f"record_episode); leave out --video")
     can_record = getattr(base, "can_record", None)
-    if callable(can_record):
-        can_record()                                   # the env's own check (ValueError saying why not)
+    if callable(can_record) and not can_record():
+        raise ValueError(f"--video: {env_id} cannot record an episode here (its env renders no RGB frames: "
+                         f"render_mode {getattr(base, 'render_mode', None)!r}); leave out --video")
     import mujoco
 
     try:
@@ -431,8 +432,7 @@ def _train_or_resume(command: RunCommand, config: TrainConfig, saved: TrainConfi
 
 def command_train(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(TrainCommand, argv, "rdmp-gym train")
-    _setup(command)
-    _check_task(config.task, command.video)
+    _setup(command, config.task)
     run = _train_or_resume(command, config, saved)
     last = run.read_log()[-1]
     print(f"{run.path}: {last['update']} updates, {last['episodes']} episodes, "
@@ -443,45 +443,67 @@ def command_train(argv: Sequence[str]) -> None:
 
 def command_evaluate(argv: Sequence[str]) -> None:
     command = parse_evaluate(argv)
-    _setup(command)
-    if command.video:
-        _check_task(load_run_config(RunDirectory(command.run)).task, video=True)
+    _setup(command, load_run_config(RunDirectory(command.run)).task if command.video else None)
     result = evaluate_run(command.run, command.episodes, workers=command.workers, policy=command.policy,
                           video=command.video, progress=True, backend=command.backend,
                           ray_address=command.ray_address)
     _print_comparison(result)
-    print(f"wrote {Path(command.run) / 'evaluation.json'} and evaluation.png" +
+    figure = " and evaluation.png" if (Path(command.run) / "evaluation.png").is_file() else ""
+    print(f"wrote {Path(command.run) / 'evaluation.json'}{figure}" +
           (f" and {result['video']}" if "video" in result else ""))
 
 
-def _interval_text(summary: dict[str, Any], metric: str) -> str:
-    found = summary["intervals"].get(metric)
+def _interval_text(summary: dict[str, Any], key: str) -> str:
+    """``"mean [low, high]"`` of the interval ``key`` of a policy's summary, ``"-"`` where it has none."""
+    found = summary["intervals"].get(key)
     return "-" if found is None else f"{found['estimate']:.3f} [{found['low']:.3f}, {found['high']:.3f}]"
 
 
-def _print_comparison(result: dict[str, Any]) -> None:
-    """Imitation vs trained on the test contexts: means with 95 % bootstrap intervals over the contexts."""
-    print(f"{'policy':>10} {'success rate':>22} {'coverage':>22} {'jerk / imitation':>22}")
-    for name in ("imitation", "trained"):
-        summary = result[name]
-        print(f"{name:>10} {_interval_text(summary, 'success'):>22} {_interval_text(summary, 'coverage'):>22} "
-              f"{_interval_text(summary, 'jerk_ratio'):>22}")
-    def paired_gain(metric: str) -> str:        # "-" where the task has no such metric (e.g. no dirt: coverage)
-        gain = (np.array(result["trained"][metric], dtype=float)
-                - np.array(result["imitation"][metric], dtype=float))
-        return str(interval(gain, "mean")) if np.all(np.isfinite(gain)) else "-"
+#: the per-context list of an evaluation's interval key (the task's metrics: their own keys)
+_PER_CONTEXT = {"return": "returns"}
 
-    print(f"paired gain over the imitation on the same {len(result['trained']['success'])} test contexts (mean, "
-          f"95 % CI): coverage {paired_gain('coverage')}, success {paired_gain('success')}")
+
+def _paired_gain(result: dict[str, Any], key: str) -> str:
+    """The trained policy's mean gain over the imitation in ``key`` on the same test contexts, with its 95 %
+    interval; ``"-"`` where a context has no value of it."""
+    name = _PER_CONTEXT.get(key, key)
+    gain = (np.array(result["trained"][name], dtype=float) - np.array(result["imitation"][name], dtype=float))
+    return str(interval(gain, "mean")) if gain.size and np.all(np.isfinite(gain)) else "-"
+
+
+def _print_comparison(result: dict[str, Any]) -> None:
+    """Imitation vs trained on the test contexts: the return, the success rate (where the env reports success), the
+    task's metrics by their labels and the path smoothness, means with 95 % bootstrap intervals over the contexts,
+    and the trained policy's paired gains over the imitation."""
+    columns = compared_quantities(result)
+    width = max(22, *(len(label) for _, label in columns))
+    print(f"{'policy':>10} " + " ".join(f"{label:>{width}}" for _, label in columns))
+    for name in ("imitation", "trained"):
+        print(f"{name:>10} " + " ".join(f"{_interval_text(result[name], key):>{width}}" for key, _ in columns))
+    gains = ", ".join(f"{label} {_paired_gain(result, key)}" for key, label in columns if key != "jerk_ratio")
+    print(f"paired gain over the imitation on the same {len(result['trained']['returns'])} test contexts (mean, "
+          f"95 % CI): {gains}")
     for name in ("imitation", "trained"):
         if result[name].get("failures") is not None:
             print(f"{name} fails on: {_failure_text(result[name]['failures'])}")
 
 
 def _failure_text(failures: list[str]) -> str:
-    """``"cup 2 (contexts 3, 7), coverage 1 (context 3)"``: each missed success criterion, where it was missed."""
+    """Each missed success criterion and where it was missed (e.g. the wiping task's ``"cup 2 (contexts 3, 7),
+    coverage 1 (context 3)"``)."""
     return ", ".join(f"{cause} {len(found)} (context{'s' if len(found) > 1 else ''} "
                      f"{', '.join(map(str, found))})" for cause, found in failure_contexts(failures).items()) or "none"
+
+
+def _validation_curve(records: list[dict[str, Any]]) -> tuple[list[tuple], list[str]]:
+    """The policy's numbers on the validation contexts wherever it was evaluated, ``(episodes, return, success rate,
+    the task's metrics...)`` (no success rate where the env reports none), and the names of those numbers."""
+    evaluated = [r for r in records if r.get("eval_return_mean") is not None]
+    keys = ["eval_return_mean", *(["eval_success"] if any(r.get("eval_success") is not None for r in evaluated)
+                                  else []), *(f"eval_{key}" for key, _ in logged_metrics(evaluated))]
+    names = ["return", *(["success rate"] if "eval_success" in keys else []),
+             *(label for _, label in logged_metrics(evaluated))]
+    return [(r["episodes"], *(r.get(key) for key in keys)) for r in evaluated], names
 
 
 def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
@@ -498,8 +520,7 @@ def _write_imitation_figure(config: TrainConfig, out: Path) -> str:
 
 def command_main(argv: Sequence[str]) -> None:
     command, config, saved = _parse_run(MainCommand, argv, "rdmp-gym main")
-    _setup(command)
-    _check_task(config.task, command.video)
+    _setup(command, config.task)
     out = Path(command.out)
     out.mkdir(parents=True, exist_ok=True)
     print("[1/4] imitation: the env's rhythmic DMP fitted to the demonstration (the start of training)")
@@ -510,10 +531,9 @@ def command_main(argv: Sequence[str]) -> None:
           f"{config.workers} worker(s); policy checked on {config.eval_episodes} validation contexts every "
           f"{config.eval_every} updates")
     run = _train_or_resume(command, config, saved)
-    curve = [(r["episodes"], r["eval_success"], r["eval_coverage"]) for r in run.read_log()
-             if r.get("eval_coverage") is not None]
-    print("held-out (validation) curve, episodes: success rate / coverage  " +
-          "  ".join(f"{e}: {s:.2f}/{c:.3f}" for e, s, c in curve))
+    curve, names = _validation_curve(run.read_log())
+    print(f"held-out (validation) curve, episodes: {' / '.join(names)}  " +
+          "  ".join(f"{row[0]}: " + "/".join("-" if v is None else f"{v:.3g}" for v in row[1:]) for row in curve))
     print(f"[4/4] the final policy against the imitation on {command.episodes} test contexts (never trained on)")
     result = evaluate_run(run.path, command.episodes, workers=config.workers, policy="last", video=command.video,
                           progress=True)
@@ -527,12 +547,13 @@ def command_main(argv: Sequence[str]) -> None:
     print(f"wrote {out / 'summary.json'}, {out / 'fit.png'}, {run.curve_png}, {run.path / 'evaluation.png'}")
 
 
-def _setup(command: Any) -> None:
-    """Logging, the headless-video check and one torch thread per process (where torch is installed)."""
+def _setup(command: Any, task: TaskSpec | None) -> None:
+    """Logging, the checks of ``task`` before any work (:func:`_check_task`; None: none) and one torch thread per
+    process (where torch is installed; imported after the checks, so that a refusal is quick)."""
     logging.basicConfig(level=logging.INFO if command.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    if getattr(command, "video", False) and not os.environ.get("MUJOCO_GL") and not os.environ.get("DISPLAY"):
-        raise ValueError("--video: no display; run with MUJOCO_GL=egl (or osmesa) set in the environment")
+    if task is not None:
+        _check_task(task, command.video)
     try:
         import torch  # optional: only the torch learners need it
     except ModuleNotFoundError:

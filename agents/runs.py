@@ -31,9 +31,11 @@ import hashlib
 import io
 import json
 import logging
+import math
 import os
+import reprlib
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -42,13 +44,32 @@ import numpy as np
 
 from .state_files import decode, encode
 
-__all__ = ["CHECKPOINT_FORMAT", "RunDirectory", "RunLockedError", "sha256_file", "write_atomic"]
+__all__ = ["CHECKPOINT_FIELDS", "CHECKPOINT_FORMAT", "RunDirectory", "RunLockedError", "sha256_file", "write_atomic"]
 
 logger = logging.getLogger(__name__)
 
 CHECKPOINT_FORMAT = "rdmp-gym/checkpoint"
 CHECKPOINT_VERSION = 2
 _ZIP_MAGIC = b"PK\x03\x04"
+
+
+def _count(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+#: the checkpoint's top-level fields (what training writes after every update): name -> (check, what it must be)
+CHECKPOINT_FIELDS: dict[str, tuple[Callable[[Any], bool], str]] = {
+    "update": (_count, "a count (an integer >= 0)"),
+    "episodes": (_count, "a count (an integer >= 0)"),
+    "elapsed": (lambda value: _number(value) and math.isfinite(value) and value >= 0, "seconds (a finite number >= 0)"),
+    "best": (lambda value: value is None or (isinstance(value, dict) and _number(value.get("eval_return_mean"))),
+             "None or the best policy's summary (a dict with a number 'eval_return_mean')"),
+    "agent": (lambda value: isinstance(value, dict), "the agent's state (a dict)"),
+}
 
 
 class RunLockedError(BlockingIOError):
@@ -310,7 +331,8 @@ class RunDirectory:
     def load_checkpoint(self) -> dict[str, Any] | None:
         """The last checkpoint's state tree, or None if the run has none yet.
 
-        Raises ``ValueError`` naming the file for a pickle checkpoint, a broken or inconsistent one.
+        Raises ``ValueError`` naming the file for a pickle checkpoint, a broken or inconsistent one, and naming the
+        file and the field for a field of :data:`CHECKPOINT_FIELDS` of the wrong type or range.
         """
         if not self.checkpoint_path.exists():
             if self.legacy_checkpoint_path.exists():
@@ -347,6 +369,10 @@ class RunDirectory:
             raise ValueError(f"{self.checkpoint_path}: {error}; {redo}") from error
         if not isinstance(state, dict) or state.get("update") != document.get("update"):
             raise ValueError(f"{self.checkpoint_path}: the state does not match its update; {redo}")
+        for name, (fits, expected) in CHECKPOINT_FIELDS.items():
+            if not fits(state.get(name)):
+                raise ValueError(f"{self.checkpoint_path}: the field {name!r} is {reprlib.repr(state.get(name))}, "
+                                 f"expected {expected}; {redo}")
         return state
 
     # ------------------------------------------------------------------ best parameters

@@ -23,26 +23,31 @@ from typing import Any
 
 import numpy as np
 import torch
+from rdmp_gym.envs.contract import TaskContract, contract_of
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, configure
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
+from .episodes import episode_batch, episode_metrics
 from .learners.base import EpisodeBatch
 from .sb3_config import PPOConfig, SACConfig
 from .sb3_smooth_actions import SmoothActions, SmoothActionVecEnv
-from .tasks import TaskSpec, episode_metrics
+from .tasks import TaskSpec
 
 __all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]
 
 
 class _EpisodeCollector(BaseCallback):
-    """Collects the executed actions and episode metrics of one rollout phase (``key``: the name of the
-    policy's actions among the algorithm's locals: ``clipped_actions`` for PPO, ``actions`` for SAC; ``smooth``:
-    their map to the executed actions, None if they are executed as they are)."""
+    """Collects the executed actions and episode metrics of one rollout phase (``contract``: the task's, whose
+    metrics the episodes report; ``key``: the name of the policy's actions among the algorithm's locals:
+    ``clipped_actions`` for PPO, ``actions`` for SAC; ``smooth``: their map to the executed actions, None if they
+    are executed as they are)."""
 
-    def __init__(self, key: str = "clipped_actions", smooth: SmoothActions | None = None) -> None:
+    def __init__(self, contract: TaskContract, key: str = "clipped_actions", smooth: SmoothActions | None = None
+                 ) -> None:
         super().__init__()
+        self.contract = contract
         self.key = key
         self.smooth = smooth
         self.actions: list[np.ndarray] = []
@@ -53,19 +58,24 @@ class _EpisodeCollector(BaseCallback):
         for action, reward, info in zip(actions, self.locals["rewards"], self.locals["infos"], strict=True):
             self.actions.append(np.asarray(action, dtype=np.float64))
             # float32 as PPO learns from it (DummyVecEnv keeps rewards in float32, SubprocVecEnv in float64)
-            self.metrics.append(episode_metrics(float(np.float32(reward)), info))
+            self.metrics.append(episode_metrics(float(np.float32(reward)), info, self.contract))
         return True
 
     def pop_batch(self) -> EpisodeBatch:
-        metrics = self.metrics
-        batch = EpisodeBatch(actions=np.stack(self.actions), returns=np.array([m["return"] for m in metrics]),
-                             cost_traces=np.stack([m["cost_trace"] for m in metrics]),
-                             coverage=np.array([m["coverage"] for m in metrics]),
-                             force_in_band=np.array([m["force_in_band"] for m in metrics]),
-                             valid=np.array([m["valid"] for m in metrics]),
-                             seeds=np.full(len(metrics), -1, dtype=np.int64))
+        """The episodes collected since the last call (seeds -1: the vector envs reset themselves)."""
+        batch = episode_batch(np.stack(self.actions), self.metrics, np.full(len(self.metrics), -1, dtype=np.int64),
+                              self.contract)
         self.actions, self.metrics = [], []
         return batch
+
+
+def _task_contract(task: TaskSpec) -> TaskContract:
+    """The task's contract, read from an env built (and closed) here: the vector env's envs may run in subprocesses."""
+    env = task.make()
+    try:
+        return contract_of(env)
+    finally:
+        env.close()
 
 
 def parallel_envs(rollouts: int, envs: int) -> int:
@@ -203,7 +213,7 @@ class PPOAgent(_SB3Agent):
         with torch.no_grad():
             self.model.policy.action_net.bias.copy_(torch.as_tensor(_latent(self.smooth, initial_action),
                                                                     dtype=torch.float32))
-        self._collector = _EpisodeCollector(smooth=self.smooth)
+        self._collector = _EpisodeCollector(_task_contract(task), smooth=self.smooth)
 
     @classmethod
     def from_run(cls, config: Any, initial_action: np.ndarray, run_path: Path) -> PPOAgent:
@@ -265,7 +275,7 @@ class SACAgent(_SB3Agent):
             actor.log_std.weight.mul_(0.01)
             actor.log_std.bias.fill_(math.log(self.config.sigma))
         self.model.set_logger(_logger(False, None))
-        self._collector = _EpisodeCollector("actions", self.smooth)
+        self._collector = _EpisodeCollector(_task_contract(task), "actions", self.smooth)
 
     @property
     def exploration(self) -> float:

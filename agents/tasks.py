@@ -8,11 +8,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the env ids with gymnasium)
 from rdmp_gym.envs.registration import ENV_ID, ENV_ID_V2, LATEST_ENV_ID, learner_defaults
-from rdmp_gym.envs.specs import is_episodic
+from rdmp_gym.envs.specs import env_class, is_episodic
 
+from .episodes import episode_metrics, failure_contexts, run_episode
 from .imitation import load_demonstration
 
 __all__ = ["MAIN_AGENT", "MAIN_ENV", "MAIN_ENV_KWARGS", "MAIN_OPTIONS", "WIPE_ID", "WIPE_V2_ID", "ResetOptions",
@@ -108,10 +108,20 @@ class TaskSpec:
         """A step-based env under the rhythmic black-box wrapper with its defaults: the wrapper's settings among
         ``env_kwargs`` replace them, the rest go to the env's ``gym.make`` (``demo``: the wrapper's demonstration, in
         the actuated joints); ValueError passing on the wrapper's reason where it cannot drive the env (a discrete
-        action space, a setting it needs)."""
+        action space, a setting it needs). Without ``render_mode``, an env whose class renders RGB frames is made with
+        ``render_mode="rgb_array"``, so that the wrapper can record its episodes (a Gymnasium MuJoCo env renders only
+        when asked: nothing is spent otherwise)."""
         from rdmp_gym.envs.blackbox import make_blackbox, split_settings
 
+        twin = self.env_id.replace("Step-v", "-v")
+        if self.env_id.startswith("rdmp_gym/") and twin != self.env_id and twin in gym.registry:
+            raise ValueError(f"env_id: {self.env_id} is the step twin of {twin} (one control step per env step, for a "
+                             f"step-based learner of your own); the agents of rdmp-gym run episodic envs: use {twin}")
         wrapper, env_kwargs = split_settings(self.env_id, self.env_kwargs)   # ValueError naming a setting nobody takes
+        kind = env_class(self.env_id)
+        if render_mode is None and "render_mode" not in env_kwargs and kind is not None \
+                and "rgb_array" in getattr(kind, "metadata", {}).get("render_modes", ()):
+            render_mode = "rgb_array"
         if self.demo:
             wrapper["demonstration"] = load_demonstration(self.demo)
         try:
@@ -140,44 +150,3 @@ class ResetOptions(gym.Wrapper):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[Any, dict[str, Any]]:
         return self.env.reset(seed=seed, options=self.fixed_options if options is None else options)
-
-
-def episode_metrics(reward: float, info: Mapping[str, Any]) -> dict[str, Any]:
-    """The numbers the agents use from one episodic ``step``: return, cost trace ``[T]`` and task metrics.
-
-    ``coverage`` and ``force_in_band_fraction`` are NaN for tasks that have no dirt or contact;
-    ``success`` is ``info["is_success"]``, None where the env does not give it; ``failures`` the success
-    criteria the episode missed (``info["failure_causes"]`` joined by ``"+"``, ``""`` for a success), None where
-    the env does not name them.
-    """
-    if "cost_trace" not in info:
-        raise ValueError("info: the env returned no 'cost_trace' (per-control-step cost), which the agents need")
-    return {"return": float(reward),
-            "cost_trace": np.asarray(info["cost_trace"], dtype=np.float64),
-            "coverage": float(info.get("coverage", np.nan)),
-            "force_in_band": float(info.get("force_in_band_fraction", np.nan)),
-            "valid": bool(info.get("valid", True)),
-            "success": None if "is_success" not in info else bool(info["is_success"]),
-            "failures": None if "failure_causes" not in info else _FAILURE_JOIN.join(info["failure_causes"])}
-
-
-#: joins an episode's ``info["failure_causes"]`` into the one string per episode the evaluation keeps
-_FAILURE_JOIN = "+"
-
-
-def failure_contexts(failures: list[str]) -> dict[str, list[int]]:
-    """``{cause: [index, ...]}``: where each success criterion was missed, from per-episode failures ``[E]``
-    (:func:`episode_metrics`' ``failures``: ``"cup+coverage"``, ``""`` for a success), causes in first-seen order."""
-    where: dict[str, list[int]] = {}
-    for index, entry in enumerate(failures):
-        for cause in filter(None, entry.split(_FAILURE_JOIN)):
-            where.setdefault(cause, []).append(index)
-    return where
-
-
-def run_episode(env: gym.Env, action: np.ndarray, seed: int, options: dict[str, Any] | None
-                ) -> dict[str, Any]:
-    """One episode: reset with ``seed``, execute ``action [n]``; see :func:`episode_metrics`."""
-    env.reset(seed=int(seed), options=options)
-    _, reward, _, _, info = env.step(np.asarray(action, dtype=np.float32))
-    return episode_metrics(reward, info)

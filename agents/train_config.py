@@ -45,7 +45,7 @@ class TrainConfig:
 
     Attributes:
         agent: the learner. One of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``,
-            ``pi2``, ``pibb``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the
+            ``pi2``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the
             main learner (:data:`~rdmp_gym.agents.tasks.MAIN_AGENT`).
         updates: number of updates.
         rollouts: training episodes per update.

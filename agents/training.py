@@ -2,7 +2,7 @@
 
 An agent does one update per call of ``train_update`` (``rollouts`` training episodes) and maps
 context observations to actions with ``policy_actions``. :class:`ESAgent` wraps the ask/tell learners
-(PI², PI^BB, CMA-ES); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
+(PI², CMA-ES, the contextual learners); ``rdmp_gym.agents.sb3.PPOAgent`` wraps stable-baselines3 PPO.
 
 Seeds: the run seed makes a ``SeedSequence`` whose children drive the learner, the training episodes'
 reset seeds (drawn from ``[0, 2**30)``), the perturbed start and the contexts that standardise a
@@ -343,19 +343,8 @@ def _restore(state: TrainingState) -> bool:
     if checkpoint is None:
         run.truncate_log(-1)   # killed before its first checkpoint: start over
         return True
-    where = f"{run.checkpoint_path}"
+    where = f"{run.checkpoint_path}"         # its fields' types are checked by load_checkpoint
     fix = "delete checkpoint.json and checkpoint-*.* to restart the run, or start a new run"
-    for key in ("update", "episodes"):
-        value = checkpoint.get(key)
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise ValueError(f"{where}: '{key}' is {value!r}, expected a count >= 0; {fix}")
-    elapsed, best = checkpoint.get("elapsed"), checkpoint.get("best")
-    if isinstance(elapsed, bool) or not isinstance(elapsed, (int, float)) or not np.isfinite(elapsed) or elapsed < 0:
-        raise ValueError(f"{where}: 'elapsed' is {elapsed!r}, expected seconds >= 0; {fix}")
-    if best is not None and (not isinstance(best, dict) or not isinstance(best.get("eval_return_mean"), (int, float))):
-        raise ValueError(f"{where}: 'best' has no number 'eval_return_mean'; {fix}")
-    if not isinstance(checkpoint.get("agent"), dict):
-        raise ValueError(f"{where}: 'agent' is missing; {fix}")
     if checkpoint["update"] > config.updates:
         raise ValueError(f"updates: the run already has {checkpoint['update']} updates, more than {config.updates}; "
                          f"pass --updates {checkpoint['update']} or more")
@@ -363,8 +352,8 @@ def _restore(state: TrainingState) -> bool:
         state.agent.load_state_dict(checkpoint["agent"])
     except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"{where}: the state does not fit this run's agent ({error}); {fix}") from error
-    state.update, state.episodes, state.best = checkpoint["update"], checkpoint["episodes"], best
-    state.clock_start = time.perf_counter() - float(elapsed)
+    state.update, state.episodes, state.best = checkpoint["update"], checkpoint["episodes"], checkpoint["best"]
+    state.clock_start = time.perf_counter() - float(checkpoint["elapsed"])
     run.truncate_log(state.update)
     logger.info("resuming %s at update %d (%d episodes)", run.path, state.update, state.episodes)
     return False

@@ -53,7 +53,6 @@ from field_report import write as write_field_report
 from output import SCRATCH, add_save_argument, results_dir
 from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.protocol import (
-    PolicyScores,
     context_observations,
     evaluate_actions,
     final_test_seeds,
@@ -73,7 +72,7 @@ METRICS = ("success", "coverage", "jerk_ratio", "returns")
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--agents", nargs="+",
-                        default=["creps", "cpibb", "cpi2", "pibb", "cmaes", "ppo", "amplitude", "random"],
+                        default=["creps", "cpibb", "cpi2", "cmaes", "ppo", "amplitude", "random"],
                         help="learners, or LABEL=LEARNER to run one learner under a second name with its own "
                              "--option LABEL.KEY=VALUE settings")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 per agent")
@@ -319,8 +318,7 @@ def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[st
         if not hasattr(tester.env.unwrapped, "hand_cup_gaps"):        # the coupling baseline lifts over the cup
             return {"imitation": imitation}, observations, reference
         coupling = coupling_baseline_scores(tester.env, seeds)
-    fields = PolicyScores.__dataclass_fields__
-    coupling = {key: np.asarray(value).tolist() for key, value in coupling.items() if key in fields}
+    coupling = {key: np.asarray(value).tolist() for key, value in coupling.items() if key in imitation}
     return {"imitation": imitation, "coupling": coupling}, observations, reference
 
 
@@ -330,15 +328,22 @@ def _interval(values: list | np.ndarray, statistic: str) -> dict | None:
     return None if np.isnan(values).all() else interval(values, statistic).to_dict()
 
 
+def _scores(scores: dict, metric: str) -> list:
+    """The per-context values of ``metric`` (NaN where the task has no such figure: e.g. no coverage on a drum, no
+    success reported)."""
+    values = scores.get(metric)
+    return [np.nan] * len(scores["returns"]) if values is None else values
+
+
 def _summary(runs: list[dict], baselines: dict[str, dict]) -> list[dict]:
-    rows = [{"agent": name, "n": len(scores["success"]), "over": "contexts",
-             **{m: _interval(scores[m], "mean") for m in METRICS},
+    rows = [{"agent": name, "n": len(scores["returns"]), "over": "contexts",
+             **{m: _interval(_scores(scores, m), "mean") for m in METRICS},
              "reached": None, "episodes_to_target": None} for name, scores in baselines.items()]
     for agent in dict.fromkeys(r["agent"] for r in runs):
         group = [r for r in runs if r["agent"] == agent]
         reached = [r["episodes_to_target"] for r in group if r["episodes_to_target"] is not None]
         rows.append({"agent": agent, "n": len(group), "over": "seeds",
-                     **{m: _interval([r["test_means"][m] for r in group], "iqm") for m in METRICS},
+                     **{m: _interval([r["test_means"].get(m, np.nan) for r in group], "iqm") for m in METRICS},
                      "reached": len(reached), "episodes_to_target": float(np.median(reached)) if reached else None})
     return rows
 

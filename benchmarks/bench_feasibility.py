@@ -52,8 +52,9 @@ def _parse() -> argparse.Namespace:
 
 def _episode(env: gym.Env, seed: int, action: np.ndarray) -> dict:
     metrics = run_episode(env, action, seed, None)
-    return {"coverage": metrics["coverage"], "success": bool(metrics["success"]), "reward": metrics["return"],
-            "force_in_band": metrics["force_in_band"], "valid": metrics["valid"]}
+    task = metrics["metrics"]
+    return {"coverage": task["coverage"], "success": bool(metrics["success"]), "reward": metrics["return"],
+            "force_in_band": task["force_in_band_fraction"], "valid": metrics["valid"]}
 
 
 def _better(a: dict, b: dict | None) -> bool:

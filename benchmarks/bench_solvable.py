@@ -77,8 +77,9 @@ def best_action(env: gym.Env, row: dict) -> np.ndarray:
 
 def _metrics(env: gym.Env, seed: int, action: np.ndarray) -> dict:
     metrics = run_episode(env, action, seed, None)
-    return {"return": metrics["return"], "coverage": metrics["coverage"], "success": bool(metrics["success"]),
-            "force_in_band": metrics["force_in_band"], "valid": metrics["valid"]}
+    task = metrics["metrics"]
+    return {"return": metrics["return"], "coverage": task["coverage"], "success": bool(metrics["success"]),
+            "force_in_band": task["force_in_band_fraction"], "valid": metrics["valid"]}
 
 
 def search_context(env_id: str, seed: int, budget: int, sigma: float, cma_seed: int) -> dict:

@@ -150,7 +150,8 @@ def field_summary(document: dict) -> dict:
     for agent in agents:
         group = [r for r in runs if r["agent"] == agent]
         episodes, values = _curves(group)
-        coverage = np.array([r["test"]["coverage"] for r in group], dtype=float)
+        coverage = np.array([r["test"].get("coverage") or [np.nan] * len(r["test"]["returns"]) for r in group],
+                            dtype=float)
         covered = not np.isnan(coverage).all()          # a task without dirt (drumming) has no coverage
         reached = {str(t): [episodes_to(r["curve"], t) for r in group] for t in TARGETS}
         result["agents"][agent] = {

@@ -125,7 +125,7 @@ def coupling_baseline_scores(env, seeds: np.ndarray, options: dict[str, Any] | N
     """The no-learning coupling baseline on the reset seeds ``seeds [E]`` (each context exactly as
     ``env.reset(seed=s, options=options)`` draws it): :func:`run_lifting` in each.
 
-    Returns per-context arrays ``[E]``: ``seeds``, ``returns``, ``coverage``, ``force_in_band``, ``valid``,
+    Returns per-context arrays ``[E]``: ``seeds``, ``returns``, ``coverage``, ``force_in_band_fraction``, ``valid``,
     ``success`` (``info["is_success"]``), ``jerk_ratio`` (integrated squared jerk of the commanded path over the
     imitation's), ``cup`` (the context has one), ``cup_touched`` (the arm touched it), ``cup_shift`` (m),
     ``peak_joint_accel`` (rad/s^2, of the planned joint path; NaN for an invalid path).
@@ -141,7 +141,7 @@ def coupling_baseline_scores(env, seeds: np.ndarray, options: dict[str, Any] | N
                      info["path_jerk_ratio"], env.unwrapped.context.obstacle, info["obstacle_touch_steps"] > 0,
                      info["obstacle_shift"], info["peak_joint_accel"]))
     columns = list(zip(*rows, strict=True))
-    names = ("returns", "coverage", "force_in_band", "valid", "success", "jerk_ratio", "cup", "cup_touched",
+    names = ("returns", "coverage", "force_in_band_fraction", "valid", "success", "jerk_ratio", "cup", "cup_touched",
              "cup_shift", "peak_joint_accel")
     kinds = (np.float64, np.float64, np.float64, bool, bool, np.float64, bool, bool, np.float64, np.float64)
     out = {"seeds": seeds.astype(np.int64)}

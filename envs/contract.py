@@ -39,8 +39,8 @@ class Metric:
     """One per-episode number of a task.
 
     Attributes:
-        key: the ``info`` key it is read from, also its name in logs and results (``"coverage"``).
-        label: how tables and figures name it (``"coverage"``, ``"timing error (s)"``).
+        key: the ``info`` key it is read from, also its name in logs and results.
+        label: how tables and figures name it (e.g. "timing error"; default: the key with spaces).
         higher_is_better: its direction (False for an error).
         unit: its unit, "" where it has none.
     """

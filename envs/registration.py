@@ -164,7 +164,16 @@ def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:
 
 def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)) -> list[str]:
     """Register the ids of ``task`` (a name in :data:`rdmp_gym.envs.tasks.TASKS`) on ``robots`` (registered robot
-    names) for each of its versions; returns the episodic ids."""
+    names, :data:`rdmp_gym.envs.robots.ROBOTS`) for each of its versions; returns the episodic ids. A task or robot
+    that is not registered is a ValueError naming it and the registered ones."""
+    if not isinstance(task, str) or task not in TASKS:
+        raise ValueError(f"task: expected a registered task, one of {sorted(TASKS)} (register one with "
+                         f"rdmp_gym.envs.tasks.register_task first), got {task!r}")
+    from .robots import ROBOTS
+
+    if not isinstance(robots, (tuple, list)) or not all(isinstance(robot, str) and robot in ROBOTS for robot in robots):
+        raise ValueError(f"robots: expected a tuple of registered robot names, some of {sorted(ROBOTS)}, got "
+                         f"{robots!r}")
     ids = []
     entry = TASKS[task]
     for robot in robots:

@@ -19,8 +19,11 @@
    per-control-step cost (``info["cost_trace"]``, summing to ``-reward``), ``info["is_success"]``,
    ``info["failure_causes"]`` and the task's own info keys.
 
-The task's own attributes and methods read and its attributes write through the face where the face has none of
-that name (``env.unwrapped.tolerance`` is ``env.unwrapped.task.tolerance``).
+What the tools (learners, evaluation, logs, figures) may know of the task, the face declares from the task's
+description: :meth:`RhythmicTaskEnv.task_contract` (its metrics, context fields and kinds, success, smoothness
+measure) and :meth:`RhythmicTaskEnv.executed_path`. The task's own attributes and methods read and its attributes
+write through the face where the face has none of that name (``env.unwrapped.tolerance`` is
+``env.unwrapped.task.tolerance``), for code that knows the task; the tools never rely on it.
 
 Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`TaskDescription.render_overlay`),
 ``"depth_array"`` (depth in m) or ``"human"`` (MuJoCo's viewer, following every control step; needs a display);
@@ -37,7 +40,10 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
+from rdmp_gym import RhythmicDMP
+
 from .action import checked_action
+from .contract import TaskContract
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
 from .robots import RobotDescription, get_robot
@@ -118,13 +124,14 @@ class RhythmicTaskEnv(gym.Env):
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.frames: list[np.ndarray] = []
         self.record_frames = bool(record_frames)
-        self._faced = True                    # from here on the task's own attributes write through the face
+        #: the episode's context (set by ``reset``; the face's own, also where the task keeps one of that name)
         self.context: Any = None
         #: what the task draws on this episode's frames (its record of the episode so far; None before the first step)
         self.overlay: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
+        self._faced = True                    # from here on the task's own attributes write through the face
 
     def __getattr__(self, name: str) -> Any:
         """The task's own attribute ``name`` where the face has none (``env.unwrapped.tolerance``)."""
@@ -171,6 +178,32 @@ class RhythmicTaskEnv(gym.Env):
         """How active each action dimension's parameter is at each control step, ``[T, n]`` in [0, 1]
         (:meth:`TaskDescription.action_time_weights`)."""
         return self.task.action_time_weights(self.dmp, self.times, self.action_map)
+
+    def param_slices(self) -> dict[str, slice]:
+        """``{group: slice}`` of the DMP parameters ``theta [P]`` (the task's groups)."""
+        return dict(self.dmp.param_slices(self.task.groups))
+
+    def policy_dmp(self, theta: np.ndarray) -> RhythmicDMP:
+        """The imitation DMP with the parameters ``theta [P]`` (the task's groups): the DMP a policy executes, as a
+        run saves it."""
+        return self.dmp.with_params(np.asarray(theta, dtype=np.float64), self.task.groups)
+
+    # ------------------------------------------------------------------ the task's contract
+    def task_contract(self) -> TaskContract:
+        """What the tools may know of the task (:mod:`rdmp_gym.envs.contract`), from its description: its metrics,
+        context fields and kinds, the smoothness measure of the executed path (the tool path, x y z in the task
+        frame, at the control period); every episode reports ``is_success``."""
+        task = self.task
+        return TaskContract(name=task.name, metrics=tuple(task.metrics), context_fields=dict(task.context_fields()),
+                            has_success=True, smoothness=task.smoothness_measure, dt=float(self.dt),
+                            path_labels=("x", "y", "z"), context_kind=task.context_kind)
+
+    def executed_path(self, action: np.ndarray) -> np.ndarray:
+        """The tool path ``[T, 3]`` (task frame) that :meth:`step` executes for ``action [n]`` (clipped to [-1, 1]) in
+        this episode's context, as planned and changed by the task before execution
+        (:meth:`TaskDescription.execution_path`), without simulating it."""
+        plan = self.plan(*self._split(self._check_action(action)))
+        return self.task.execution_path(plan, self)
 
     # ------------------------------------------------------------------ gym API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:

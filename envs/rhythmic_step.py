@@ -44,7 +44,11 @@ from .rhythmic_env import RhythmicTaskEnv
 from .servo import ServoSimulation
 from .step_book import REWARD_EVERY, StepBook
 
-__all__ = ["RhythmicTaskStepEnv"]
+__all__ = ["REFUSED", "RhythmicTaskStepEnv"]
+
+#: settings of the episodic face that no step twin honours, and why (a book refuses more: its ``refused``)
+REFUSED = {"record_frames": "the face captures frames in its own rollout, which the twin does not run; record with the "
+                            "episodic env's record_episode"}
 
 
 class RhythmicTaskStepEnv(gym.Env):
@@ -55,8 +59,8 @@ class RhythmicTaskStepEnv(gym.Env):
         reward_every: control steps between the task's judgements of the episode so far (the generic book's reward
             resolution; default 5); a task with its own book may refuse it.
         **kwargs: the episodic face's keywords (:class:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv`: task, robot,
-            version, the task's settings); the book's :attr:`~rdmp_gym.envs.step_book.StepBook.refused` are refused
-            by name.
+            version, the task's settings); :data:`REFUSED` (``record_frames``) and the book's
+            :attr:`~rdmp_gym.envs.step_book.StepBook.refused` are refused by name.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "depth_array"], "render_fps": 100}
@@ -73,7 +77,7 @@ class RhythmicTaskStepEnv(gym.Env):
         every = REWARD_EVERY if reward_every is None else reward_every
         #: the task's step interface (:class:`~rdmp_gym.envs.step_book.StepBook`)
         self.book: StepBook = face.task.step_book(face, every) or StepBook(face, every)
-        refuse_settings(self.book.refused, {**kwargs, "reward_every": reward_every}, "the step twin")
+        refuse_settings({**REFUSED, **self.book.refused}, {**kwargs, "reward_every": reward_every}, "the step twin")
         self.render_mode = face.render_mode
         self.metadata = {**self.metadata, "render_fps": max(1, round(face.control_rate))}
         dmp = face.dmp

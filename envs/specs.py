@@ -48,16 +48,10 @@ def env_class(env_id: str) -> type | None:
     return returned if inspect.isclass(returned) and issubclass(returned, gym.Env) else None
 
 
-#: what an episodic env has beside its contract: the map between its action and the DMP's parameters
-_EPISODIC_API = ("action_to_params", "params_to_action", "action_time_weights")
-
-
 def declares_contract(kind: type) -> bool:
-    """Whether envs of the class ``kind`` are episodic (one step = one DMP rollout), which the agents run as they
-    are: they declare a task contract (``task_contract()``) or map their action to a DMP's parameters
-    (``action_to_params``, ``params_to_action``, ``action_time_weights``)."""
-    return callable(getattr(kind, "task_contract", None)) or all(callable(getattr(kind, name, None))
-                                                                 for name in _EPISODIC_API)
+    """Whether envs of the class ``kind`` declare a task contract (``task_contract()``, :mod:`rdmp_gym.envs.contract`):
+    the episodic envs (one step = one DMP rollout), which the agents run as they are."""
+    return callable(getattr(kind, "task_contract", None))
 
 
 def is_episodic(env_id: str) -> bool:

@@ -24,6 +24,8 @@ import numpy as np
 from rdmp_gym import Demonstration, RhythmicDMP, wiping_demonstration
 from rdmp_gym.dmp.fitting import FADE_BEFORE_T
 
+from .contract import Metric, TaskContract
+
 __all__ = ["TrackingEnv"]
 
 _ERROR_UNIT = 0.01  # m
@@ -44,7 +46,8 @@ class TrackingEnv(gym.Env):
         weight_scale: action scale of a weight, as a fraction of its group's largest |weight|.
         phase_scale, radius_scale: action scales of ``phi0`` (rad) and of ``r0`` (fraction of ``r0``).
 
-    ``step`` returns ``info`` with ``cost_trace`` (``[T]``), ``valid`` and ``reward_terms``.
+    ``step`` returns ``info`` with ``cost_trace`` (``[T]``), ``valid``, ``reward_terms`` and ``rms_error`` (the RMS
+    distance to the target, m: the task's metric in its contract, :meth:`task_contract`; no ``is_success``).
     """
 
     metadata = {"render_modes": []}  # noqa: RUF012 (gymnasium's class attribute)
@@ -109,6 +112,22 @@ class TrackingEnv(gym.Env):
         """``[T_ctrl, n]`` activation in [0, 1] of each action dimension at each control step."""
         return self.dmp.param_time_weights(self.t[self._control], self.groups)
 
+    def policy_dmp(self, theta: np.ndarray) -> RhythmicDMP:
+        """The DMP with the parameters ``theta [P]`` of the selected groups."""
+        return self.dmp.with_params(np.asarray(theta, dtype=np.float64), self.groups)
+
+    def task_contract(self) -> TaskContract:
+        """What the tools may know of the task: the tracking error per episode, the context's ``shift`` (x, y), no
+        success; the executed path is the DMP's at the control steps."""
+        return TaskContract(name="DMPTracking", metrics=(Metric("rms_error", "tracking error (m)",
+                                                                higher_is_better=False, unit="m"),),
+                            context_fields={"shift": (0, 2)}, has_success=False, smoothness="jerk",
+                            dt=self._dt, path_labels=("x", "y", "z"))
+
+    def executed_path(self, action: np.ndarray) -> np.ndarray:
+        """``[T_ctrl, 3]`` the path :meth:`step` executes for ``action [n]`` (clipped to [-1, 1])."""
+        return self.rollout_path(self.action_to_params(np.clip(self._checked(action), -1.0, 1.0)))
+
     def target(self) -> np.ndarray:
         """``[T, 3]`` the target path for the current context (on the integration grid)."""
         return self._base + self._blend[:, None] * self._context
@@ -135,11 +154,14 @@ class TrackingEnv(gym.Env):
     def _observation(self) -> np.ndarray:
         return np.clip(self._context[:2], -0.1, 0.1).astype(np.float32)
 
-    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+    def _checked(self, action: Any) -> np.ndarray:
         action = np.asarray(action, dtype=np.float64)
         if action.shape != self.action_space.shape or not np.all(np.isfinite(action)):
             raise ValueError(f"action: expected {self.action_space.shape} finite values, got shape {action.shape}")
-        theta = self.action_to_params(np.clip(action, -1.0, 1.0))
+        return action
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        theta = self.action_to_params(np.clip(self._checked(action), -1.0, 1.0))
         error = np.linalg.norm(self.rollout_path(theta) - self.target()[self._control], axis=1) / _ERROR_UNIT
         duration = float(self.t[-1])
         costs = error**2 * self._dt / duration

@@ -39,7 +39,6 @@ for update in range(args.updates):
     results = [run_episode(env, a, int(s), None) for a, s in zip(actions, seeds, strict=True)]
     learner.tell(EpisodeBatch(actions=actions, returns=np.array([r["return"] for r in results]),
                               cost_traces=np.stack([r["cost_trace"] for r in results]),
-                              coverage=np.full(8, np.nan), force_in_band=np.full(8, np.nan),
                               valid=np.ones(8, bool), seeds=seeds))
     mean_policy = run_episode(env, learner.mean, args.seed, None)["return"]
     print(f"update {update + 1}: batch mean {np.mean([r['return'] for r in results]):.1f}, "

@@ -9,7 +9,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np
 import pytest
 import torch
-from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
+from rdmp_gym.agents.learners import BBRLConfig, EpisodeBatch, SearchSpace, make_learner, policy_from_state
 from rdmp_gym.agents.learners.bbrl import gaussian_kl, sample_weights
 from rdmp_gym.agents.learners.smooth_exploration import squash, unsquash
 
@@ -31,8 +31,8 @@ def _batch(actions, returns, traces=None, seeds=None):
     k = len(returns)
     traces = np.zeros((k, 1)) if traces is None else traces
     seeds = np.zeros(k) if seeds is None else seeds
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), traces, np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.asarray(seeds, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), traces, np.ones(k, dtype=bool),
+                        np.asarray(seeds, dtype=np.int64))
 
 
 def _run(learner, updates, seed=0, random_returns=False):
@@ -165,7 +165,7 @@ def test_the_affine_part_is_each_dimensions_weighted_least_squares_fit():
         start = learner.policy.mean(contexts_t)
     learner._fit_affine(contexts_t, torch.as_tensor(samples), np.full((1, 30), 1 / 30), start)
     fitted = learner.policy.affine.detach().numpy()
-    np.testing.assert_allclose(fitted[:, 0] + learner.fixed, offset, atol=1e-6)    # u0 = the start action
+    np.testing.assert_allclose(fitted[:, 0] + learner.policy.u0.numpy(), offset, atol=1e-6)    # u0: the start
     np.testing.assert_allclose(fitted[:, 1:], gains, atol=1e-6)
     weights = np.full((N, 30), 1 / 30)
     weights[0] = 0.0
@@ -298,23 +298,6 @@ def test_remaining_step_weighting_lets_the_steps_that_see_most_of_the_episode_co
         _learner(step_weighting="late")
 
 
-def test_groups_leave_the_other_dimensions_at_the_start_action():
-    start = np.linspace(-0.5, 0.5, N)
-    learner = make_learner("bbrl", start, 10, np.random.default_rng(0), {"groups": "amplitude"}, space=_space())
-    _run(learner, 3)
-    contexts = np.random.default_rng(4).uniform(-1, 1, (10, 2))
-    asked, policy = learner.ask(contexts), learner.policy_actions(contexts)
-    np.testing.assert_allclose(asked[:, : N - 2], np.broadcast_to(start[: N - 2], (10, N - 2)), atol=1e-12)
-    np.testing.assert_allclose(policy[:, : N - 2], asked[:, : N - 2], atol=1e-12)
-    assert np.all(np.std(asked[:, N - 2:], axis=0) > 1e-3)                  # the amplitudes are explored
-    np.testing.assert_allclose(policy_from_state(learner.state_dict(), contexts), policy, atol=1e-12)
-    other = _learner()
-    with pytest.raises(ValueError, match="state"):
-        other.load_state_dict(learner.state_dict())
-    with pytest.raises(ValueError, match="groups"):
-        _learner(groups="sweep")
-
-
 def test_a_predicted_context_cost_lets_the_best_sample_of_an_expensive_context_count():
     """Contexts near 0 cost 10 more whatever the action (a cost no linear function of the context explains);
     among them, sample 2 acted best. Over the ridge alone their samples get no weight; with the context's cost
@@ -346,51 +329,18 @@ def test_the_network_baseline_learns_a_cost_no_linear_function_of_the_context_gi
     assert values[outer].mean() - values[~outer].mean() > 3.0            # the jump is 5; a linear fit sees ~0
 
 
-def test_replay_revisits_the_contexts_the_policy_did_worst_in():
-    """Context seed 3 cost far more than its context predicts: of 10 fresh seeds, 3 (replay 0.3) are replaced
-    by distinct earlier ones, seed 3 almost always among them; without replay the fresh seeds stay."""
-    contexts = np.random.default_rng(1).uniform(-1, 1, (10, 2))
-    fresh = np.arange(100, 110)
-    assert np.array_equal(_learner().choose_seeds(fresh), fresh)
-    hits = 0
-    for seed in range(20):
-        learner = _learner(seed, replay=0.3)
-        actions = learner.ask(contexts)
-        learner.tell(_batch(actions, np.where(np.arange(10) == 3, -10.0, 0.0), seeds=np.arange(10)))
-        seeds = learner.choose_seeds(fresh)
-        replayed = seeds[~np.isin(seeds, fresh)]
-        assert replayed.size == 3 and np.unique(replayed).size == 3 and np.all(replayed < 10)
-        hits += 3 in replayed
-    assert hits >= 18
-
-
-def test_the_replay_keeps_the_most_recent_contexts_once_each():
-    learner = _learner(replay=0.5, replay_size=15)
-    rng = np.random.default_rng(2)
-    for update in range(4):
-        contexts = rng.uniform(-1, 1, (10, 2))
-        seeds = learner.choose_seeds(np.arange(10) + 10 * update)
-        learner.tell(_batch(learner.ask(contexts), rng.standard_normal(10), seeds=seeds))
-        assert learner._replay_seeds.size == min(15, np.unique(learner._replay_seeds).size)
-    assert learner._replay_seeds.size == 15 and np.array_equal(np.sort(learner._replay_seeds[-10:]), np.sort(seeds))
-
-
-def test_resume_with_replay_chooses_the_same_contexts():
-    learner = _learner(replay=0.3)
-    rng = np.random.default_rng(3)
-    for update in range(3):
-        seeds = learner.choose_seeds(np.arange(10) + 10 * update)
-        learner.tell(_batch(learner.ask(rng.uniform(-1, 1, (10, 2))), rng.standard_normal(10), seeds=seeds))
-    twin = _learner(seed=99, replay=0.3)
-    twin.load_state_dict(learner.state_dict())
-    np.testing.assert_array_equal(twin.choose_seeds(np.arange(50, 60)), learner.choose_seeds(np.arange(50, 60)))
-    state = learner.state_dict()
-    state["replay_scores"] = state["replay_scores"][:-1]
-    with pytest.raises(ValueError, match="replay_seeds"):
-        twin.load_state_dict(state)
-    for bad in ({"replay": 1.0}, {"replay": -0.1}, {"replay_temperature": 0.0}, {"replay_size": 0}):
-        with pytest.raises(ValueError, match=next(iter(bad))):
-            _learner(**bad)
+def test_a_saved_config_may_hold_what_bbrl_fixes_at_its_fixed_value_only():
+    """``config.json`` of a run holds every setting it ran with: a name bbrl no longer takes as an option is read
+    where it holds the value bbrl always runs with, and is an error naming it where it holds another."""
+    saved = {**BBRLConfig(epsilon=1.0).to_dict(), "groups": [], "value_ridge": 1, "replay": 0.0,
+             "replay_temperature": 0.3, "replay_size": 100}
+    assert BBRLConfig.from_dict(saved, "bbrl") == BBRLConfig(epsilon=1.0)
+    with pytest.raises(ValueError, match=r"bbrl\.replay: not an option of bbrl, which always runs with replay = 0\.0"):
+        BBRLConfig.from_dict({**saved, "replay": 0.3}, "bbrl")
+    with pytest.raises(ValueError, match=r"bbrl\.groups"):
+        BBRLConfig.from_dict({"groups": ["amplitude"]}, "bbrl")
+    with pytest.raises(ValueError, match=r"unknown option\(s\) \['replays'\]"):
+        BBRLConfig.from_dict({"replays": 0.0}, "bbrl")
 
 
 def test_antithetic_sampling_mirrors_each_perturbation_on_a_shared_context():
@@ -405,8 +355,6 @@ def test_antithetic_sampling_mirrors_each_perturbation_on_a_shared_context():
         learner.ask(np.random.default_rng(3).uniform(-1, 1, (10, 2)))
     with pytest.raises(ValueError, match="rollouts"):
         make_learner("bbrl", np.zeros(N), 9, np.random.default_rng(0), {"antithetic": True}, space=_space())
-    with pytest.raises(ValueError, match="antithetic"):
-        _learner(antithetic=True, replay=0.3)
 
 
 def test_a_pairs_mean_cost_judges_its_samples_whatever_the_context_costs():

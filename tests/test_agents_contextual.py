@@ -1,6 +1,7 @@
 """Contextual learners, smooth exploration, smooth bounds and the protocol's statistics (MuJoCo-free)."""
 
 import os
+from types import SimpleNamespace
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -11,6 +12,7 @@ from rdmp_gym.agents.learners.contextual import policy_from_state
 from rdmp_gym.agents.learners.smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
+from rdmp_gym.envs.contract import TaskContract
 from rdmp_gym.envs.registration import TRACKING_ID
 
 N = 12
@@ -23,8 +25,8 @@ def _space(contexts=2):
 
 def _batch(actions, returns):
     k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.ones(k, dtype=bool),
+                        np.zeros(k, dtype=np.int64))
 
 
 def _toy(agent, target, updates=60, seed=0, **options):
@@ -74,8 +76,8 @@ def test_bounded_samples_stay_in_the_box_and_the_update_finds_an_optimum_near_a_
     assert np.all(np.abs(a) < 1.0) and np.all(np.diff(a) > 0)               # monotone into the open box
     np.testing.assert_allclose(squash(np.array([-0.3, 0.5, 0.8])), [-0.3, 0.5, 0.8])   # identity inside
     np.testing.assert_allclose(unsquash(a), u, atol=1e-9)
-    history, asked, learner = _toy("creps", lambda s: np.full((len(s), N), 0.7), updates=50, contextual=False,
-                                   length=0.0, sigma=0.6)
+    history, asked, learner = _toy("amplitude", lambda s: np.full((len(s), N), 0.7), updates=50, groups=[],
+                                   sigma=0.6)                           # REPS with one θ for all contexts
     assert np.all(np.abs(asked) <= 1.0)
     assert np.max(np.abs(learner.mean - 0.7)) < 0.05                          # no pull toward 0 or toward the face
     assert history[-1] > -0.01
@@ -83,7 +85,7 @@ def test_bounded_samples_stay_in_the_box_and_the_update_finds_an_optimum_near_a_
 
 def test_contextual_reps_solves_a_contextual_quadratic_far_better_than_a_shared_theta():
     contextual, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01)
-    shared, _, _ = _toy("creps", _contextual_target, length=0.0, gain_prior=0.01, contextual=False)
+    shared, _, _ = _toy("amplitude", _contextual_target, gain_prior=0.01, groups=[])    # REPS, one θ
     best_shared = -np.sum(GAINS**2) / 3                                        # the best single θ's expected loss
     assert contextual[-1] > 0.3 * best_shared                                  # < 30 % of the best shared loss
     assert shared[-1] < 0.7 * best_shared
@@ -109,16 +111,29 @@ def test_state_round_trip_continues_identically():
         assert isinstance(value, (str, int, float, np.ndarray, dict))
 
 
+class _Declared:
+    """An env that declares only its context fields (its contract) and an action space of ``N``."""
+
+    action_space = SimpleNamespace(shape=(N,))
+
+    def __init__(self, fields):
+        self.fields = fields
+
+    @property
+    def unwrapped(self):
+        return self
+
+    def task_contract(self):
+        return TaskContract(name="fields", context_fields=self.fields)
+
+
 def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_contexts():
     """ArmarWipe-v1's layout: [..., obstacle (0/1), obstacle x, y]; x, y are (0, 0) without a cup."""
-    from types import SimpleNamespace
-
     rng = np.random.default_rng(0)
     present = (rng.uniform(size=200) < 0.4).astype(float)
     position = np.where(present[:, None] > 0, rng.normal([-0.04, 0.13], [0.02, 0.01], (200, 2)), 0.0)
     obs = np.column_stack([rng.normal(0, 0.01, 200), present, position])
-    env = SimpleNamespace(unwrapped=SimpleNamespace(context_fields={"obstacle": (1, 1), "obstacle_position": (2, 2)}),
-                          action_space=SimpleNamespace(shape=(N,)))
+    env = _Declared({"obstacle": (1, 1), "obstacle_position": (2, 2)})
     space = SearchSpace.from_env(env, obs)
     assert space.context_gate.tolist() == [-1, -1, 1, 1]
     np.testing.assert_allclose(space.context_center[2:], position[present > 0].mean(axis=0))
@@ -129,8 +144,7 @@ def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_c
     np.testing.assert_allclose(phi[present > 0, 2:].std(axis=0), 1.0, rtol=1e-9)  # cup: unit scale
     learner.gains = rng.normal(size=learner.gains.shape)
     np.testing.assert_allclose(policy_from_state(learner.state_dict(), obs), learner.policy_actions(obs))
-    plain = SimpleNamespace(unwrapped=SimpleNamespace(), action_space=SimpleNamespace(shape=(N,)))
-    assert SearchSpace.from_env(plain, obs).context_gate is None                  # no layout: no gate
+    assert SearchSpace.from_env(_Declared({}), obs).context_gate is None         # no fields: no gate
 
 
 def test_contextual_learner_rejects_bad_input():
@@ -143,8 +157,11 @@ def test_contextual_learner_rejects_bad_input():
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"groups": "transient"}, space=_space())
     with pytest.raises(ValueError, match="space"):
         make_learner("creps", np.zeros(N), 10, np.random.default_rng(0))
-    with pytest.raises(ValueError, match="weighting"):
-        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"weighting": "ppo"}, space=_space())
+    with pytest.raises(ValueError, match=r"creps\.weighting: not an option of creps, which always runs with "
+                                         r"weighting = 'reps'"):
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"weighting": "pi2"}, space=_space())
+    with pytest.raises(ValueError, match=r"sigma"):                  # above the exploration's ceiling
+        make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), {"sigma": 0.7}, space=_space())
 
 
 def test_amplitude_baseline_moves_only_the_amplitude():
@@ -167,17 +184,17 @@ def test_bootstrap_intervals_cover_the_true_value():
         interval(np.array([1.0, np.nan]))
 
 
-def test_protocol_context_sets_are_disjoint_and_success_needs_all_three():
+def test_protocol_context_sets_are_disjoint_and_success_is_the_envs_own():
     train, val, test = TRAIN_SEED_LIMIT, validation_seeds(50), final_test_seeds(50)
     assert test.min() >= train and val.min() >= train and not set(val) & set(test)
     k = 4
-    batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([0.96, 0.94, 0.99, 0.99]),
-                         np.array([0.95, 0.95, 0.85, 0.95]), np.array([True, True, True, False]), np.zeros(k, int))
-    assert success(batch).tolist() == [True, False, False, False]
-    given = EpisodeBatch(*(getattr(batch, name) for name in ("actions", "returns", "cost_traces", "coverage",
-                                                             "force_in_band", "valid", "seeds")),
+    metrics = {"coverage": np.array([0.96, 0.94, 0.99, 0.99]), "force_in_band_fraction": np.full(k, 0.95)}
+    batch = EpisodeBatch(np.zeros((k, 1)), np.zeros(k), np.zeros((k, 1)), np.array([True, True, True, False]),
+                         np.zeros(k, int), metrics)
+    assert success(batch) is None                      # no is_success: none made up from the task's metrics
+    given = EpisodeBatch(batch.actions, batch.returns, batch.cost_traces, batch.valid, batch.seeds, metrics,
                          success=np.array([False, True, True, False]))
-    assert success(given).tolist() == [False, True, True, False]     # the env's is_success wins
+    assert success(given).tolist() == [False, True, True, False]
 
 
 @pytest.mark.parametrize("agent", ["creps", "cpi2"])
@@ -273,10 +290,15 @@ def test_the_wiping_task_defaults_of_the_contextual_searches_are_written_into_th
     assert TrainConfig.from_dict(old).options.sigma_factors == {"approach": 3.0}  # a config.json of earlier versions
     with pytest.raises(TypeError, match=r"cpi2\.sigma"):
         TrainConfig(agent="cpi2", options={"sigma": "big"})
+    fixed = {"weighting": "pi2", "contextual": True, "random_returns": False, "max_sigma": 0.6}
+    saved = {**config.to_dict(), "options": {**config.options.to_dict(), **fixed}}
+    assert TrainConfig.from_dict(saved) == config                                # what cpi2 always runs with
+    with pytest.raises(ValueError, match=r"cpi2\.max_sigma"):
+        TrainConfig.from_dict({**saved, "options": {**saved["options"], "max_sigma": 0.4}})
 
 
-def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
-    """With ``replay=0.5`` half of the second update's rollouts revisit contexts of the first (tracking task)."""
+def test_bbrl_antithetic_pairs_share_their_contexts_on_a_task():
+    """With ``antithetic`` the training loop runs every reset seed twice in a row (tracking task)."""
     from rdmp_gym.agents.pool import Evaluator
     from rdmp_gym.agents.protocol import context_observations
     from rdmp_gym.agents.tasks import TaskSpec
@@ -286,8 +308,9 @@ def test_bbrl_replay_reruns_earlier_training_contexts_on_a_task():
     with Evaluator(spec, 1) as evaluator:
         space = SearchSpace.from_env(evaluator.env, context_observations(evaluator.env, np.arange(8), spec.options()))
         n = evaluator.env.action_space.shape[0]
-        learner = make_learner("bbrl", np.zeros(n), 4, np.random.default_rng(0), {"replay": 0.5}, space=space)
+        learner = make_learner("bbrl", np.zeros(n), 4, np.random.default_rng(0), {"antithetic": True}, space=space)
         agent = ESAgent(learner, evaluator, np.random.default_rng(1), shared_context=False)
         first, second = agent.train_update(), agent.train_update()
-    assert np.unique(first.seeds).size == 4
-    assert np.sum(np.isin(second.seeds, first.seeds)) == 2
+    for batch in (first, second):
+        assert np.array_equal(batch.seeds[0::2], batch.seeds[1::2]) and np.unique(batch.seeds).size == 2
+        assert not np.array_equal(batch.actions[0], batch.actions[1])           # mirrored, not repeated

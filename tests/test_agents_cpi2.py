@@ -3,12 +3,15 @@ on a toy where only one segment of the path matters, the trust region of its upd
 (MuJoCo-free)."""
 
 import os
+from dataclasses import dataclass
+from typing import ClassVar
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner, policy_from_state
+from rdmp_gym.agents.learners.contextual import MAX_SIGMA, ContextualSearch, CPI2Config, CPIBBConfig
 
 N, T, K = 12, 20, 10
 EARLY, LATE = slice(0, N // 2), slice(N // 2, N)
@@ -28,10 +31,27 @@ def _space(time_weights=None) -> SearchSpace:
     return SearchSpace({"first": EARLY, "second": LATE}, 1, np.zeros(2), np.ones(2), time_weights=weights)
 
 
-def _learner(weighting="pi2", seed=0, time_weights=None, **options):
-    options = {"length": 0.0, "weighting": weighting, **options}
-    return make_learner("cpi2", np.zeros(N), K, np.random.default_rng(seed), options,
+def _learner(seed=0, time_weights=None, **options):
+    return make_learner("cpi2", np.zeros(N), K, np.random.default_rng(seed), {"length": 0.0, **options},
                         space=_space(time_weights))
+
+
+@dataclass(frozen=True)
+class _SharedPI2(CPI2Config):
+    """``cpi2`` with one θ for every context."""
+
+    contextual: ClassVar[bool] = False
+
+
+@dataclass(frozen=True)
+class _SharedPIBB(CPIBBConfig):
+    """``cpibb`` with one θ for every context."""
+
+    contextual: ClassVar[bool] = False
+
+
+def _shared(config: type, seed: int) -> ContextualSearch:
+    return ContextualSearch(np.zeros(N), K, np.random.default_rng(seed), _space(), config(length=0.0))
 
 
 def _traces(actions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -46,8 +66,7 @@ def _traces(actions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
 
 def _batch(actions: np.ndarray, traces: np.ndarray) -> EpisodeBatch:
     k = actions.shape[0]
-    return EpisodeBatch(actions, -traces.sum(axis=1), traces, np.full(k, np.nan), np.full(k, np.nan),
-                        np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, -traces.sum(axis=1), traces, np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
 
 
 def _train(learner, updates: int, seed: int = 0) -> float:
@@ -61,10 +80,11 @@ def _train(learner, updates: int, seed: int = 0) -> float:
 
 def test_per_step_credit_ignores_the_cost_of_a_segment_no_weight_acts_in():
     """The late weights are judged by the cost from step T/2 on, which the early draw does not reach: per-step
-    credit (``pi2``) learns them several times closer than one weight per episode (``pibb``), in every seed."""
+    credit (PI²'s weighting) learns them several times closer than one weight per episode (PI^BB's), in every
+    seed (one θ for every context, both)."""
     start = float(np.sum(TARGET[LATE] ** 2))
-    per_step = np.array([_train(_learner("pi2", seed=s, contextual=False), 15, s) for s in range(3)])
-    per_episode = np.array([_train(_learner("pibb", seed=s, contextual=False), 15, s) for s in range(3)])
+    per_step = np.array([_train(_shared(_SharedPI2, s), 15, s) for s in range(3)])
+    per_episode = np.array([_train(_shared(_SharedPIBB, s), 15, s) for s in range(3)])
     assert np.all(per_step < 0.2 * start)
     assert np.all(per_step < 0.25 * per_episode)
 
@@ -84,9 +104,9 @@ def test_a_stronger_gain_prior_keeps_the_gains_nearer_their_previous_value():
 
 
 def test_the_exploration_stays_within_its_bounds():
-    learner = _learner(sigma=0.3, min_sigma=0.05, max_sigma=0.4)
+    learner = _learner(sigma=0.3, min_sigma=0.05)
     _train(learner, 20)
-    assert np.all(learner.sigmas >= 0.05 - 1e-12) and np.all(learner.sigmas <= 0.4 + 1e-12)
+    assert np.all(learner.sigmas >= 0.05 - 1e-12) and np.all(learner.sigmas <= MAX_SIGMA + 1e-12)
     assert learner.sigmas.min() < 0.3                      # it adapted
 
 
@@ -103,7 +123,7 @@ def test_resume_continues_bit_for_bit_with_the_cost_traces_of_the_reused_batches
 
 def test_clear_errors_for_missing_or_misshaped_activations_and_traces():
     with pytest.raises(ValueError, match="time_weights"):
-        make_learner("cpi2", np.zeros(N), K, np.random.default_rng(0), {"weighting": "pi2"},
+        make_learner("cpi2", np.zeros(N), K, np.random.default_rng(0),
                      space=SearchSpace({"all": slice(0, N)}, 1, np.zeros(2), np.ones(2)))
     with pytest.raises(ValueError, match="time_weights"):
         _learner(time_weights=np.ones((T, N - 1)))

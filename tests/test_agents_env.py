@@ -47,7 +47,7 @@ def test_imitation_rollouts_wipe_and_are_repeatable():
     assert batch.valid.all()
     assert [cause == "" for cause in batch.failures] == batch.success.tolist()
     assert all(cause in ("", "coverage", "force") for cause in batch.failures)      # no cup, no collision here
-    assert np.all(batch.coverage > 0.6) and np.all(batch.force_in_band > 0.8)
+    assert np.all(batch.metrics["coverage"] > 0.6) and np.all(batch.metrics["force_in_band_fraction"] > 0.8)
     assert batch.returns[0] == batch.returns[2]                  # same seed, same context, same episode
     np.testing.assert_allclose(-batch.cost_traces.sum(axis=1), batch.returns, atol=1e-6)
 
@@ -65,7 +65,7 @@ def trained(tmp_path_factory, context):
     return run_of
 
 
-@pytest.mark.parametrize("agent", ["pi2", "pibb", "cmaes"])
+@pytest.mark.parametrize("agent", ["pi2", "cmaes"])
 def test_learners_improve_the_wipe_from_a_shrunk_start(trained, agent):
     records = trained(agent).read_log()
     start, best = records[0], max(records[1:], key=lambda r: r["eval_return_mean"])

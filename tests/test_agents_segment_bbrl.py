@@ -50,7 +50,7 @@ def _traces(actions, rng, noise):
 def _batch(actions, traces, seeds=None):
     k = len(actions)
     costs = traces.sum(axis=1)
-    return EpisodeBatch(actions, -costs, traces, np.full(k, np.nan), np.full(k, np.nan), np.ones(k, dtype=bool),
+    return EpisodeBatch(actions, -costs, traces, np.ones(k, dtype=bool),
                         np.arange(k, dtype=np.int64) if seeds is None else seeds)
 
 
@@ -188,8 +188,6 @@ def test_bad_options_and_inputs_raise_clear_errors():
         _learner(segments=0)
     with pytest.raises(ValueError, match="episode_share"):
         _learner(episode_share=1.5)
-    with pytest.raises(ValueError, match="replay"):
-        _learner(replay=0.2)
     with pytest.raises(ValueError, match="time_weights"):
         make_learner("bbrl_segments", np.zeros(N), 10, np.random.default_rng(0), space=_space(None))
     with pytest.raises(ValueError, match="state"):

@@ -1,4 +1,4 @@
-"""Smooth exploration for PI², PI^BB and CMA-ES (``length`` > 0): the explored weights are correlated along the
+"""Smooth exploration for PI² and CMA-ES (``length`` > 0): the explored weights are correlated along the
 movement, so exploring does not make the paths jagged (MuJoCo-free)."""
 
 import os
@@ -25,7 +25,7 @@ def _roughness(actions):
     return float(np.mean(second**2) / np.mean(block**2))
 
 
-@pytest.mark.parametrize("agent", ["pi2", "pibb", "cmaes"])
+@pytest.mark.parametrize("agent", ["pi2", "cmaes"])
 def test_smooth_exploration_is_far_smoother_than_independent_noise(agent):
     weights = np.ones((5, N))
     rough, smooth = ([make_learner(agent, np.zeros(N), 200, np.random.default_rng(0),
@@ -38,7 +38,7 @@ def test_smooth_exploration_is_far_smoother_than_independent_noise(agent):
 
 def test_smooth_exploration_needs_the_layout():
     with pytest.raises(ValueError, match="space"):
-        make_learner("pibb", np.zeros(N), 10, np.random.default_rng(0), {"length": 5.0})
+        make_learner("cmaes", np.zeros(N), 10, np.random.default_rng(0), {"length": 5.0})
     with pytest.raises(ValueError, match="length"):
         make_learner("pi2", np.zeros(N), 10, np.random.default_rng(0), {"length": -1.0},
                      time_weights=np.ones((5, N)), space=_space())
@@ -59,12 +59,12 @@ def test_smooth_cmaes_resumes_exactly_and_keeps_the_box():
 
 def _batch(actions, returns):
     k = len(returns)
-    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.full(k, np.nan),
-                        np.full(k, np.nan), np.ones(k, dtype=bool), np.zeros(k, dtype=np.int64))
+    return EpisodeBatch(actions, np.asarray(returns, dtype=float), np.zeros((k, 1)), np.ones(k, dtype=bool),
+                        np.zeros(k, dtype=np.int64))
 
 
 def test_the_v2_task_explores_smoothly_by_default_and_v1_keeps_its_published_settings():
-    for agent in ("pi2", "pibb", "cmaes"):
+    for agent in ("pi2", "cmaes"):
         assert task_options(WIPE_V2_ID, agent, {})["length"] == 5.0
         assert "length" not in task_options(WIPE_ID, agent, {})
         assert task_options(WIPE_V2_ID, agent, {"length": 0.0})["length"] == 0.0

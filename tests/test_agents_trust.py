@@ -91,7 +91,7 @@ def test_an_object_array_in_the_checkpoint_npz_is_refused(tmp_path):
 # 2. --resume reads the run's own config ---------------------------------------------------------------
 def test_resume_takes_the_runs_config_and_only_extending_flags(tmp_path, capsys):
     out = tmp_path / "run"
-    assert _cli_train(out, "--agent", "pibb", "--updates", "2", "--rollouts", "4", "--seed", "5",
+    assert _cli_train(out, "--agent", "cmaes", "--updates", "2", "--rollouts", "4", "--seed", "5",
                       "--env-option", "n_periodic", "8", "n_transient", "8", "--env-option", "duration", "3") == 0
     assert _cli_train(out, "--resume") == 0                   # no flags: the run is complete, nothing added
     assert _updates(out) == [0, 1, 2]
@@ -181,12 +181,12 @@ def test_a_run_whose_first_update_is_all_invalid_stops_with_the_reasons(tmp_path
     Demonstration(demo.t, demo.Y * 1000.0, name="millimetres").to_csv(tmp_path / "mm.csv")
     small = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
     # a demonstration in millimetres is refused before any episode (the env's frame check) ...
-    mm = TrainConfig(agent="pibb", updates=5, rollouts=3, env_id=WIPE_ID, demo=str(tmp_path / "mm.csv"),
+    mm = TrainConfig(agent="cmaes", updates=5, rollouts=3, env_id=WIPE_ID, demo=str(tmp_path / "mm.csv"),
                      env_kwargs=small)
     with pytest.raises(ValueError, match=r"demonstration.*millimetres"):
         train(mm, tmp_path / "mm_run")
     # ... and settings under which no plan is executable stop the run after its first update, reasons counted
-    config = TrainConfig(agent="pibb", updates=5, rollouts=3, env_id=WIPE_ID,
+    config = TrainConfig(agent="cmaes", updates=5, rollouts=3, env_id=WIPE_ID,
                          env_kwargs={**small, "max_joint_speed": 1e-3})
     with pytest.raises(NoValidEpisodesError, match=r"all 3 episodes.*invalid_reason: joint_speed x3.*units"):
         train(config, tmp_path / "run")

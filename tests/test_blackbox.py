@@ -281,7 +281,6 @@ def test_a_learner_improves_on_the_tiny_env():
         results = [run_episode(env, action, seed, None) for seed, action in enumerate(actions)]
         learner.tell(EpisodeBatch(actions=actions, returns=np.array([r["return"] for r in results]),
                                   cost_traces=np.stack([r["cost_trace"] for r in results]),
-                                  coverage=np.full(8, np.nan), force_in_band=np.full(8, np.nan),
                                   valid=np.ones(8, bool), seeds=np.arange(8) + 8 * update))
     end = run_episode(env, learner.mean, 0, None)["return"]
     assert end > 0.5 * start          # returns are negative: the cost has at least halved
@@ -294,8 +293,7 @@ def test_pi2_takes_the_time_weights(arm):
     results = [run_episode(arm, action, seed, None) for seed, action in enumerate(actions)]
     learner.tell(EpisodeBatch(actions=actions, returns=np.array([r["return"] for r in results]),
                               cost_traces=np.stack([r["cost_trace"] for r in results]),
-                              coverage=np.full(4, np.nan), force_in_band=np.full(4, np.nan), valid=np.ones(4, bool),
-                              seeds=np.arange(4)))
+                              valid=np.ones(4, bool), seeds=np.arange(4)))
     assert learner.updates == 1 and np.all(np.isfinite(learner.mean))
 
 

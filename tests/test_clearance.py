@@ -94,9 +94,11 @@ def test_clearance_keeps_the_imitation_off_a_cup_it_knocks(envs):
     assert _run(guarded, TOUCHING_SEED)[0] == guarded_reward                    # the same seed, the same numbers
     base = guarded.unwrapped
     theta = base.action_map.theta0
-    shift = np.linalg.norm(base.task.executed_path(theta, base.context) - base.rollout_path(theta), axis=1).max()
+    executed = base.executed_path(np.zeros(base.action_space.shape))            # the action of theta0
+    np.testing.assert_array_equal(executed, base.task.executed_path(theta, base.context))
+    shift = np.linalg.norm(executed - base.rollout_path(theta), axis=1).max()
     assert shift == pytest.approx(guarded_info["clearance_push"])
-    gaps = base.task.hand_cup_gaps(base.task.executed_path(theta, base.context), base.context)
+    gaps = base.task.hand_cup_gaps(executed, base.context)
     assert set(gaps) == {"fingers", "thumb", "palm", "sponge"}
     assert all(gap.shape == (base.n_steps,) for gap in gaps.values())
     before = min(g.min() for g in base.task.hand_cup_gaps(base.rollout_path(theta), base.context).values())

@@ -261,24 +261,29 @@ def test_make_run_can_be_run_twice(tmp_path):
 
 
 def test_the_comparison_table_leaves_out_gains_a_task_does_not_measure(capsys):
-    """A task without dirt (the tracking env) has no coverage: its paired gain is "-", not an error."""
+    """A metric some test context has no value of (a path refused before it ran) has no paired gain: "-", not an
+    error; a task that reports no success (the tracking env) has no success rate, and no failures are listed."""
     from rdmp_gym.agents.run_commands import _print_comparison
 
-    def scores(success: list[bool]) -> dict:
-        return {"intervals": {}, "success": success, "coverage": [None] * len(success)}
+    def scores(returns: list[float], error: list[float | None]) -> dict:
+        return {"intervals": {}, "returns": returns, "success": None, "rms_error": error}
 
-    _print_comparison({"imitation": scores([False, True]), "trained": scores([True, True])})
+    _print_comparison({"has_success": False, "metrics": [{"key": "rms_error", "label": "tracking error (m)"}],
+                       "imitation": scores([-1.0, -2.0], [0.01, None]), "trained": scores([-0.5, -1.0], [0.005, 0.01])})
     printed = capsys.readouterr().out
-    assert "coverage -," in printed and "success 0.500 [" in printed and "fails on" not in printed
+    assert "tracking error (m) -" in printed and "return 0.750 [" in printed
+    assert "success" not in printed and "fails on" not in printed
 
 
 def test_the_comparison_says_which_criteria_each_policy_misses_and_where(capsys):
     from rdmp_gym.agents.run_commands import _print_comparison
 
     def scores(failures: list[str]) -> dict:
-        return {"intervals": {}, "success": [not f for f in failures], "coverage": [0.9] * 3, "failures": failures}
+        return {"intervals": {}, "returns": [-1.0] * 3, "success": [not f for f in failures], "coverage": [0.9] * 3,
+                "failures": failures}
 
-    _print_comparison({"imitation": scores(["coverage+cup", "", "cup"]), "trained": scores(["", "", ""])})
+    _print_comparison({"has_success": True, "metrics": [{"key": "coverage", "label": "coverage"}],
+                       "imitation": scores(["coverage+cup", "", "cup"]), "trained": scores(["", "", ""])})
     printed = capsys.readouterr().out
     assert "imitation fails on: coverage 1 (context 0), cup 2 (contexts 0, 2)" in printed
     assert "trained fails on: none" in printed

@@ -263,7 +263,7 @@ def test_fuzz_cli_fit(tmp_path_factory, flags, capsys):
     st.sampled_from(["--updates", "--rollouts", "--seed", "--perturbation", "--eval-episodes", "--start",
                      "--option", "--env-option", "--reset-option", "--workers", "--agent"]),
     st.sampled_from(["0", "1", "2", "-1", "nan", "1e99", "x", "sigma=0.1", "sigma=-1", "decay=nan", "duration=2.5",
-                     "n_periodic=2.5", "bogus=1", "perturbed", "shrunk", "pibb", "cmaes"])), max_size=3))
+                     "n_periodic=2.5", "bogus=1", "perturbed", "shrunk", "pi2", "cmaes"])), max_size=3))
 def test_fuzz_cli_train(tmp_path_factory, flags, capsys):
     from rdmp_gym.envs.registration import TRACKING_ID
 

@@ -9,6 +9,8 @@ import rdmp_gym.envs  # noqa: F401
 from bench_agents import _cache_key
 from rdmp_gym.agents.protocol import final_test_seeds, stratified_validation_seeds, validation_seeds
 from rdmp_gym.agents.training import TrainConfig
+from rdmp_gym.envs.contract import TaskContract, contract_of
+from rdmp_gym.envs.registration import TRACKING_ID
 from rdmp_gym.envs.tasks.wiping.context import CONTEXT_KINDS
 
 
@@ -28,6 +30,9 @@ class _Kinds(gym.Env):
         seed = int(observation[0])
         return "rare" if seed % self.rare == 0 else ("even" if seed % 2 == 0 else "odd")
 
+    def task_contract(self):
+        return TaskContract(name="kinds", context_kind=self.context_kind)
+
 
 def test_a_rare_kind_is_validated_as_often_as_a_common_one():
     env = _Kinds()
@@ -40,7 +45,7 @@ def test_a_rare_kind_is_validated_as_often_as_a_common_one():
 
 
 def test_an_env_without_kinds_gets_the_plain_validation_seeds():
-    np.testing.assert_array_equal(stratified_validation_seeds(gym.make("Pendulum-v1"), 5), validation_seeds(5))
+    np.testing.assert_array_equal(stratified_validation_seeds(gym.make(TRACKING_ID), 5), validation_seeds(5))
     with pytest.raises(ValueError, match="n"):
         stratified_validation_seeds(_Kinds(), 0)
 
@@ -49,9 +54,10 @@ def test_an_env_without_kinds_gets_the_plain_validation_seeds():
 def test_the_wiping_validation_holds_every_kind_of_context_evenly(env_id):
     env = gym.make(env_id)
     seeds = stratified_validation_seeds(env, 8)
-    kinds = Counter(env.unwrapped.context_kind(env.reset(seed=int(s))[0]) for s in seeds)
+    kind_of = contract_of(env).context_kind
+    kinds = Counter(kind_of(env.reset(seed=int(s))[0]) for s in seeds)
     assert kinds == dict.fromkeys(CONTEXT_KINDS, 2)
-    plain = Counter(env.unwrapped.context_kind(env.reset(seed=int(s))[0]) for s in validation_seeds(8))
+    plain = Counter(kind_of(env.reset(seed=int(s))[0]) for s in validation_seeds(8))
     assert plain["cup on the approach"] < 2                                  # what the plain choice misses
 
 

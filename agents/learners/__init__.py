@@ -1,6 +1,6 @@
 """Episodic learners behind one ask/tell interface.
 
-Shared-θ learners: PI², PI^BB and CMA-ES. ``bbrl`` (:mod:`.bbrl`): a neural network from the raw context to a
+Shared-θ learners: PI² and CMA-ES. ``bbrl`` (:mod:`.bbrl`): a neural network from the raw context to a
 Gaussian over the action, updated within a KL trust region; ``bbrl_segments`` (:mod:`.segment_bbrl`): the same
 policy, each action dimension credited with the cost of the parts of the movement it acts in. Contextual learners
 (:mod:`.contextual`, a linear-Gaussian policy θ = θ̄ + K·φ(s) with smooth exploration): ``creps`` (contextual
@@ -17,14 +17,13 @@ import numpy as np
 
 from ..config import Settings
 from ..registry import REGISTRY, agent_spec
-from . import cmaes, contextual, pi2, pibb  # noqa: F401  (each declares its learners)
+from . import cmaes, contextual, pi2  # noqa: F401  (each declares its learners)
 from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights
 from .bbrl_config import BBRLConfig
 from .cmaes import CMAES, CMAESConfig
 from .contextual import ContextualConfig, ContextualSearch, ContextualSettings, SearchSpace
 from .contextual import policy_from_state as contextual_policy_from_state
 from .pi2 import PI2, PI2Config
-from .pibb import PIBB, PIBBConfig
 from .segment_bbrl_config import SegmentBBRLConfig
 
 __all__ = [
@@ -32,7 +31,6 @@ __all__ = [
     "CONTEXTUAL",
     "LEARNERS",
     "PI2",
-    "PIBB",
     "BBRLConfig",
     "CMAESConfig",
     "ContextualConfig",
@@ -42,7 +40,6 @@ __all__ = [
     "Learner",
     "LearnerInputs",
     "PI2Config",
-    "PIBBConfig",
     "SearchSpace",
     "SegmentBBRLConfig",
     "cost_weights",
@@ -69,7 +66,7 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
         rng: the learner's random generator.
         options: the learner's settings, or a mapping of their fields (a misspelt name is a ``ValueError``).
         time_weights: ``[T, n]`` activation of each action dimension per control step (PI² only).
-        space: action layout and context standardisation (the contextual learners; PI², PI^BB and CMA-ES
+        space: action layout and context standardisation (the contextual learners; PI² and CMA-ES
             with ``length > 0``, their smooth exploration).
     """
     spec = agent_spec(agent)

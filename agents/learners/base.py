@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -25,22 +25,21 @@ class EpisodeBatch:
         actions: ``[K, n]`` the actions that were executed.
         returns: ``[K]`` episode returns (higher is better).
         cost_traces: ``[K, T]`` per-control-step costs (the part of ``-return`` spread over time).
-        coverage: ``[K]`` wiped fraction of the dirt (NaN where the task has none).
-        force_in_band: ``[K]`` fraction of the wiping time with the contact force in band (or NaN).
         valid: ``[K]`` whether each episode was simulated (an invalid plan gets a penalty instead).
         seeds: ``[K]`` the reset seeds.
+        metrics: ``{key: [K]}`` the task's metrics (its contract's, e.g. the wiping task's coverage; NaN where an
+            episode has none).
         success: ``[K]`` the env's ``info["is_success"]``, or None where the env does not give it.
-        failures: ``[K]`` the success criteria each episode missed (``"cup+coverage"``, ``""`` for a success),
-            or None where the env does not name them.
+        failures: ``[K]`` the success criteria each episode missed (``""`` for a success), or None where the env
+            does not name them.
     """
 
     actions: np.ndarray
     returns: np.ndarray
     cost_traces: np.ndarray
-    coverage: np.ndarray
-    force_in_band: np.ndarray
     valid: np.ndarray
     seeds: np.ndarray
+    metrics: Mapping[str, np.ndarray] = field(default_factory=dict)
     success: np.ndarray | None = None
     failures: np.ndarray | None = None
 

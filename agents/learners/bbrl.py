@@ -55,9 +55,10 @@ from typing import Any
 import numpy as np
 import torch
 
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
-from .bbrl_config import BASELINES, CREDITS, BBRLConfig
-from .contextual import SearchSpace, group_factors, select_groups
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat
+from .bbrl_config import BASELINES, CREDITS, VALUE_RIDGE, BBRLConfig
+from .contextual import SearchSpace, group_factors
+from .credit import remaining_steps, step_credit, weighted_ridge
 from .smooth_exploration import smooth_factor, squash, unsquash
 
 __all__ = ["BASELINES", "BBRL", "CREDITS", "BBRLConfig", "bbrl_policy_actions", "sample_weights"]
@@ -90,11 +91,7 @@ def sample_weights(costs: np.ndarray, traces: np.ndarray | None, contexts: np.nd
     episode = cost_weights(cost_advantage(costs, hat, offset[:, 0]), h)
     if traces is None or time_weights is None:
         return episode[None], episode
-    to_go = cost_to_go(costs, traces) - offset                                          # [N, T]
-    per_step = cost_weights((to_go - hat @ to_go).T, h)                                 # [T, N]
-    norm = time_weights.sum(axis=0)                                                     # [n]
-    per_dimension = time_weights.T @ per_step / np.where(norm > 0, norm, 1.0)[:, None]
-    return np.where((norm > 0)[:, None], per_dimension, episode[None]), episode
+    return step_credit(costs, traces, h, time_weights, episode[None], hat=hat, offset=offset), episode
 
 
 def pair_hat(n: int) -> np.ndarray:
@@ -242,14 +239,10 @@ class BBRL(Learner):
             raise ValueError(f"rollouts: antithetic sampling needs an even number of rollouts, got {rollouts}")
         self.space = space
         self.center, self.scale = np.asarray(space.context_center), np.asarray(space.context_scale)
-        #: ``[m]`` the action dimensions the policy sets, and ``[n]`` the start action (unbounded) of the others
-        self.active = self._active_dims(space)
-        self.fixed = unsquash(self._mean)
         factor = smooth_factor(self.n_params, space.slices, space.n_dims, self.config.length)
-        correlation = (factor @ factor.T)[np.ix_(self.active, self.active)]
-        correlation = (1.0 - self.config.rough) * correlation + self.config.rough * np.eye(self.active.size)
+        correlation = (1.0 - self.config.rough) * (factor @ factor.T) + self.config.rough * np.eye(self.n_params)
         torch.manual_seed(int(rng.integers(2**31)))
-        self.policy = _Policy(self.fixed[self.active], self.center.size, self.config.hidden, correlation,
+        self.policy = _Policy(unsquash(self._mean), self.center.size, self.config.hidden, correlation,
                               self._initial_sigma(space), self.config.rank, self.config.context_scale,
                               self.config.linear and self.config.linear_fit == "adam",
                               self.config.linear and self.config.linear_fit == "ridge")
@@ -264,9 +257,6 @@ class BBRL(Learner):
         self._kept = self.config.reuse + (self.config.history - 1 if self.value is not None else 0)
         #: the mean KL divergence of the last update (after the trust region)
         self.last_kl = 0.0
-        #: the replay's table: reset seeds of recent training contexts [M] (oldest first) and their last advantage [M]
-        self._replay_seeds = np.zeros(0, dtype=np.int64)
-        self._replay_scores = np.zeros(0)
 
     @classmethod
     def build(cls, initial_mean: np.ndarray, rollouts: int, rng: np.random.Generator, config: BBRLConfig,
@@ -276,18 +266,12 @@ class BBRL(Learner):
             raise ValueError("space: bbrl needs the action layout and context standardisation (SearchSpace)")
         return cls(initial_mean, rollouts, rng, inputs.space, config)
 
-    def _active_dims(self, space: SearchSpace) -> np.ndarray:
-        if not self.config.groups:
-            return np.arange(self.n_params)
-        chosen = select_groups(space.slices, self.config.groups, "groups").values()
-        return np.unique(np.concatenate([np.arange(self.n_params)[part] for part in chosen]))
-
     def _initial_sigma(self, space: SearchSpace) -> np.ndarray:
-        """``[m]`` the initial standard deviation of each of the policy's dimensions (``sigma`` x its factor)."""
+        """``[n]`` the initial standard deviation of each action dimension (``sigma`` x its factor)."""
         sigma = np.full(self.n_params, self.config.sigma)
         for group, factor in group_factors(space.slices, self.config.sigma_factors):
             sigma[group] = self.config.sigma * factor
-        return sigma[self.active]
+        return sigma
 
     def _time_weights(self, space: SearchSpace) -> np.ndarray | None:
         if space.time_weights is None:
@@ -296,14 +280,8 @@ class BBRL(Learner):
         if weights.ndim != 2 or weights.shape[1] != self.n_params:
             raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
         if self.config.step_weighting == "remaining":
-            weights = (len(weights) - np.arange(len(weights)))[:, None] * weights
-        return weights[:, self.active]
-
-    def _full(self, u: np.ndarray) -> np.ndarray:
-        """``[K, n]`` actions (unbounded) from the policy's dimensions ``u [K, m]``, the others at the start."""
-        full = np.repeat(self.fixed[None], len(u), axis=0)
-        full[:, self.active] = u
-        return full
+            weights = remaining_steps(weights)
+        return np.asfortranarray(weights)      # column-major: the credit's sums over the steps run in this order
 
     # ------------------------------------------------------------------ sampling
     def _features(self, observations: np.ndarray) -> np.ndarray:
@@ -338,44 +316,23 @@ class BBRL(Learner):
             chol = self._chol().numpy()
         u = mean + scale[:, None] * (self._noise() @ chol.T)
         self._asked = (x, u)
-        return squash(self._full(u))
+        return squash(u)
 
     def _noise(self) -> np.ndarray:
-        """``[K, m]`` standard normal perturbations; antithetic: rows ``2i`` and ``2i + 1`` opposite."""
+        """``[K, n]`` standard normal perturbations; antithetic: rows ``2i`` and ``2i + 1`` opposite."""
         if not self.config.antithetic:
-            return self.rng.standard_normal((self.rollouts, self.active.size))
-        half = self.rng.standard_normal((self.rollouts // 2, self.active.size))
-        return np.stack([half, -half], axis=1).reshape(self.rollouts, self.active.size)
+            return self.rng.standard_normal((self.rollouts, self.n_params))
+        half = self.rng.standard_normal((self.rollouts // 2, self.n_params))
+        return np.stack([half, -half], axis=1).reshape(self.rollouts, self.n_params)
 
     def choose_seeds(self, fresh: np.ndarray) -> np.ndarray:
-        """``[K]`` ``fresh`` with ``replay`` of its seeds replaced by earlier training contexts, drawn without
-        replacement by the rank of their last advantage (the worst first); antithetic: the first ``K / 2`` of
-        ``fresh``, each twice in a row."""
+        """``[K]`` the reset seeds: ``fresh``; antithetic: the first ``K / 2`` of ``fresh``, each twice in a row."""
         seeds = np.array(fresh, dtype=np.int64)
-        if self.config.antithetic:
-            return np.repeat(seeds[: seeds.size // 2], 2)
-        count = min(round(self.config.replay * seeds.size), self._replay_seeds.size)
-        if count == 0:
-            return seeds
-        ranks = np.empty(self._replay_scores.size)
-        ranks[np.argsort(-self._replay_scores, kind="stable")] = np.arange(1, ranks.size + 1)
-        priority = ranks ** (-1.0 / self.config.replay_temperature)
-        chosen = self.rng.choice(ranks.size, size=count, replace=False, p=priority / priority.sum())
-        seeds[:count] = self._replay_seeds[chosen]
-        return seeds
-
-    def _remember_contexts(self, seeds: np.ndarray, advantages: np.ndarray) -> None:
-        """Record the last advantage ``[K]`` of each context ``seeds [K]``; keep the ``replay_size`` most recent."""
-        _, last = np.unique(seeds[::-1], return_index=True)             # a seed twice in the batch: its last result
-        latest = np.sort(seeds.size - 1 - last)
-        seeds, advantages = seeds[latest], advantages[latest]
-        keep = ~np.isin(self._replay_seeds, seeds)
-        self._replay_seeds = np.concatenate([self._replay_seeds[keep], seeds])[-self.config.replay_size:]
-        self._replay_scores = np.concatenate([self._replay_scores[keep], advantages])[-self.config.replay_size:]
+        return np.repeat(seeds[: seeds.size // 2], 2) if self.config.antithetic else seeds
 
     def policy_actions(self, observations: np.ndarray) -> np.ndarray:
         with torch.no_grad():
-            return squash(self._full(self.policy.mean(torch.as_tensor(self._features(observations))).numpy()))
+            return squash(self.policy.mean(torch.as_tensor(self._features(observations))).numpy())
 
     # ------------------------------------------------------------------ update
     def _update(self, batch: EpisodeBatch) -> None:
@@ -393,11 +350,6 @@ class BBRL(Learner):
             with torch.no_grad():
                 predicted = self.value(torch.as_tensor(data["contexts"])).numpy()
         per_dimension, episode = self._sample_weights(data, predicted)
-        if self.config.replay > 0:
-            hat = ridge_hat(np.c_[np.ones(len(data["costs"])), data["contexts"]], self.config.value_ridge)
-            offset = np.zeros(len(data["costs"])) if predicted is None else predicted[:, 0]
-            advantages = cost_advantage(data["costs"], hat, offset)[-batch.size:]
-            self._remember_contexts(np.asarray(batch.seeds, dtype=np.int64), advantages)
         torch.manual_seed(int(self.rng.integers(2**31)))
         contexts, samples = torch.as_tensor(data["contexts"]), torch.as_tensor(data["samples"])
         old = [p.detach().clone() for p in self.policy.parameters()]
@@ -422,7 +374,7 @@ class BBRL(Learner):
                         predicted: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """``([n or 1, N], [N])`` the per-dimension and episode weights of the reused samples ``data`` (step 1)."""
         return sample_weights(data["costs"], data["traces"], data["contexts"], self.time_weights, self.config.h,
-                              self.config.value_ridge, predicted, paired=self.config.antithetic)
+                              VALUE_RIDGE, predicted, paired=self.config.antithetic)
 
     def _value_targets(self, batch: dict[str, np.ndarray]) -> np.ndarray:
         """``[K, T or 1]`` what the baseline network predicts of one stored batch (its cost-to-go, or its cost)."""
@@ -462,11 +414,9 @@ class BBRL(Learner):
         x = np.c_[np.ones(len(contexts)), contexts.numpy()]                             # [N, 1 + o]
         rest = (samples - mean).numpy() + x @ previous.T                                # [N, n]
         weights = np.broadcast_to(weights, (previous.shape[0], len(x)))                 # [n, N]
-        prior = ridge_penalty(x.shape[1], self.config.linear_prior)
-        gram = np.einsum("ik,kf,kg->ifg", weights, x, x) + prior                        # [n, 1 + o, 1 + o]
-        moment = np.einsum("ik,ki,kf->if", weights, rest, x) + previous @ prior         # [n, 1 + o]
+        fit = weighted_ridge(x, weights, rest, previous, self.config.linear_prior, per_dimension=True)
         with torch.no_grad():
-            self.policy.affine.copy_(torch.as_tensor(np.linalg.solve(gram, moment[..., None])[..., 0]))
+            self.policy.affine.copy_(torch.as_tensor(fit))
 
     def _kl(self, contexts: torch.Tensor, old_mean: torch.Tensor, old_chol: torch.Tensor,
             old_scale: torch.Tensor) -> float:
@@ -497,26 +447,17 @@ class BBRL(Learner):
         buffer = {f"buffer_{key}": [b[key].copy() for b in self._buffer] for key in _BUFFER}
         return {"parameters": {name: value.detach().numpy().copy() for name, value in self.policy.state_dict().items()},
                 "context_center": self.center.copy(), "context_scale": self.scale.copy(), **buffer,
-                "active": self.active.copy(), "fixed": self.fixed.copy(),
                 "min_sigma": float(self.config.min_sigma),
-                "replay_seeds": self._replay_seeds.copy(), "replay_scores": self._replay_scores.copy(),
                 **({} if self.value is None else {"value_parameters": {
                     name: value.detach().numpy().copy() for name, value in self.value.state_dict().items()}})}
 
     def _load_extra_state(self, state: dict[str, Any]) -> None:
-        seeds, scores = np.asarray(state["replay_seeds"]), np.asarray(state["replay_scores"], dtype=np.float64)
-        if seeds.dtype.kind not in "iu" or seeds.ndim != 1 or scores.shape != seeds.shape \
-                or seeds.size > self.config.replay_size:
-            raise ValueError("state.replay_seeds: expected integer seeds [M] and scores [M], M <= replay_size")
-        if not np.array_equal(state["active"], self.active) or np.asarray(state["fixed"]).shape != self.fixed.shape:
-            raise ValueError("state.active: the state sets other action dimensions than this learner (groups)")
-        self.fixed = np.asarray(state["fixed"], dtype=np.float64).copy()
         parameters = {name: torch.as_tensor(np.asarray(value, dtype=np.float64))
                       for name, value in state["parameters"].items()}
         shapes = {name: tuple(value.shape) for name, value in self.policy.state_dict().items()}
         if {name: tuple(value.shape) for name, value in parameters.items()} != shapes:
             raise ValueError("state.parameters: the state's policy network has other shapes than this learner's "
-                             "(hidden, rank, groups, context_scale, linear or linear_fit differ)")
+                             "(hidden, rank, context_scale, linear or linear_fit differ)")
         self.policy.load_state_dict(parameters)
         if self.value is not None:             # a state of the other baseline fails check_state_like's keys
             self.value.load_state_dict({name: torch.as_tensor(np.asarray(value, dtype=np.float64))
@@ -527,7 +468,6 @@ class BBRL(Learner):
                              "reuse (or history)")
         self._buffer = [{key: np.asarray(value, dtype=np.float64) for key, value in zip(_BUFFER, batch, strict=True)}
                         for batch in zip(*columns, strict=True)]
-        self._replay_seeds, self._replay_scores = seeds.astype(np.int64), scores.copy()
         self._asked = None
 
 
@@ -550,6 +490,4 @@ def bbrl_policy_actions(state: Mapping[str, Any], observations: np.ndarray) -> n
     policy = params["u0"] + out @ params["shape"].T
     if "affine" in params:                                   # the affine part fitted in closed form
         policy = policy + params["affine"][:, 0] + x @ params["affine"][:, 1:].T
-    full = np.repeat(np.asarray(state["fixed"], dtype=np.float64)[None], len(obs), axis=0)
-    full[:, np.asarray(state["active"], dtype=np.int64)] = policy
-    return squash(full)
+    return squash(policy)

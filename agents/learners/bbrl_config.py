@@ -4,18 +4,21 @@ not import torch (the learner's module is imported when a run builds it)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from rdmp_gym.validation import check_choice, check_range
 
 from ..registry import register
 from .contextual import ContextualSettings
 
-__all__ = ["BASELINES", "CREDITS", "LINEAR_FITS", "STEP_WEIGHTINGS", "BBRLConfig"]
+__all__ = ["BASELINES", "CREDITS", "LINEAR_FITS", "STEP_WEIGHTINGS", "VALUE_RIDGE", "BBRLConfig"]
 
 CREDITS = ("step", "episode")
 BASELINES = ("ridge", "network")
 LINEAR_FITS = ("adam", "ridge")
 STEP_WEIGHTINGS = ("activation", "remaining")
+#: ridge of the context baselines of the cost (and cost-to-go)
+VALUE_RIDGE = 1.0
 
 
 @dataclass(frozen=True)
@@ -33,16 +36,10 @@ class BBRLConfig(ContextualSettings):
             (``"remaining"``, PI²'s averaging of its per-step updates, which ``cpi2`` uses).
         epochs: Adam steps per update.
         learning_rate: Adam's step size.
-        value_ridge: ridge of the context baselines of the cost (and cost-to-go).
         baseline: ``"ridge"`` (a ridge regression of the cost on the context over the reused samples) or
             ``"network"`` (an MLP of the cost-to-go, fitted to the last ``history`` batches, then the ridge).
         history: batches the ``"network"`` baseline is fitted to (those before the ``reuse`` batches it judges).
         value_epochs: Adam steps of the baseline network per update.
-        replay: share of each update's rollouts that revisit earlier training contexts, those the policy did
-            worst in against the context baseline (prioritised context replay, Jiang et al. 2021); 0 = none.
-        replay_temperature: the replay's rank prioritisation: a context of rank ``k`` (1 = the worst) is drawn
-            with probability proportional to ``k^(-1/replay_temperature)``.
-        replay_size: the most recently seen training contexts that the replay chooses from.
         context_scale: the network also gives each context a scale ``s(s)`` of the exploration
             (``Sigma(s) = s(s)^2 Sigma``, 1 at the start), fitted with the covariance, so that the exploration can
             stay wide where wide samples pay and narrow where they do not.
@@ -58,6 +55,8 @@ class BBRLConfig(ContextualSettings):
         antithetic: mirrored sampling: the rollouts come in pairs ``mu(s) + e``, ``mu(s) - e`` on the same
             context ``s``, and each sample is judged against its pair's mean cost (and cost-to-go) instead of the
             ridge regression on the context; needs an even number of rollouts.
+
+    The policy sets every action dimension; the ridge of its context baselines is :data:`VALUE_RIDGE`.
     """
 
     epsilon: float = 0.2
@@ -69,13 +68,9 @@ class BBRLConfig(ContextualSettings):
     step_weighting: str = "activation"
     epochs: int = 10
     learning_rate: float = 1e-2
-    value_ridge: float = 1.0
     baseline: str = "ridge"
     history: int = 20
     value_epochs: int = 50
-    replay: float = 0.0
-    replay_temperature: float = 0.3
-    replay_size: int = 100
     antithetic: bool = False
     context_scale: bool = False
     linear: bool = False
@@ -90,21 +85,19 @@ class BBRLConfig(ContextualSettings):
         check_choice(self.credit, "credit", CREDITS)
         check_range(self.epochs, "epochs", 1, None)
         check_range(self.learning_rate, "learning_rate", 0.0, None, low_open=True)
-        check_range(self.value_ridge, "value_ridge", 0.0, None, low_open=True)
         check_choice(self.baseline, "baseline", BASELINES)
         check_range(self.history, "history", 1, None)
         check_range(self.value_epochs, "value_epochs", 1, None)
-        check_range(self.replay, "replay", 0.0, 1.0, high_open=True)
-        check_range(self.replay_temperature, "replay_temperature", 0.0, None, low_open=True)
-        check_range(self.replay_size, "replay_size", 1, None)
         check_choice(self.linear_fit, "linear_fit", LINEAR_FITS)
         check_choice(self.step_weighting, "step_weighting", STEP_WEIGHTINGS)
         check_range(self.linear_prior, "linear_prior", 0.0, None, low_open=True)
         if self.linear_fit == "ridge" and not self.linear:
             raise ValueError("linear_fit: 'ridge' fits the linear part of the mean, which needs linear=True")
-        if self.antithetic and self.replay > 0:
-            raise ValueError("antithetic: a pair's own mean judges each sample, which leaves the replay no context "
-                             "to rank; use antithetic with replay = 0")
+
+    @classmethod
+    def fixed_values(cls) -> dict[str, Any]:
+        return {"groups": (), "value_ridge": VALUE_RIDGE, "replay": 0.0, "replay_temperature": 0.3,
+                "replay_size": 100}
 
 
 register("bbrl", BBRLConfig, "rdmp_gym.agents.learners.bbrl:BBRL", uses_context=True)

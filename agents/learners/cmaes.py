@@ -1,7 +1,7 @@
 """CMA-ES (Hansen) through the ``cma`` package's ask/tell interface, on the action box ``[-1, 1]^n``.
 
 The population size is the number of rollouts per update. The box is handled by ``cma``'s
-``BoundTransform`` (``bounds="transform"``) or ``BoundPenalty`` (``bounds="penalty"``). ``cma`` draws its
+``BoundTransform``, and the covariance is full (not separable). ``cma`` draws its
 normal samples through the ``randn`` option, which is fed from the learner's Generator, so the run is
 reproducible. The strategy is not stored as an object: the state holds the start (mean and RNG state)
 and the costs told so far ``[U, K]``, and loading replays the ``U`` generations, which restores the
@@ -21,7 +21,7 @@ from typing import Any
 import cma
 import numpy as np
 
-from rdmp_gym.validation import check_choice, check_range
+from rdmp_gym.validation import check_range
 
 from ..config import Settings
 from ..registry import register
@@ -30,8 +30,6 @@ from .smooth_exploration import exploration_factor
 
 __all__ = ["CMAES", "CMAESConfig"]
 
-BOUND_MODES = ("transform", "penalty")
-
 
 @dataclass(frozen=True)
 class CMAESConfig(Settings):
@@ -39,20 +37,19 @@ class CMAESConfig(Settings):
 
     Attributes:
         sigma: initial step size in action units.
-        bounds: ``"transform"`` or ``"penalty"`` handling of the ``[-1, 1]`` box.
-        diagonal: learn only a diagonal covariance (separable CMA-ES; faster in high dimension).
         length: correlation length of the exploration in neighbouring weights (0 = CMA-ES's isotropic start).
     """
 
     sigma: float = 0.6
-    bounds: str = "transform"
-    diagonal: bool = False
     length: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "cmaes.sigma", 0.0, None, low_open=True)
-        check_choice(self.bounds, "cmaes.bounds", BOUND_MODES)
         check_range(self.length, "cmaes.length", 0.0, None)
+
+    @classmethod
+    def fixed_values(cls) -> dict[str, Any]:
+        return {"bounds": "transform", "diagonal": False}
 
 
 class _GeneratorNormal:
@@ -92,11 +89,10 @@ class CMAES(Learner):
         self._pending: list[np.ndarray] | None = None
 
     def _new_strategy(self) -> cma.CMAEvolutionStrategy:
-        handler = cma.BoundTransform if self.config.bounds == "transform" else cma.BoundPenalty
         smooth = self.factor is not None
         options = {"popsize": self.rollouts, "bounds": [None, None] if smooth else [-1.0, 1.0],
-                   "BoundaryHandler": None if smooth else handler,
-                   "randn": _GeneratorNormal(self.rng), "seed": math.nan, "CMA_diagonal": self.config.diagonal,
+                   "BoundaryHandler": None if smooth else cma.BoundTransform,
+                   "randn": _GeneratorNormal(self.rng), "seed": math.nan, "CMA_diagonal": False,
                    "verbose": -9, "verb_disp": 0, "verb_log": 0, "tolflatfitness": 10**9,
                    "tolfun": 0.0, "tolfunhist": 0.0, "tolx": 0.0, "tolstagnation": 10**9,
                    "maxiter": 10**9, "maxfevals": 10**12}

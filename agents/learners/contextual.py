@@ -21,30 +21,32 @@ standard deviation per block. Each update keeps the last ``reuse`` batches and w
 The new ``W`` is the weighted maximum-likelihood (MAP) fit ``argmin Σ d_k |u_k - W x_k|² + |(W - W_old) Λ^½|²``,
 where the prior ``Λ = diag(0, gain_prior, ...)`` keeps the gains from following a few samples. Each
 block's standard deviation is adapted by weighted ML of its whitened sampling noise
-(``σ_b² <- (1 - rate) σ_b² + rate Σ d_k |L_b⁻¹ ε_kb|² / m_b``) within ``[min_sigma, max_sigma]``.
+(``σ_b² <- (1 - rate) σ_b² + rate Σ d_k |L_b⁻¹ ε_kb|² / m_b``) within ``[min_sigma, MAX_SIGMA]``.
 The control cost ``control_cost · ½ Σ_b a_bᵀ A_bᵀA_b a_b`` is added to every sample's cost.
-With ``random_returns`` the learner sees standard-normal returns instead (a control: it never sees the
-reward). With ``contextual=False`` the gains stay 0 (one θ for all contexts).
+The weighting, whether the gains are learned and whether the returns are seen are the learner's (its
+registered name's) own: ``creps``, ``cpibb``, ``cpi2``; ``random`` (contextual REPS fed standard-normal returns: a
+control that never sees the reward) and ``amplitude`` (one θ for all contexts, the gains stay 0).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy.optimize import minimize
 
-from rdmp_gym.validation import check_choice, check_range
+from rdmp_gym.validation import check_range
 
 from ..config import Settings
 from ..registry import register
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights, ridge_hat, ridge_penalty
+from .base import EpisodeBatch, Learner, LearnerInputs, cost_weights, ridge_hat
+from .credit import remaining_steps, step_credit, weighted_ridge
 from .smooth_exploration import SmoothNoise, block_layout, squash, unsquash
 
 __all__ = [
-    "WEIGHTINGS",
+    "MAX_SIGMA",
     "AmplitudeConfig",
     "CPI2Config",
     "CPIBBConfig",
@@ -60,13 +62,14 @@ __all__ = [
     "select_groups",
 ]
 
-WEIGHTINGS = ("reps", "pibb", "pi2")
+#: upper bound of each exploration block's standard deviation (times its ``sigma_factors``)
+MAX_SIGMA = 0.6
 _BUFFER_KEYS = ("u", "noise", "x", "costs", "traces")
 
 
 @dataclass(frozen=True)
 class ContextualSettings(Settings):
-    """Settings every contextual learner shares (the linear-Gaussian searches here and ``bbrl``).
+    """Settings the contextual learners share (the linear-Gaussian searches here and ``bbrl``).
 
     Attributes:
         sigma: initial per-weight standard deviation (action units).
@@ -75,10 +78,9 @@ class ContextualSettings(Settings):
         h: eliteness of the cost weighting.
         reuse: batches (this one and earlier ones) whose samples enter each update.
         min_sigma: floor of the exploration's standard deviation.
-        groups: the action groups to search (empty = all; e.g. ``["amplitude"]``); the others stay at the start.
         sigma_factors: per-group factors of ``sigma`` and its bounds (e.g. ``{"approach": 3}``: a dimension whose
             effect is only seen far from the imitation, such as a lift that clears an obstacle only near its full
-            height, is explored over its whole range). Choosing groups and factors is task structure.
+            height, is explored over its whole range). Choosing factors is task structure.
     """
 
     sigma: float = 0.3
@@ -87,7 +89,6 @@ class ContextualSettings(Settings):
     h: float = 10.0
     reuse: int = 4
     min_sigma: float = 0.02
-    groups: tuple[str, ...] = ()
     sigma_factors: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -104,21 +105,23 @@ class ContextualSettings(Settings):
 
 @dataclass(frozen=True)
 class ContextualConfig(ContextualSettings):
-    """Settings of :class:`ContextualSearch` (beyond :class:`ContextualSettings`).
+    """Settings of :class:`ContextualSearch` (beyond :class:`ContextualSettings`; ``sigma`` at most
+    :data:`MAX_SIGMA`). The class attributes ``weighting`` (``reps``, ``pibb`` or ``pi2``, see the module docstring),
+    ``contextual`` (learn the gains ``K``; False: one θ for every context) and ``random_returns`` (replace every
+    return by a standard-normal draw) are each learner's own.
 
     Attributes:
-        weighting: ``reps``, ``pibb`` or ``pi2`` (see the module docstring).
-        contextual: learn the gains ``K`` (False: one θ for every context).
+        groups: the action groups to search (empty = all; e.g. ``["amplitude"]``); the others stay at the start.
+            Choosing groups is task structure.
         gain_groups: the searched groups whose actions depend on the context (rows of ``K``);
             the others get one value for every context (``θ̄`` only). Empty = every searched group. Few
             context-dependent dimensions keep the weighted fit of ``K`` well posed with a few dozen samples.
-        features: the context fields in ``φ(s)`` (the env's ``CONTEXT_FIELDS`` names, e.g.
-            ``["patch_size", "obstacle"]``); empty = every field. The rest is left out of the policy and baselines.
+        features: the context fields in ``φ(s)`` (names of the context fields of the env's task contract, e.g.
+            the wiping task's ``["patch_size", "obstacle"]``); empty = every field. The rest is left out of the
+            policy and baselines.
         control_cost: weight of ``½ aᵀRa`` in the cost.
         gain_prior: ridge ``Λ`` pulling the gains toward their previous value (and of the baselines).
         adapt_rate: rate of the step-size adaptation (0 = fixed exploration).
-        max_sigma: upper bound of each block's standard deviation.
-        random_returns: the control: replace every return by a standard-normal draw.
         fourier_features: ``D`` random Fourier features ``√(2/D) cos(Ω φ(s) + b)`` appended to ``φ(s)`` (0 = a
             policy and baselines linear in the context): with them the policy's mean and the cost baselines are
             smooth nonlinear functions of the raw context (``Ω ~ N(0, 1/fourier_length²)``, ``b ~ U[0, 2π)``,
@@ -126,27 +129,31 @@ class ContextualConfig(ContextualSettings):
         fourier_length: length scale of the Fourier features in standardised context units.
     """
 
-    weighting: str = "reps"
-    contextual: bool = True
+    weighting: ClassVar[str] = "reps"
+    contextual: ClassVar[bool] = True
+    random_returns: ClassVar[bool] = False
+    groups: tuple[str, ...] = ()
     gain_groups: tuple[str, ...] = ()
     features: tuple[str, ...] = ()
     control_cost: float = 0.05
     gain_prior: float = 0.3
     adapt_rate: float = 0.5
-    max_sigma: float = 0.6
-    random_returns: bool = False
     fourier_features: int = 0
     fourier_length: float = 1.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_choice(self.weighting, "weighting", WEIGHTINGS)
+        check_range(self.sigma, "sigma", 0.0, MAX_SIGMA, low_open=True)
         check_range(self.fourier_features, "fourier_features", 0, None)
         check_range(self.fourier_length, "fourier_length", 0.0, None, low_open=True)
         check_range(self.control_cost, "control_cost", 0.0, None)
         check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
         check_range(self.adapt_rate, "adapt_rate", 0.0, 1.0)
-        check_range(self.max_sigma, "max_sigma", self.sigma, None)
+
+    @classmethod
+    def fixed_values(cls) -> dict[str, Any]:
+        return {"weighting": cls.weighting, "contextual": cls.contextual, "random_returns": cls.random_returns,
+                "max_sigma": MAX_SIGMA}
 
 
 @dataclass(frozen=True)
@@ -158,29 +165,29 @@ class CREPSConfig(ContextualConfig):
 class CPIBBConfig(ContextualConfig):
     """Contextual PI^BB: episode-level weights over a context-dependent baseline."""
 
-    weighting: str = "pibb"
+    weighting: ClassVar[str] = "pibb"
 
 
 @dataclass(frozen=True)
 class CPI2Config(ContextualConfig):
     """Contextual PI²: per-step weights over per-step context-dependent baselines."""
 
-    weighting: str = "pi2"
+    weighting: ClassVar[str] = "pi2"
 
 
 @dataclass(frozen=True)
 class RandomReturnConfig(ContextualConfig):
     """The random-return control: contextual REPS fed standard-normal returns."""
 
-    random_returns: bool = True
+    random_returns: ClassVar[bool] = True
 
 
 @dataclass(frozen=True)
 class AmplitudeConfig(ContextualConfig):
     """The amplitude-only baseline: one shared θ over the ``amplitude`` group (3 numbers), isotropic."""
 
+    contextual: ClassVar[bool] = False
     groups: tuple[str, ...] = ("amplitude",)
-    contextual: bool = False
     length: float = 0.0
 
 
@@ -213,7 +220,7 @@ class SearchSpace:
         base = env.unwrapped
         slices, n_dims = action_layout(env)
         observations = np.asarray(observations, dtype=np.float64)
-        gate = _context_gate(base, observations.shape[1])
+        gate = _context_gate(env, observations.shape[1])
         center, scale = observations.mean(axis=0), observations.std(axis=0)
         for j in np.flatnonzero(gate >= 0):
             defined = observations[observations[:, gate[j]] > 0.5, j]
@@ -221,7 +228,7 @@ class SearchSpace:
         scale[scale < 1e-9 * (1.0 + np.abs(center))] = 0.0
         weights = base.action_time_weights() if hasattr(base, "action_time_weights") else None
         return cls(slices, n_dims, center, scale, weights, gate if np.any(gate >= 0) else None,
-                   _context_names(base, observations.shape[1]))
+                   _context_names(env, observations.shape[1]))
 
 
 def action_layout(env: Any) -> tuple[dict[str, slice], int]:
@@ -267,23 +274,20 @@ def _block_factors(blocks: list[tuple[slice, bool | None]], slices: Mapping[str,
     return per_block
 
 
-def _context_fields(base: Any) -> Mapping[str, tuple[int, int]] | None:
-    """The env's context fields: its own ``context_fields``, else for the wiping envs (which have a
-    ``context_spec``) their ``CONTEXT_FIELDS``.
+def _context_fields(env: Any) -> Mapping[str, tuple[int, int]]:
+    """The context fields ``{name: (start, size)}`` of the env's task contract (empty: unnamed).
 
-    The table is imported here, where such an env already runs (its package is loaded), rather than at the top:
-    importing the learners loads neither gymnasium nor MuJoCo.
+    The contract is read here, where the env already runs (its package is loaded), rather than imported at the
+    top: importing the learners loads neither gymnasium nor MuJoCo.
     """
-    fields = getattr(base, "context_fields", None)
-    if fields is None and hasattr(base, "context_spec"):
-        from rdmp_gym.envs.tasks.wiping.context import CONTEXT_FIELDS  # the env's package: loaded with the env itself
-        fields = CONTEXT_FIELDS
-    return fields
+    from rdmp_gym.envs.contract import contract_of  # the env's package: loaded with the env itself
+
+    return contract_of(env).context_fields
 
 
-def _context_names(base: Any, size: int) -> tuple[str, ...] | None:
+def _context_names(env: Any, size: int) -> tuple[str, ...] | None:
     """``[o]`` the field name of each observation entry (None if the env names no fields)."""
-    fields = _context_fields(base)
+    fields = _context_fields(env)
     if not fields:
         return None
     names = [""] * size
@@ -293,12 +297,12 @@ def _context_names(base: Any, size: int) -> tuple[str, ...] | None:
     return tuple(names)
 
 
-def _context_gate(base: Any, size: int) -> np.ndarray:
+def _context_gate(env: Any, size: int) -> np.ndarray:
     """``[o]`` the indicator index of each gated context feature (-1 = not gated): ArmarWipe-v1's cup
-    position (``obstacle_position``) is gated by its presence (``obstacle``), read from the env's
-    ``CONTEXT_FIELDS``; an env without them has none."""
+    position (``obstacle_position``) is gated by its presence (``obstacle``), read from the context fields of the
+    env's contract; an env without them has none."""
     gate = np.full(size, -1, dtype=np.int64)
-    fields = _context_fields(base)
+    fields = _context_fields(env)
     if fields and "obstacle" in fields and "obstacle_position" in fields:
         start, length = fields["obstacle_position"]
         if start + length <= size:
@@ -428,8 +432,7 @@ class ContextualSearch(Learner):
             weights = np.asarray(space.time_weights, dtype=np.float64)
             if weights.ndim != 2 or weights.shape[1] != self.n_params:
                 raise ValueError(f"space.time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
-            steps = weights.shape[0]
-            self.time_weights = (steps - np.arange(steps))[:, None] * weights       # [T, n]
+            self.time_weights = remaining_steps(weights)                            # [T, n]
         self._pending: dict[str, np.ndarray] | None = None
         self._buffer: list[dict[str, np.ndarray]] = []
 
@@ -507,30 +510,21 @@ class ContextualSearch(Learner):
     def _fit(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """``[S, n, F + 1]`` the MAP fits of ``u [N, n]`` on ``x [N, F + 1]`` for ``S`` weightings ``[S, N]``
         (the context-independent dimensions: on the constant alone, their gains stay 0)."""
-        fit = self._regress(u, x, weights, self.gains)
+        fit = weighted_ridge(x, weights, u, self.gains, self.config.gain_prior)
         if np.all(self._context_dependent) or x.shape[1] == 1:
             return fit
-        shared = self._regress(u, x[:, :1], weights, self.gains[:, :1])                 # [S, n, 1]
+        shared = weighted_ridge(x[:, :1], weights, u, self.gains[:, :1], self.config.gain_prior)   # [S, n, 1]
         fit[:, ~self._context_dependent] = 0.0
         fit[:, ~self._context_dependent, :1] = shared[:, ~self._context_dependent]
         return fit
-
-    def _regress(self, u: np.ndarray, x: np.ndarray, weights: np.ndarray, previous: np.ndarray) -> np.ndarray:
-        prior = ridge_penalty(x.shape[1], self.config.gain_prior)
-        gram = np.einsum("sk,kf,kg->sfg", weights, x, x) + prior                 # [S, F+1, F+1]
-        moment = np.einsum("sk,kn,kf->snf", weights, u, x) + previous @ prior    # [S, n, F+1]
-        return np.linalg.solve(gram, np.swapaxes(moment, 1, 2)).swapaxes(1, 2)
 
     def _pi2_fit(self, data: dict[str, np.ndarray], episode_fit: np.ndarray) -> np.ndarray:
         """Per-step weighted fits averaged over time with ``(T - t) · activation``; ``[n, F + 1]``."""
         assert self.time_weights is not None
         traces = np.concatenate([b["traces"] for b in self._buffer])                     # [N, T]
-        to_go = cost_to_go(data["costs"], traces)                                       # [N, T]
-        advantage = to_go - ridge_hat(data["x"], self.config.gain_prior) @ to_go
-        per_step = self._fit(data["u"], data["x"], cost_weights(advantage.T, self.config.h))   # [T, n, F+1]
-        norm = self.time_weights.sum(axis=0)                                              # [n]
-        averaged = np.einsum("tn,tnf->nf", self.time_weights, per_step) / np.where(norm > 0, norm, 1.0)[:, None]
-        return np.where((norm > 0)[:, None], averaged, episode_fit)
+        return step_credit(data["costs"], traces, self.config.h, self.time_weights, episode_fit,
+                           hat=ridge_hat(data["x"], self.config.gain_prior),
+                           per_step=lambda weights: self._fit(data["u"], data["x"], weights))   # [T, n, F+1] fits
 
     def _adapt(self, weights: np.ndarray, noise: np.ndarray) -> None:
         rate = self.config.adapt_rate
@@ -539,7 +533,7 @@ class ContextualSearch(Learner):
         variance = weights @ self.noise.whitened_energy(noise)                           # [B]
         updated = np.sqrt((1 - rate) * self.sigmas**2 + rate * variance)
         self.sigmas = np.clip(updated, self.config.min_sigma * self._sigma_factor,
-                              self.config.max_sigma * self._sigma_factor)
+                              MAX_SIGMA * self._sigma_factor)
 
     # ------------------------------------------------------------------ state
     def _extra_state(self) -> dict[str, Any]:

@@ -5,7 +5,7 @@ maps actions affinely onto the selected DMP parameter groups). From each rollout
 ``c_k(t)`` (``T`` control steps) and its total cost ``J_k = -return_k``:
 
 * cost-to-go ``S_k(t) = sum_{t' >= t} c_k(t') + (J_k - sum_t c_k(t))``; the part of ``J_k`` that the
-  env does not spread over time (e.g. coverage, known only at the end) counts at every step, so
+  env does not spread over time (e.g. the wiping task's coverage, known only at the end) counts at every step, so
   ``S_k(0) = J_k``;
 * ``P_k(t) ∝ exp(-h (S_k(t) - min_k S(t)) / (max_k S(t) - min_k S(t)))`` for every step (h = 10);
 * per-step update ``d(t) = sum_k P_k(t) eps_k`` (``[T, n]``);
@@ -28,7 +28,8 @@ from rdmp_gym.validation import check_range
 
 from ..config import Settings
 from ..registry import register
-from .base import EpisodeBatch, Learner, LearnerInputs, cost_to_go, cost_weights
+from .base import EpisodeBatch, Learner, LearnerInputs
+from .credit import remaining_steps, step_credit
 from .smooth_exploration import exploration_factor
 
 __all__ = ["PI2", "PI2Config"]
@@ -85,9 +86,7 @@ class PI2(Learner):
             raise ValueError(f"time_weights: expected shape [T, {self.n_params}], got {weights.shape}")
         if not np.all(np.isfinite(weights)) or weights.min() < 0.0 or weights.max() > 1.0:
             raise ValueError("time_weights: expected finite values in [0, 1]")
-        steps = weights.shape[0]
-        self._step_weights = (steps - np.arange(steps, dtype=np.float64))[:, None] * weights  # [T, n]
-        self._norm = self._step_weights.sum(axis=0)                                            # [n]
+        self._step_weights = remaining_steps(weights)                                          # [T, n]
         self.sigma = self.config.sigma
         self.factor = np.eye(self.n_params) if factor is None else np.asarray(factor, dtype=np.float64)
         if self.factor.shape != (self.n_params, self.n_params):
@@ -116,11 +115,9 @@ class PI2(Learner):
         if traces.shape != (batch.size, steps):
             raise ValueError(f"batch.cost_traces: expected shape {(batch.size, steps)} (one cost per "
                              f"control step), got {traces.shape}")
-        probabilities = cost_weights(cost_to_go(batch.costs, traces).T, self.config.h)   # [T, K]
         noise = batch.actions - self._mean                                        # [K, n]
-        per_step = probabilities @ noise                                          # [T, n]
-        total = (self._step_weights * per_step).sum(axis=0)                       # [n]
-        delta = np.divide(total, self._norm, out=np.zeros_like(total), where=self._norm > 0)
+        delta = step_credit(batch.costs, traces, self.config.h, self._step_weights, np.zeros(self.n_params),
+                            per_step=lambda weights: weights @ noise)              # [n]: P(t) @ ε averaged
         self._mean = np.clip(self._mean + delta, -1.0, 1.0)
         self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
 

@@ -12,8 +12,8 @@ the last segment), and:
 2. each action dimension ``i`` is **credited with the segments it acts in**: ``A_ki = (1 - b) sum_j w_ji A_kj +
    b sum_j A_kj``, ``w_ji`` the dimension's activation mass in segment ``j`` relative to its largest (the
    env's ``action_time_weights``: a periodic weight acts in every cycle, a transient weight in one or two
-   segments, an anchor everywhere) and ``b`` the ``episode_share`` (costs judged once at the end, such as a
-   coverage, reach early dimensions through it);
+   segments, an anchor everywhere) and ``b`` the ``episode_share`` (costs judged once at the end, e.g. the wiping
+   task's coverage, reach early dimensions through it);
 3. ``bbrl``'s weighted maximum likelihood with per-dimension weights ``exp(-h A_ki / R_i)`` (normalised over the
    samples; ``R_i`` the range of dimension ``i``'s advantages as in PI², or with ``scale="common"`` the range of
    the episode advantages ``sum_j A_kj`` for every dimension, so that a dimension whose segments hardly differ
@@ -29,6 +29,7 @@ import numpy as np
 
 from .base import cost_weights, ridge_hat
 from .bbrl import BBRL, pair_hat
+from .bbrl_config import VALUE_RIDGE
 from .contextual import SearchSpace
 from .segment_bbrl_config import SegmentBBRLConfig
 
@@ -139,6 +140,6 @@ class SegmentBBRL(BBRL):
         if self.starts is None:
             return super()._sample_weights(data, predicted)
         parts = segment_costs(data["costs"], data["traces"], self.starts)
-        return segment_weights(parts, data["contexts"], self.activation, self.config.h, self.config.value_ridge,
+        return segment_weights(parts, data["contexts"], self.activation, self.config.h, VALUE_RIDGE,
                                self.config.episode_share, predicted, paired=self.config.antithetic,
                                common_scale=self.config.scale == "common")

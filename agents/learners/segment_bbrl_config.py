@@ -23,8 +23,8 @@ class SegmentBBRLConfig(BBRLConfig):
             (the critic's outputs).
         episode_share: share of each dimension's credit that comes from the whole episode's advantage rather than
             from the segments in which the dimension acts (0: only the segments; 1: the episode, as bbrl without
-            per-step credit). Costs the task books at the end (a coverage judged once) reach the dimensions that
-            act early through it.
+            per-step credit). Costs the task books at the end (e.g. the wiping task's coverage, judged once) reach
+            the dimensions that act early through it.
         scale: how advantages become weights: ``"dimension"`` (PI²'s min-max per dimension: every dimension's best
             sample gets the full eliteness ``h``) or ``"common"`` (one scale, the range of the episode advantages,
             for every dimension: a dimension whose segments hardly differ between samples stays nearly where it is).
@@ -48,8 +48,6 @@ class SegmentBBRLConfig(BBRLConfig):
         check_range(self.segments, "segments", 1, None)
         check_range(self.episode_share, "episode_share", 0.0, 1.0)
         check_choice(self.scale, "scale", SCALES)
-        if self.replay > 0:
-            raise ValueError("replay: bbrl_segments judges samples per segment and ranks no contexts; use replay = 0")
 
 
 register("bbrl_segments", SegmentBBRLConfig, "rdmp_gym.agents.learners.segment_bbrl:SegmentBBRL", uses_context=True)

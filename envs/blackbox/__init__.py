@@ -8,9 +8,12 @@ own env". Importing this package registers ``rdmp_gym/RhythmicBlackBox-v0`` (:fu
     import gymnasium as gym
     from rdmp_gym.envs.blackbox import RhythmicBlackBoxWrapper
 
-    env = RhythmicBlackBoxWrapper(gym.make("Swimmer-v5"), p_gains=10.0, d_gains=0.5, duration=4.0)
+    env = RhythmicBlackBoxWrapper(gym.make("Hopper-v5"))        # every setting derived from the MuJoCo model
     context, _ = env.reset(seed=0)
     context, episode_return, _, _, info = env.step(env.action_space.sample() * 0)   # the initial DMP
+
+Settings are one :class:`BlackBoxSettings` (``RhythmicBlackBoxWrapper(env, settings, **overrides)``, e.g.
+``p_gains=10.0, duration=4.0``).
 """
 
 from __future__ import annotations
@@ -18,9 +21,18 @@ from __future__ import annotations
 import gymnasium as gym
 
 from .controller import CONTROLLERS, MujocoJoints, PDController, PositionController, VelocityController, make_controller
-from .defaults import BLACKBOX_SCALES, ENV_DEFAULTS, default_demonstration, env_defaults
+from .defaults import (
+    BLACKBOX_SCALES,
+    ENV_DEFAULTS,
+    MODEL_RULES,
+    ModelDefaults,
+    default_demonstration,
+    env_defaults,
+    model_defaults,
+)
 from .params import JointParameterMap
-from .wrapper import DEFAULT_GROUPS, WRAPPER_SETTINGS, RhythmicBlackBoxWrapper, make_blackbox, split_settings
+from .settings import DEFAULT_GROUPS, BlackBoxSettings
+from .wrapper import WRAPPER_SETTINGS, RhythmicBlackBoxWrapper, make_blackbox, split_settings
 
 __all__ = [
     "BLACKBOX_ID",
@@ -28,8 +40,11 @@ __all__ = [
     "CONTROLLERS",
     "DEFAULT_GROUPS",
     "ENV_DEFAULTS",
+    "MODEL_RULES",
     "WRAPPER_SETTINGS",
+    "BlackBoxSettings",
     "JointParameterMap",
+    "ModelDefaults",
     "MujocoJoints",
     "PDController",
     "PositionController",
@@ -39,6 +54,7 @@ __all__ = [
     "env_defaults",
     "make_blackbox",
     "make_controller",
+    "model_defaults",
     "split_settings",
 ]
 

@@ -41,6 +41,7 @@ class MujocoJoints:
         env: the env (``env.unwrapped.model`` and ``data``).
 
     Attributes:
+        joint_ids: ``[d]`` the joints' ids in the model.
         qpos_adr, dof_adr: ``[d]`` the joints' addresses in ``data.qpos`` and ``data.qvel``.
         names: the joints' names.
     """
@@ -65,6 +66,7 @@ class MujocoJoints:
                 raise ValueError(f"joint_state: actuator {name!r} drives a {mujoco.mjtJoint(kind).name} joint, not a "
                                  "hinge or slide; pass joint_state=callable(env) -> (q, qd)")
             joints.append(joint)
+        self.joint_ids = np.array(joints, dtype=np.intp)
         self.qpos_adr = np.array([model.jnt_qposadr[j] for j in joints], dtype=np.intp)
         self.dof_adr = np.array([model.jnt_dofadr[j] for j in joints], dtype=np.intp)
         self.names = tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint {j}" for j in joints)
@@ -78,11 +80,6 @@ class MujocoJoints:
     def __call__(self, env: Any) -> tuple[np.ndarray, np.ndarray]:
         data = env.unwrapped.data
         return data.qpos[self.qpos_adr].copy(), data.qvel[self.dof_adr].copy()
-
-    def posture(self, env: Any) -> np.ndarray | None:
-        """``[d]`` the joints' nominal positions (the env's ``init_qpos``), or None if the env has none."""
-        init = getattr(env.unwrapped, "init_qpos", None)
-        return None if init is None else np.asarray(init, dtype=np.float64)[self.qpos_adr].copy()
 
 
 def check_gains(gains: Any, n_joints: int, name: str) -> np.ndarray:
@@ -154,8 +151,9 @@ def make_controller(controller: str | TrackingController, n_joints: int, n_actio
                          "action")
     if controller == "pd":
         if p_gains is None:
-            raise ValueError("p_gains: the 'pd' controller needs its position gains (action units per joint unit), "
-                             "a number or one per joint")
+            raise ValueError("p_gains: the 'pd' controller needs its position gains (action units per joint unit) and "
+                             "the env has no MuJoCo motors to derive them from; pass p_gains=... (a number or one per "
+                             "joint)")
         return PDController(check_gains(p_gains, n_joints, "p_gains"),
                             check_gains(0.0 if d_gains is None else d_gains, n_joints, "d_gains"))
     if d_gains is not None:

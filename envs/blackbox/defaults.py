@@ -1,20 +1,27 @@
-"""Defaults of the rhythmic black-box wrapper: the action scales, the default pattern, settings per known env.
+"""Defaults of the rhythmic black-box wrapper: the action scales, the default pattern, settings per known env, and
+the settings derived from a MuJoCo model.
 
 Without a demonstration the wrapper fits its DMP to :func:`default_demonstration`: one sine per joint about a
 posture, the same period for all, each joint with its own phase, that grows from rest at the posture over the
 first period (a smoothstep envelope), so the fitted transient is a gentle start into the rhythm.
+
+On a MuJoCo env the settings not given (and not in :data:`ENV_DEFAULTS`) come from the model
+(:func:`model_defaults`, the rules in :data:`MODEL_RULES`), so that any Gymnasium MuJoCo env with a continuous action
+space runs with no option.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from rdmp_gym import Demonstration, Segmentation
 
-__all__ = ["BLACKBOX_SCALES", "ENV_DEFAULTS", "default_demonstration", "env_defaults", "pattern_phases"]
+__all__ = ["BLACKBOX_SCALES", "ENV_DEFAULTS", "MODEL_RULES", "ModelDefaults", "default_demonstration",
+           "env_defaults", "model_defaults", "pattern_phases"]
 
 #: Action scales (``theta = theta0 + scale * a``). ``periodic``/``transient``: the fraction of the range of the
 #: initial DMP's weights per joint (as :class:`rdmp_gym.envs.action.ActionMap` does); ``initial``: of pi for the
@@ -103,3 +110,195 @@ def default_demonstration(posture: np.ndarray, period: float, amplitude: float |
     Y = posture + envelope[:, None] * amplitudes * np.sin(2.0 * np.pi * t[:, None] / period + phi)
     return (Demonstration(t, Y, name="default rhythmic pattern"),
             Segmentation(period=period, transient_length=period, anchor=posture.copy()))
+
+
+#: The rules of :func:`model_defaults` (fractions of a joint's range; a joint without limits counts as 2 pi for a
+#: hinge and the model's length for a slide):
+#:
+#: - ``full_command_error``: the PD gives the full command (the action box's half width) at this error;
+#: - ``stability``: at most this many rad of the PD's natural frequency per env step (the stiffness is capped at
+#:   ``inertia * (stability / dt)**2``, so the sampled loop stays well damped);
+#: - ``amplitude``: the default pattern's amplitude; ``hold_amplitude`` on a model with passive joints;
+#: - ``hold_periods``: on a model with passive joints, the period is this many natural periods.
+MODEL_RULES: dict[str, float] = {"full_command_error": 0.1, "stability": 0.5, "amplitude": 0.04,
+                                 "hold_amplitude": 0.001, "hold_periods": 3.0}
+
+#: standard gravity (m/s^2): the natural period's length-to-time scale, also for models without gravity
+_G0 = 9.81
+
+
+@dataclass(frozen=True, eq=False)
+class ModelDefaults:
+    """The wrapper's settings derived from a MuJoCo model, per actuated joint (``[d]``, in the action's order).
+
+    Attributes:
+        controller: ``"pd"`` (motors), ``"position"`` or ``"velocity"`` (servos with gear 1), or None with
+            :attr:`no_controller` saying why.
+        no_controller: why the actuators get no built-in controller ("" where they do).
+        p_gains, d_gains: ``[d]`` the PD's gains in action units per joint unit (and per joint unit/s); None
+            unless ``controller == "pd"``.
+        posture: ``[d]`` the reset posture ``init_qpos`` at the joints, inside the limited joints' ranges.
+        amplitude: ``[d]`` the default pattern's amplitude (joint units).
+        period: the default pattern's period (s).
+        inertia: ``[d]`` each joint's effective inertia at the posture, ``1 / (M^-1)_jj`` of the joint-space
+            inertia matrix ``M`` (armature included; kg m^2 or kg): what its torque meets with the rest free.
+        force_per_command: ``[d]`` joint torque (or force) per unit of the action (gear x actuator gain).
+        joint_range: ``[d]`` each joint's range (a joint without limits: 2 pi, or the model's length for a slide).
+        length: the model's length (m): twice the radius of gyration of its moving bodies at the posture.
+        passive: the names of the model's passive joints (unactuated hinges or slides of a body that hangs from
+            another body, e.g. an inverted pendulum's pole), which make the pattern hold the posture.
+    """
+
+    controller: str | None
+    no_controller: str
+    p_gains: np.ndarray | None
+    d_gains: np.ndarray | None
+    posture: np.ndarray
+    amplitude: np.ndarray
+    period: float
+    inertia: np.ndarray
+    force_per_command: np.ndarray
+    joint_range: np.ndarray
+    length: float
+    passive: tuple[str, ...]
+
+    def critical_damping(self, p_gains: np.ndarray) -> np.ndarray:
+        """``[d]`` the d gains (action units per joint unit/s) that damp the PD of ``p_gains [d]`` critically on the
+        joints' inertia: ``2 sqrt(Kp g I) / g`` with ``g`` the force per command."""
+        force = self.force_per_command
+        return 2.0 * np.sqrt(np.asarray(p_gains, dtype=np.float64) * force * self.inertia) / force
+
+
+def model_defaults(env: Any, joints: Any, dt: float) -> ModelDefaults:
+    """The settings a MuJoCo env's model suggests for its actuated joints (the rules of :data:`MODEL_RULES`).
+
+    - **controller**: motors (no bias) get ``"pd"``; position or velocity servos with gear 1 get ``"position"`` or
+      ``"velocity"``; other or mixed actuators get none.
+    - **PD gains**: the stiffness that gives the full command at ``full_command_error`` of the joint's range,
+      ``K = g c / (0.1 range)`` (``g``: force per command, ``c``: half the action box), capped at
+      ``I (stability / dt)^2`` (``I``: the joint's effective inertia at the posture, ``1 / (M^-1)_jj`` of the
+      joint-space inertia matrix, armature included; the diagonal ``M_jj`` itself, the inertia with every other
+      joint locked, overestimates it on a floating robot and lets the sampled loop chatter); the damping critical,
+      ``D = 2 sqrt(K I)``; in action units, ``p = K / g`` and ``d = D / g``.
+    - **posture**: ``init_qpos`` at the joints, inside their ranges.
+    - **pattern**: amplitude ``amplitude`` x each joint's range, period the natural period
+      ``T0 = 2 pi sqrt(l / g0)`` of the model's length ``l`` (twice the radius of gyration of its moving bodies);
+      on a model with **passive joints** (a balancing system: an unactuated hinge or slide inside the body tree)
+      the pattern holds the posture: amplitude ``hold_amplitude`` x the range and period ``hold_periods`` x T0
+      (the DMP's start, one period long, then glides from the reset state to the posture).
+
+    Args:
+        env: the env (``env.unwrapped.model``, ``init_qpos``, ``action_space``).
+        joints: its :class:`~rdmp_gym.envs.blackbox.controller.MujocoJoints`.
+        dt: seconds per env step.
+    """
+    import mujoco
+
+    base = env.unwrapped
+    model = base.model
+    data = mujoco.MjData(model)
+    init = getattr(base, "init_qpos", None)
+    data.qpos[:] = model.qpos0 if init is None else np.asarray(init, dtype=np.float64)
+    mujoco.mj_forward(model, data)
+    ids = joints.joint_ids
+    length = _model_length(model, data)
+    limited = np.asarray(model.jnt_limited[ids], dtype=bool)
+    low, high = model.jnt_range[ids, 0], model.jnt_range[ids, 1]
+    slide = model.jnt_type[ids] == int(mujoco.mjtJoint.mjJNT_SLIDE)
+    joint_range = np.where(limited & (high > low), high - low, np.where(slide, length, 2.0 * np.pi))
+    posture = data.qpos[joints.qpos_adr].copy()
+    posture = np.where(limited, np.clip(posture, low, high), posture)
+    inertia = _effective_inertia(model, data)[joints.dof_adr]
+    force = model.actuator_gear[:, 0] * model.actuator_gainprm[:, 0]
+    controller, why = _controller(model)
+    p_gains, d_gains = _pd_gains(env.action_space, np.abs(force), joint_range, inertia, dt) if controller == "pd" \
+        else (None, None)
+    passive = _passive_joints(model)
+    natural = 2.0 * np.pi * np.sqrt(length / _G0)
+    hold = bool(passive)
+    amplitude = MODEL_RULES["hold_amplitude" if hold else "amplitude"] * joint_range
+    period = natural * (MODEL_RULES["hold_periods"] if hold else 1.0)
+    return ModelDefaults(controller, why, p_gains, d_gains, posture, amplitude, float(period), inertia,
+                         np.abs(force), joint_range, float(length), passive)
+
+
+def _pd_gains(space: Any, force: np.ndarray, joint_range: np.ndarray, inertia: np.ndarray, dt: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """``[d]`` p and d gains (action units): the stiffness of the full command at ``full_command_error`` of the
+    range, capped for the sampled loop's stability, critically damped (see :func:`model_defaults`)."""
+    width = np.asarray(space.high, dtype=np.float64) - np.asarray(space.low, dtype=np.float64)
+    half = np.where(np.isfinite(width), width / 2.0, np.inf)
+    stiffness = np.minimum(force * half / (MODEL_RULES["full_command_error"] * joint_range),
+                           inertia * (MODEL_RULES["stability"] / dt) ** 2)
+    return stiffness / force, 2.0 * np.sqrt(stiffness * inertia) / force
+
+
+def _effective_inertia(model: Any, data: Any) -> np.ndarray:
+    """``[nv]`` each degree of freedom's effective inertia ``1 / (M^-1)_jj``: what a torque on it alone meets with
+    the rest of the model free to move (the joint-space inertia matrix ``M`` built one column ``M e_j`` at a
+    time)."""
+    import mujoco
+
+    matrix, unit = np.empty((model.nv, model.nv)), np.zeros(model.nv)
+    for index in range(model.nv):
+        unit[:] = 0.0
+        unit[index] = 1.0
+        mujoco.mj_mulM(model, data, matrix[index], unit)     # M is symmetric: row j = column j
+    return 1.0 / np.diag(np.linalg.inv(matrix))
+
+
+def _model_length(model: Any, data: Any) -> float:
+    """Twice the radius of gyration (m) of the moving bodies' mass about their centre of mass (the bodies' own
+    inertia included); the model's mean size where nothing moves."""
+    moving = [body for body in range(1, model.nbody) if model.body_weldid[body] != 0 and model.body_mass[body] > 0]
+    if not moving:
+        return float(model.stat.meansize)
+    mass = model.body_mass[moving]
+    centres = data.xipos[moving]
+    centre = mass @ centres / mass.sum()
+    spread = mass @ np.sum((centres - centre) ** 2, axis=1) + 0.5 * model.body_inertia[moving].sum()
+    return float(2.0 * np.sqrt(spread / mass.sum()))
+
+
+def _controller(model: Any) -> tuple[str | None, str]:
+    """The built-in controller the actuators suit, or None and why not."""
+    import mujoco
+
+    fixed, none, affine = (int(mujoco.mjtGain.mjGAIN_FIXED), int(mujoco.mjtBias.mjBIAS_NONE),
+                           int(mujoco.mjtBias.mjBIAS_AFFINE))
+    kinds = []
+    for index in range(model.nu):
+        gain, bias = model.actuator_gainprm[index, 0], model.actuator_biasprm[index, :3]
+        if int(model.actuator_gaintype[index]) != fixed:
+            kinds.append("other")
+        elif int(model.actuator_biastype[index]) == none:
+            kinds.append("pd" if gain * model.actuator_gear[index, 0] != 0.0 else "other")
+        elif int(model.actuator_biastype[index]) == affine and bias[0] == 0.0 and gain != 0.0 and bias[1] == -gain:
+            kinds.append("position")
+        elif int(model.actuator_biastype[index]) == affine and bias[0] == bias[1] == 0.0 and gain != 0.0 \
+                and bias[2] == -gain:
+            kinds.append("velocity")
+        else:
+            kinds.append("other")
+    found = sorted(set(kinds))
+    if len(found) != 1 or found[0] == "other":
+        return None, (f"the actuators are not all motors, or all position or velocity servos ({', '.join(found)}); "
+                      "pass controller='pd' with p_gains, or a callable (q_des, qd_des, q, qd) -> action")
+    if found[0] != "pd" and not np.all(model.actuator_gear[:, 0] == 1.0):
+        return None, (f"the {found[0]} servos have a gear other than 1 (their command is gear x the joint's "
+                      f"{found[0]}); pass a controller callable (q_des, qd_des, q, qd) -> action")
+    return found[0], ""
+
+
+def _passive_joints(model: Any) -> tuple[str, ...]:
+    """The names of the unactuated hinge and slide joints of bodies whose parent is not the world (the root joints
+    of a floating robot hang from the world and are not passive)."""
+    import mujoco
+
+    driven = {int(model.actuator_trnid[index, 0]) for index in range(model.nu)
+              if int(model.actuator_trntype[index]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+    kinds = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    return tuple(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, joint) or f"joint {joint}"
+                 for joint in range(model.njnt)
+                 if joint not in driven and int(model.jnt_type[joint]) in kinds
+                 and int(model.body_parentid[model.jnt_bodyid[joint]]) != 0)

@@ -15,6 +15,11 @@ One ``step(a)``:
    (the reset observation under ``context_mask``) and ``info`` (the executed and desired trajectories, the tracking
    error, ``env_steps``, the per-step rewards and ``cost_trace``, the per-step cost zero-padded to ``T``).
 
+The settings are one :class:`~rdmp_gym.envs.blackbox.settings.BlackBoxSettings`; on a MuJoCo env every setting has a
+default derived from the model (:func:`~rdmp_gym.envs.blackbox.defaults.model_defaults`). The wrapper declares its
+task contract (:meth:`RhythmicBlackBoxWrapper.task_contract`, :meth:`~RhythmicBlackBoxWrapper.executed_path`) and
+records videos (:meth:`~RhythmicBlackBoxWrapper.record_episode`, where :meth:`~RhythmicBlackBoxWrapper.can_record`).
+
 The names follow fancy_gym's ``BlackBoxWrapper`` where they fit (``duration``, ``context_mask``, a tracking
 controller with ``p_gains``/``d_gains``). It is a :class:`gymnasium.Env` that holds the step-based env as
 ``.env`` rather than a ``gymnasium.Wrapper``: the learners of :mod:`rdmp_gym.agents` find the episodic methods
@@ -25,69 +30,56 @@ from __future__ import annotations
 
 import copy
 import inspect
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from rdmp_gym import Demonstration, RhythmicDMP
+from rdmp_gym import RhythmicDMP
 
 from ..action import checked_action
+from ..contract import Metric, TaskContract
 from ..specs import find_spec
-from .controller import JointReader, MujocoJoints, TrackingController, make_controller
-from .defaults import default_demonstration, env_defaults
+from .controller import JointReader, MujocoJoints, TrackingController, check_gains, make_controller
+from .defaults import ModelDefaults, default_demonstration, env_defaults, model_defaults
 from .params import JointParameterMap
+from .settings import DEFAULT_GROUPS, BlackBoxSettings
 
 __all__ = ["DEFAULT_GROUPS", "WRAPPER_SETTINGS", "RhythmicBlackBoxWrapper", "make_blackbox", "split_settings"]
 
-#: the parameter groups in the action by default: the cycle's shape, its amplitude and the posture it is centred on
-DEFAULT_GROUPS = ("periodic", "amplitude", "anchor")
+#: the most frames per second of :meth:`RhythmicBlackBoxWrapper.record_episode` (it keeps every k-th env step)
+VIDEO_FPS = 30.0
 
 
 class RhythmicBlackBoxWrapper(gym.Env):
     """Episodic black-box env: a rhythmic joint-space DMP tracked on a step-based env for one whole episode.
 
     Args:
-        env: a step-based Gymnasium env with a continuous ``Box`` action space (e.g. ``gym.make("Swimmer-v5")``).
-        groups: the DMP parameter groups in the action (:data:`DEFAULT_GROUPS`; also ``transient``, ``initial``, and
-            ``tempo``: the cycle's speed as one more action dimension, ``tempo = 1 + 0.5 a``).
-        duration: the episode (s); default the env's time limit (``spec.max_episode_steps * dt``). It must fit in the
-            time limit and be a whole number of env steps.
-        controller: ``"pd"`` (joint torques), ``"position"`` or ``"velocity"`` (joint targets), or a callable
-            ``(q_des, qd_des, q, qd) -> action`` (:mod:`~rdmp_gym.envs.blackbox.controller`).
-        p_gains, d_gains: the built-in controllers' gains (a number or one per joint, in action units per joint
-            unit): ``"pd"`` needs ``p_gains`` (``d_gains`` default 0); ``"velocity"`` takes ``p_gains`` (default 0).
-        context_mask: ``[o]`` booleans that select the context (the observation) from the flattened reset
-            observation; None: all of it.
-        demonstration: a joint-space :class:`~rdmp_gym.Demonstration` ``Y [L, d]`` (d joints, the transient start
-            then at least two cycles) that the initial DMP is fitted to; None: the default pattern.
-        dmp: a fitted :class:`~rdmp_gym.RhythmicDMP` with ``d`` dimensions to start from (instead of a fit).
-        n_periodic, n_transient: basis functions of the fitted DMP.
-        period, amplitude, phases: the default pattern without demonstration (s; joint units, a number or one per
-            joint; per joint phases in rad, or a number: the lag between neighbouring joints, default pi/2).
-        posture: ``[d]`` the default pattern's anchor; default the MuJoCo env's ``init_qpos`` at the joints, else the
-            joint positions after ``env.reset(seed=0)``.
-        joint_state: ``reader(env) -> (q [d], qd [d])``; default for MuJoCo envs: the joints of the actuators
-            (:class:`~rdmp_gym.envs.blackbox.controller.MujocoJoints`).
-        dt: seconds per env step; default ``env.unwrapped.dt``.
-        scales: ``{group: frac}`` action scales over :data:`~rdmp_gym.envs.blackbox.defaults.BLACKBOX_SCALES`.
-        fit_kwargs: settings of :meth:`RhythmicDMP.fit <rdmp_gym.RhythmicDMP.fit>` (``period``, ``alpha_z``, ...).
+        env: a step-based Gymnasium env with a continuous ``Box`` action space (e.g. ``gym.make("Swimmer-v5")``),
+            or one that only looks like one (``reset``, ``step``, a ``Box`` action space; no ``spec`` or
+            ``metadata`` needed: then give ``duration`` and, without a MuJoCo model, ``joint_state`` and ``dt``).
+        settings: a :class:`~rdmp_gym.envs.blackbox.settings.BlackBoxSettings` (default: all defaults).
+        **overrides: settings by name, replacing those of ``settings`` (``p_gains=5.0``, ``duration=4.0``, ...).
+
+    A setting left None is taken from :data:`~rdmp_gym.envs.blackbox.defaults.ENV_DEFAULTS` for a known env
+    (Swimmer, HalfCheetah), else from the MuJoCo model (:func:`~rdmp_gym.envs.blackbox.defaults.model_defaults`:
+    the controller, the PD gains, the posture and the default pattern), else from the generic fallbacks named in
+    :class:`~rdmp_gym.envs.blackbox.settings.BlackBoxSettings`.
+
+    Attributes:
+        settings: the settings as given. model_defaults: what the MuJoCo model suggests (None without one).
+        has_success: whether the env reports ``info["is_success"]`` (told by one env step when it is built).
 
     Raises:
         ValueError: naming the argument, for an env it cannot drive (a discrete action space, no joint state to
-            track, no step length or time limit) and for inconsistent settings.
+            track, no step length or time limit) and for inconsistent settings; TypeError for an unknown setting.
     """
 
-    def __init__(self, env: gym.Env, *, groups: Iterable[str] | str = DEFAULT_GROUPS, duration: float | None = None,
-                 controller: str | TrackingController = "pd", p_gains: float | Sequence[float] | None = None,
-                 d_gains: float | Sequence[float] | None = None, context_mask: Sequence[bool] | None = None,
-                 demonstration: Demonstration | None = None, dmp: RhythmicDMP | None = None, n_periodic: int = 10,
-                 n_transient: int = 10, period: float = 1.0, amplitude: float | Sequence[float] = 0.2,
-                 phases: float | Sequence[float] | None = None, posture: Sequence[float] | None = None,
-                 joint_state: JointReader | None = None, dt: float | None = None,
-                 scales: Mapping[str, float] | None = None, fit_kwargs: Mapping[str, Any] | None = None) -> None:
+    def __init__(self, env: gym.Env, settings: BlackBoxSettings | None = None, **overrides: Any) -> None:
+        self.settings = BlackBoxSettings.build(settings, **overrides)
         if not isinstance(env, gym.Env):
             raise TypeError(f"env: expected a gymnasium.Env, got {type(env).__name__}")
         space = env.action_space
@@ -97,31 +89,45 @@ class RhythmicBlackBoxWrapper(gym.Env):
                              f"actuator), got {space}")
         self.env = env
         self.env_action_space = space
-        self.dt = self._step_length(env, dt)
-        self.n_steps = self._steps(env, duration)
+        spec = getattr(env, "spec", None)
+        #: the env's name: its id, or its class's name where it has no spec
+        self.env_name = spec.id if spec is not None else type(env.unwrapped).__name__
+        chosen = {**(env_defaults(spec.id) if spec is not None else {}), **self._given()}
+        self.dt = self._step_length(env, self.settings.dt)
+        self.n_steps = self._steps(env, self.settings.duration)
         #: ``[T + 1]`` the env step grid (s): the reset state at 0, the end of env step k at ``t[k + 1]``
         self.t = np.arange(self.n_steps + 1) * self.dt
-        self._read, mujoco = self._reader(env, joint_state)
-        self.posture = self._posture(env, posture, mujoco)
+        self._read, joints = self._reader(env, self.settings.joint_state)
+        self.model_defaults = None if joints is None else model_defaults(env, joints, self.dt)
+        self.posture = self._posture(env, chosen.get("posture"), joints)
         self.n_joints = int(self.posture.size)
-        self.controller = make_controller(controller, self.n_joints, int(space.shape[0]), p_gains, d_gains)
-        self.dmp = self._initial_dmp(dmp, demonstration, n_periodic, n_transient, period, amplitude, phases,
-                                     fit_kwargs)
-        self.groups = (groups,) if isinstance(groups, str) else tuple(groups)
-        self.param_map = JointParameterMap(self.dmp, self.groups, scales, self._cycle_motion())
+        #: the joints' names (the executed path's columns)
+        self.joint_names = joints.names if joints is not None else tuple(f"joint {j}" for j in range(self.n_joints))
+        self.controller = self._controller(chosen, int(space.shape[0]))
+        self.dmp = self._initial_dmp(chosen)
+        self.groups = self.settings.groups
+        self.param_map = JointParameterMap(self.dmp, self.groups, self.settings.scales, self._cycle_motion())
         self.theta0 = self.param_map.theta0.copy()
         self.action_space = gym.spaces.Box(-1.0, 1.0, (self.param_map.size,), np.float32)
         self._flat_space = gym.spaces.flatten_space(env.observation_space)
-        self.context_mask = self._mask(context_mask)
+        self.context_mask = self._mask(self.settings.context_mask)
         self.observation_space = gym.spaces.Box(self._flat_space.low[self.context_mask].astype(np.float32),
                                                 self._flat_space.high[self.context_mask].astype(np.float32),
                                                 dtype=np.float32)
-        self.metadata = dict(getattr(env, "metadata", {}))
+        self.metadata = dict(getattr(env, "metadata", None) or {})
         self.render_mode = getattr(env, "render_mode", None)
+        self.has_success = self._reports_success()
         self._start: tuple[np.ndarray, np.ndarray] | None = None
         self._context = np.zeros(int(self.context_mask.sum()), dtype=np.float32)
+        self._frames: list[np.ndarray] | None = None
+        self._frame_stride = 1
 
     # ------------------------------------------------------------------ construction
+    def _given(self) -> dict[str, Any]:
+        """The settings given (not None) among those :data:`ENV_DEFAULTS` and the model may fill in."""
+        names = ("controller", "p_gains", "d_gains", "period", "amplitude", "phases", "posture")
+        return {name: getattr(self.settings, name) for name in names if getattr(self.settings, name) is not None}
+
     @staticmethod
     def _step_length(env: gym.Env, dt: float | None) -> float:
         value = getattr(env.unwrapped, "dt", None) if dt is None else dt
@@ -132,28 +138,42 @@ class RhythmicBlackBoxWrapper(gym.Env):
             raise ValueError(f"dt: expected seconds per env step > 0, got {value!r}")
         return value
 
+    @staticmethod
+    def time_limit(env: gym.Env) -> int | None:
+        """The env's time limit in env steps: the smallest of its ``spec.max_episode_steps`` and of the
+        ``gymnasium.wrappers.TimeLimit`` wrappers around it; None where it has neither."""
+        limits = []
+        spec_limit = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+        if spec_limit is not None:
+            limits.append(int(spec_limit))
+        layer = env
+        while isinstance(layer, gym.Wrapper):
+            if isinstance(layer, gym.wrappers.TimeLimit):
+                limits.append(int(layer._max_episode_steps))
+            layer = layer.env
+        return min(limits) if limits else None
+
     def _steps(self, env: gym.Env, duration: float | None) -> int:
-        limit = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+        limit = self.time_limit(env)
         if duration is None:
             if limit is None:
-                raise ValueError("duration: the env has no time limit (spec.max_episode_steps) to take the episode's "
-                                 "length from; pass duration=... (s)")
+                raise ValueError("duration: the env has no time limit (no spec.max_episode_steps, no TimeLimit "
+                                 "wrapper) to take the episode's length from; pass duration=... (s, a whole number of "
+                                 f"env steps of {self.dt:g} s)")
             return int(limit)
-        duration = float(duration)
         steps = round(duration / self.dt)
-        if not np.isfinite(duration) or steps < 1 or abs(steps * self.dt - duration) > 1e-6 * max(duration, 1.0):
+        if steps < 1 or abs(steps * self.dt - duration) > 1e-6 * max(duration, 1.0):
             raise ValueError(f"duration: expected a whole number (>= 1) of env steps of {self.dt:g} s, "
                              f"got {duration!r}")
         if limit is not None and steps > limit:
             raise ValueError(f"duration: {duration:g} s is {steps} env steps, more than the env's time limit of "
-                             f"{limit} steps ({limit * self.dt:g} s)")
+                             f"{limit} steps ({limit * self.dt:g} s), which would cut every episode short; pass "
+                             f"duration <= {limit * self.dt:g} or raise the env's limit")
         return int(steps)
 
     @staticmethod
     def _reader(env: gym.Env, joint_state: JointReader | None) -> tuple[Callable, MujocoJoints | None]:
         if joint_state is not None:
-            if not callable(joint_state):
-                raise ValueError(f"joint_state: expected a callable env -> (q, qd), got {type(joint_state).__name__}")
             return joint_state, None
         if not MujocoJoints.available(env):
             raise ValueError("joint_state: the env has no MuJoCo model and data (env.unwrapped.model/.data) to read "
@@ -162,44 +182,55 @@ class RhythmicBlackBoxWrapper(gym.Env):
         joints = MujocoJoints(env)
         return joints, joints
 
-    def _posture(self, env: gym.Env, posture: Sequence[float] | None, mujoco: MujocoJoints | None) -> np.ndarray:
-        if posture is None and mujoco is not None:
-            posture = mujoco.posture(env)
+    def _posture(self, env: gym.Env, posture: Any, joints: MujocoJoints | None) -> np.ndarray:
+        if posture is None and self.model_defaults is not None:
+            posture = self.model_defaults.posture
         if posture is None:
             env.reset(seed=0)
             posture = self._joint_state()[0]
         values = np.asarray(posture, dtype=np.float64)
         if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values)):
             raise ValueError(f"posture: expected [d] finite joint positions, got {posture!r}")
-        if mujoco is not None and values.size != mujoco.qpos_adr.size:
-            raise ValueError(f"posture: expected {mujoco.qpos_adr.size} joint positions (one per actuator), "
+        if joints is not None and values.size != joints.qpos_adr.size:
+            raise ValueError(f"posture: expected {joints.qpos_adr.size} joint positions (one per actuator), "
                              f"got {values.size}")
         return values.copy()
 
-    def _initial_dmp(self, dmp: RhythmicDMP | None, demonstration: Demonstration | None, n_periodic: int,
-                     n_transient: int, period: float, amplitude: Any, phases: Any,
-                     fit_kwargs: Mapping[str, Any] | None) -> RhythmicDMP:
-        if dmp is not None:
-            if demonstration is not None:
-                raise ValueError("dmp: give a fitted dmp or a demonstration, not both")
-            if not isinstance(dmp, RhythmicDMP):
-                raise ValueError(f"dmp: expected a RhythmicDMP, got {type(dmp).__name__}")
-            if dmp.n_dims != self.n_joints:
-                raise ValueError(f"dmp: has {dmp.n_dims} dimensions, the env has {self.n_joints} joints")
-            return dmp
-        keywords = dict(fit_kwargs or {})
-        if demonstration is not None:
-            if not isinstance(demonstration, Demonstration):
-                raise ValueError("demonstration: expected a rdmp_gym.Demonstration, got "
-                                 f"{type(demonstration).__name__}")
-            if demonstration.n_dims != self.n_joints:
-                raise ValueError(f"demonstration: has {demonstration.n_dims} dimensions, the env has {self.n_joints} "
-                                 "joints (one DMP dimension per actuated joint)")
-            return RhythmicDMP.fit(demonstration, n_periodic, n_transient, **keywords)
-        demo, segmentation = default_demonstration(self.posture, period, amplitude, phases)
+    def _controller(self, chosen: Mapping[str, Any], n_actions: int) -> TrackingController:
+        """The tracking controller: given, else the known env's, else the model's (with its gains), else "pd"."""
+        derived: ModelDefaults | None = self.model_defaults
+        controller = chosen.get("controller")
+        if controller is None and derived is not None:
+            if derived.controller is None:
+                raise ValueError(f"controller: {derived.no_controller}")
+            controller = derived.controller
+        controller = "pd" if controller is None else controller
+        p_gains, d_gains = chosen.get("p_gains"), chosen.get("d_gains")
+        if controller == "pd" and derived is not None and derived.controller == "pd":
+            if p_gains is None:
+                p_gains = derived.p_gains
+            if d_gains is None:
+                d_gains = derived.critical_damping(check_gains(p_gains, self.n_joints, "p_gains"))
+        return make_controller(controller, self.n_joints, n_actions, p_gains, d_gains)
+
+    def _initial_dmp(self, chosen: Mapping[str, Any]) -> RhythmicDMP:
+        settings, derived = self.settings, self.model_defaults
+        if settings.dmp is not None:
+            if settings.dmp.n_dims != self.n_joints:
+                raise ValueError(f"dmp: has {settings.dmp.n_dims} dimensions, the env has {self.n_joints} joints")
+            return settings.dmp
+        keywords = dict(settings.fit_kwargs)
+        if settings.demonstration is not None:
+            if settings.demonstration.n_dims != self.n_joints:
+                raise ValueError(f"demonstration: has {settings.demonstration.n_dims} dimensions, the env has "
+                                 f"{self.n_joints} joints (one DMP dimension per actuated joint)")
+            return RhythmicDMP.fit(settings.demonstration, settings.n_periodic, settings.n_transient, **keywords)
+        period = chosen.get("period", derived.period if derived is not None else 1.0)
+        amplitude = chosen.get("amplitude", derived.amplitude if derived is not None else 0.2)
+        demo, segmentation = default_demonstration(self.posture, period, amplitude, chosen.get("phases"))
         keywords.setdefault("segmentations", [segmentation])
         keywords.setdefault("period", segmentation.period)
-        return RhythmicDMP.fit(demo, n_periodic, n_transient, **keywords)
+        return RhythmicDMP.fit(demo, settings.n_periodic, settings.n_transient, **keywords)
 
     def _cycle_motion(self) -> np.ndarray:
         """``[d]`` each joint's peak-to-peak motion over the initial DMP's first cycle after the transient."""
@@ -208,15 +239,25 @@ class RhythmicBlackBoxWrapper(gym.Env):
         path = self.dmp.rollout(t)[t >= start]
         return np.ptp(path, axis=0)
 
-    def _mask(self, context_mask: Sequence[bool] | None) -> np.ndarray:
+    def _mask(self, context_mask: tuple[bool, ...] | None) -> np.ndarray:
         size = int(self._flat_space.shape[0])
         if context_mask is None:
             return np.ones(size, dtype=bool)
-        mask = np.asarray(context_mask)
-        if mask.dtype != bool or mask.shape != (size,):
+        mask = np.asarray(context_mask, dtype=bool)
+        if mask.shape != (size,):
             raise ValueError(f"context_mask: expected {size} booleans (one per entry of the env's flattened "
-                             f"observation), got {mask.dtype} array of shape {mask.shape}")
-        return mask.copy()
+                             f"observation), got {mask.size}")
+        return mask
+
+    def _reports_success(self) -> bool:
+        """Whether the env reports ``is_success``: in the info of a reset (unseeded) or of one env step after it
+        (the action box's point nearest 0). The next episode needs a reset anyway."""
+        _, info = self.env.reset()
+        if "is_success" in info:
+            return True
+        low, high = self.env_action_space.low, self.env_action_space.high
+        action = np.clip(np.zeros(self.env_action_space.shape), low, high).astype(self.env_action_space.dtype)
+        return "is_success" in self.env.step(action)[4]
 
     # ------------------------------------------------------------------ action <-> parameters
     def action_to_params(self, action: np.ndarray) -> np.ndarray:
@@ -293,6 +334,34 @@ class RhythmicBlackBoxWrapper(gym.Env):
         """``[T, d]`` the desired joint path for ``theta [P]`` at the end of each env step, from the last reset."""
         return self.desired_trajectory(theta)[0][1:]
 
+    # ------------------------------------------------------------------ the task contract
+    def task_contract(self) -> TaskContract:
+        """What the tools may know of this task (:mod:`rdmp_gym.envs.contract`): the episode length
+        (``info["env_steps"]``) and the tracking error (``info["tracking_rmse"]``, RMS over the episode after the
+        reset state), success where the env reports it, the jerk of the desired joint path (:meth:`executed_path`)
+        at the env's step."""
+        return TaskContract(name=self.env_name,
+                            metrics=(Metric("env_steps", "episode length", unit="steps"),
+                                     Metric("tracking_rmse", "tracking error (RMS)", higher_is_better=False,
+                                            unit=self._joint_unit())),
+                            has_success=self.has_success, smoothness="jerk", dt=self.dt,
+                            path_labels=tuple(self.joint_names))
+
+    def _joint_unit(self) -> str:
+        """``"rad"`` where every joint is a MuJoCo hinge, ``"m"`` where every one is a slide, else ``""``."""
+        if not isinstance(self._read, MujocoJoints):
+            return ""
+        import mujoco
+
+        kinds = set(self.env.unwrapped.model.jnt_type[self._read.joint_ids].tolist())
+        return {int(mujoco.mjtJoint.mjJNT_HINGE): "rad", int(mujoco.mjtJoint.mjJNT_SLIDE): "m"}.get(
+            kinds.pop(), "") if len(kinds) == 1 else ""
+
+    def executed_path(self, action: np.ndarray) -> np.ndarray:
+        """``[T, d]`` the desired joint path of ``action [n]`` at the end of each env step, from the state of the last
+        reset: what the tracking controller follows (:meth:`rollout_path` of :meth:`action_to_params`)."""
+        return self.rollout_path(self.action_to_params(action))
+
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -314,19 +383,24 @@ class RhythmicBlackBoxWrapper(gym.Env):
         if self._start is None:
             raise RuntimeError("step: call reset() first; one step is a whole episode, so every step needs a reset")
         theta = self.param_map.to_params(np.clip(a, -1.0, 1.0))
-        q_start, qd_start = self._start
-        q_des, qd_des = self.desired_trajectory(theta, q_start, qd_start)
-        self._start = None
+        start, self._start = self._start, None
+        q_des, qd_des = self.desired_trajectory(theta, *start)
+        run = self._track(start, q_des, qd_des)
+        return self._context.copy(), float(run["step_rewards"].sum()), True, False, self._info(theta, q_des, qd_des,
+                                                                                               run)
+
+    def _track(self, start: tuple[np.ndarray, np.ndarray], q_des: np.ndarray, qd_des: np.ndarray) -> dict[str, Any]:
+        """Run the env from the joint state ``start`` along the desired states ``[T + 1, d]`` with the controller
+        until the episode's end or the env's; the executed states, the env's actions and rewards, its last step."""
         low, high = self.env_action_space.low, self.env_action_space.high
         n, d = self.n_steps, self.n_joints
         positions, velocities = np.empty((n + 1, d)), np.empty((n + 1, d))
-        positions[0], velocities[0] = q_start, qd_start
+        positions[0], velocities[0] = start
         rewards = np.zeros(n)
         commands = np.empty((n, *self.env_action_space.shape), dtype=self.env_action_space.dtype)
-        clipped = 0
+        clipped = used = 0
         terminated = truncated = False
         observation, step_info = None, {}
-        used = 0
         for k in range(n):
             raw = np.asarray(self.controller(q_des[k + 1], qd_des[k + 1], positions[k], velocities[k]),
                              dtype=np.float64)
@@ -340,26 +414,76 @@ class RhythmicBlackBoxWrapper(gym.Env):
             rewards[k] = float(reward)
             used = k + 1
             positions[used], velocities[used] = self._joint_state()
+            if self._frames is not None and used % self._frame_stride == 0:
+                self._frames.append(self._frame())
             if terminated or truncated:
                 break
-        error = positions[:used + 1] - q_des[:used + 1]
-        total = float(rewards[:used].sum())
-        cost = np.zeros(n)
-        cost[:used] = -rewards[:used]
-        info = {"params": theta, "positions": positions[:used + 1], "velocities": velocities[:used + 1],
+        return {"positions": positions[:used + 1], "velocities": velocities[:used + 1], "env_actions": commands[:used],
+                "clipped": clipped, "step_rewards": rewards[:used].copy(), "env_terminated": bool(terminated),
+                "env_truncated": bool(truncated), "last_observation": observation, "env_info": step_info}
+
+    def _info(self, theta: np.ndarray, q_des: np.ndarray, qd_des: np.ndarray, run: dict[str, Any]) -> dict[str, Any]:
+        """The episode's ``info`` (see the docs' table)."""
+        used = len(run["step_rewards"])
+        error = run["positions"] - q_des[:used + 1]
+        cost = np.zeros(self.n_steps)
+        cost[:used] = -run["step_rewards"]
+        info = {"params": theta, "positions": run["positions"], "velocities": run["velocities"],
                 "desired_positions": q_des, "desired_velocities": qd_des, "tracking_error": error,
                 "tracking_rmse": float(np.sqrt(np.mean(error[1:] ** 2))) if used else 0.0,
-                "env_actions": commands[:used], "clipped_fraction": clipped / max(commands[:used].size, 1),
-                "env_steps": used, "step_rewards": rewards[:used].copy(), "cost_trace": cost,
-                "env_terminated": bool(terminated), "env_truncated": bool(truncated), "terminated_early": used < n,
-                "last_observation": observation, "env_info": step_info, "valid": True}
-        if "is_success" in step_info:
-            info["is_success"] = bool(step_info["is_success"])
-        return self._context.copy(), total, True, False, info
+                "env_actions": run["env_actions"], "clipped_fraction": run["clipped"] / max(run["env_actions"].size, 1),
+                "env_steps": used, "step_rewards": run["step_rewards"], "cost_trace": cost,
+                "env_terminated": run["env_terminated"], "env_truncated": run["env_truncated"],
+                "terminated_early": used < self.n_steps, "last_observation": run["last_observation"],
+                "env_info": run["env_info"], "valid": True}
+        if "is_success" in run["env_info"]:
+            info["is_success"] = bool(run["env_info"]["is_success"])
+        return info
 
+    # ------------------------------------------------------------------ rendering
     def render(self) -> Any:
         """The step-based env's frame (as it renders after the last env step)."""
         return self.env.render()
+
+    def can_record(self) -> bool:
+        """Whether :meth:`record_episode` can write a video: the env renders RGB frames (it was made with
+        ``render_mode="rgb_array"``, e.g. ``make_blackbox(env_id, render_mode="rgb_array")``). Cheap: nothing runs."""
+        return getattr(self.env, "render_mode", None) == "rgb_array"
+
+    def record_episode(self, action: np.ndarray, path: str | Path, fps: float | None = None
+                       ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """``step(action)`` while capturing the env's frames (the reset state, then every k-th env step, at most
+        :data:`VIDEO_FPS` frames per simulated second), then write them to a video at ``path`` (``.mp4`` or
+        ``.gif``; ``fps`` default: real time). Returns the step's result.
+
+        Raises:
+            ValueError: the env does not render RGB frames (:meth:`can_record`), or a frame is not ``[H, W, 3]``.
+        """
+        if not self.can_record():
+            raise ValueError(f"render_mode: recording needs the env made with render_mode='rgb_array' "
+                             f"(make_blackbox(env_id, render_mode='rgb_array')), got "
+                             f"{getattr(self.env, 'render_mode', None)!r}")
+        from ..recording import write_video
+
+        self._check_action(action)
+        if self._start is None:
+            raise RuntimeError("record_episode: call reset() first; one step is a whole episode")
+        self._frame_stride = max(1, round(1.0 / (VIDEO_FPS * self.dt)))
+        self._frames = [self._frame()]
+        try:
+            result = self.step(action)
+            frames = self._frames
+        finally:
+            self._frames = None
+        write_video(frames, path, fps=1.0 / (self._frame_stride * self.dt) if fps is None else fps)
+        return result
+
+    def _frame(self) -> np.ndarray:
+        frame = np.asarray(self.env.render())
+        if frame.ndim != 3 or frame.shape[2] != 3:
+            raise ValueError(f"render_mode: expected the env's render() to give RGB frames [H, W, 3], got shape "
+                             f"{frame.shape}")
+        return frame
 
     def close(self) -> None:
         self.env.close()
@@ -371,9 +495,12 @@ class RhythmicBlackBoxWrapper(gym.Env):
 
 
 def make_blackbox(env_id: str, *, env_kwargs: Mapping[str, Any] | None = None, render_mode: str | None = None,
-                  **settings: Any) -> RhythmicBlackBoxWrapper:
-    """``gym.make(env_id, **env_kwargs)`` wrapped in a :class:`RhythmicBlackBoxWrapper` with ``settings`` over the
-    env's entry in :data:`~rdmp_gym.envs.blackbox.defaults.ENV_DEFAULTS` (e.g. ``Swimmer``'s gains and pattern).
+                  settings: BlackBoxSettings | None = None, **overrides: Any) -> RhythmicBlackBoxWrapper:
+    """``gym.make(env_id, **env_kwargs)`` wrapped in a :class:`RhythmicBlackBoxWrapper` with ``settings`` and the
+    ``overrides`` by name; what neither gives comes from the env's entry in
+    :data:`~rdmp_gym.envs.blackbox.defaults.ENV_DEFAULTS` (e.g. ``Swimmer``'s gains and pattern), else from its
+    MuJoCo model (:func:`~rdmp_gym.envs.blackbox.defaults.model_defaults`), so ``make_blackbox("Hopper-v5")``
+    needs no setting.
 
     Registered as ``rdmp_gym/RhythmicBlackBox-v0`` when :mod:`rdmp_gym.envs.blackbox` is imported, so
     ``gym.make("rdmp_gym.envs.blackbox:rdmp_gym/RhythmicBlackBox-v0", env_id="Swimmer-v5")`` builds it too.
@@ -383,16 +510,15 @@ def make_blackbox(env_id: str, *, env_kwargs: Mapping[str, Any] | None = None, r
         kwargs["render_mode"] = render_mode
     env = gym.make(env_id, **kwargs)
     try:
-        return RhythmicBlackBoxWrapper(env, **{**env_defaults(env_id), **settings})
+        return RhythmicBlackBoxWrapper(env, settings, **overrides)
     except BaseException:
         env.close()
         raise
 
 
-#: the settings of :class:`RhythmicBlackBoxWrapper` (its keywords but ``env``), which :func:`split_settings` takes
-#: out of an env's keywords
-WRAPPER_SETTINGS = tuple(name for name in inspect.signature(RhythmicBlackBoxWrapper.__init__).parameters
-                         if name not in ("self", "env"))
+#: the settings of :class:`RhythmicBlackBoxWrapper` (the fields of :class:`BlackBoxSettings`), which
+#: :func:`split_settings` takes out of an env's keywords
+WRAPPER_SETTINGS = BlackBoxSettings.names()
 
 
 def _env_keywords(env_id: str) -> set[str] | None:

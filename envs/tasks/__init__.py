@@ -13,10 +13,12 @@ import importlib
 from dataclasses import dataclass
 from typing import Any
 
+from rdmp_gym.validation import SettingTypeError
+
 from .description import Outcome, Rejection, Solution, Stage, TaskDescription, TaskPlan, ToolPath
 
-__all__ = ["TASKS", "Outcome", "Rejection", "Solution", "Stage", "TaskDescription", "TaskEntry", "TaskPlan", "ToolPath",
-           "get_task", "register_task"]
+__all__ = ["BUILT_IN", "TASKS", "Outcome", "Rejection", "Solution", "Stage", "TaskDescription", "TaskEntry", "TaskPlan",
+           "ToolPath", "get_task", "register_task"]
 
 
 @dataclass(frozen=True)
@@ -92,16 +94,36 @@ TASKS: dict[str, TaskEntry] = {
                       faces="rdmp_gym.envs.tasks.wiping.faces:faces"),
     "drum": TaskEntry("Drum", (1,), "rdmp_gym.envs.tasks.drumming:DrumTask"),
 }
+#: the names of the tasks this package brings, which :func:`register_task` replaces only when told to
+BUILT_IN = frozenset(TASKS)
 
 
 def register_task(name: str, factory: Any, id_name: str | None = None, versions: tuple[int, ...] = (1,),
-                  faces: Any = None) -> None:
-    """Make a task available by ``name`` (an existing name is replaced); ``factory(**settings)`` builds its
-    description (a class, a callable or a ``"module:attribute"`` string); ``faces``: see :class:`TaskEntry`."""
+                  faces: Any = None, *, replace: bool = False) -> None:
+    """Make a task available by ``name``; ``factory(**settings)`` builds its description (a class, a callable or a
+    ``"module:attribute"`` string); ``faces``: see :class:`TaskEntry`.
+
+    Registering a name again with the same entry changes nothing; a different entry for a registered name (a built-in
+    task's, :data:`BUILT_IN`, or one registered before) is a ValueError unless ``replace`` is True: the env ids
+    registered for a name build whatever task the name holds when they are made.
+    """
+    if not isinstance(name, str) or not name:
+        raise SettingTypeError(f"name: expected a task name (a non-empty str), got {name!r}")
     if not (callable(factory) or isinstance(factory, str)):
         raise TypeError(f"factory: expected a TaskDescription class, a callable or 'module:attribute', got "
                         f"{type(factory).__name__}")
-    TASKS[name] = TaskEntry(id_name or name.capitalize(), tuple(versions), factory, faces)
+    if id_name is not None and (not isinstance(id_name, str) or not id_name.isidentifier()):
+        raise ValueError(f"id_name: expected the task's part of its env ids (letters and digits), got {id_name!r}")
+    if not isinstance(versions, (tuple, list)) or not versions \
+            or not all(isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in versions):
+        raise ValueError(f"versions: expected one or more integers >= 1, got {versions!r}")
+    entry = TaskEntry(id_name or name.capitalize(), tuple(versions), factory, faces)
+    current = TASKS.get(name)
+    if current is not None and current != entry and not replace:
+        kind = "a built-in task" if name in BUILT_IN else "a registered task"
+        raise ValueError(f"name: {name!r} is {kind} ({current.factory!r}); pass replace=True to replace it (the env "
+                         f"ids registered for {name!r} then build the new task) or choose another name")
+    TASKS[name] = entry
 
 
 def get_task(task: str | TaskDescription, **settings: Any) -> TaskDescription:

@@ -24,7 +24,11 @@ A task description holds everything task-specific, so that one episodic face
   plan the twin shifts, the simulation, the shifted target, the per-step bookkeeping, an early end, the step's reward
   and info, the observation and the settings the twin refuses; by default the generic book (the tool tip observed, a
   reward judged every few control steps);
-- the **learner defaults** (:attr:`learner_defaults`): settings a learner may read from the task, by agent name.
+- the **learner defaults** (:attr:`learner_defaults`): settings a learner may read from the task, by agent name;
+- the **declaration** the tools read (:class:`~rdmp_gym.envs.contract.TaskContract`, built by the episodic face):
+  the task's per-episode :attr:`metrics` (info keys), its :meth:`context_fields` and, where it sorts its contexts
+  into kinds, :attr:`context_kind`, the :attr:`smoothness_measure` of an executed path and the path an episode
+  executes (:meth:`execution_path`).
 
 Adding a task is one folder with its description and one line in :data:`rdmp_gym.envs.tasks.TASKS` (or a call of
 :func:`rdmp_gym.envs.tasks.register_task` from user code); the registry builds a description with :meth:`build` (a
@@ -40,6 +44,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
+
+from ..contract import Metric
 
 if TYPE_CHECKING:          # the registry imports this module without MuJoCo (string entry points)
     import mujoco
@@ -197,6 +203,15 @@ class TaskDescription(ABC):
     learner_defaults: Mapping[str, Mapping[str, Any]] = {}
     #: the rendered frames' default size (width, height) in pixels
     frame_size: ClassVar[tuple[int, int]] = (480, 360)
+    #: the task's per-episode metrics (each read from ``info`` under its key), in the order tables show them; the
+    #: return is every task's and is not listed
+    metrics: ClassVar[tuple[Metric, ...]] = ()
+    #: how the smoothness of an executed path is measured: ``"jerk"`` (integrated squared jerk) or
+    #: ``"speed_normalised_jerk"`` (per unit of integrated squared speed)
+    smoothness_measure: str = "jerk"
+    #: ``context_kind(observation [C]) -> str``: the kind of a context, where the task sorts its contexts into kinds
+    #: (validation contexts spread over them); None (the default) where it does not
+    context_kind: Callable[[np.ndarray], str] | None = None
 
     @classmethod
     def build(cls, **settings: Any) -> TaskDescription:
@@ -254,6 +269,16 @@ class TaskDescription(ABC):
     def evaluate(self, path: ToolPath, context: Any, sensor: Mapping[str, slice]) -> Outcome:
         """The reward terms, cost trace, info and failure causes of an executed episode; ``sensor`` maps the
         scene's sensor names to their columns of ``path.sensors``."""
+
+    def context_fields(self) -> Mapping[str, tuple[int, int]]:
+        """The observation's named fields ``{name: (start, size)}`` (default: none, the observation is unnamed)."""
+        return {}
+
+    def execution_path(self, plan: TaskPlan, face: Any) -> np.ndarray:
+        """The tool path ``[T, 3]`` (task frame) an episode executes for ``plan`` on the ``face``, without simulating
+        it: what the smoothness is measured on and the figures draw (default: the planned path; a task that changes
+        the path before executing it gives the changed one)."""
+        return plan.path
 
     def cue(self, context: Any, times: np.ndarray) -> np.ndarray:
         """What the task signals to the robot at the control times ``times [T]`` (a step-based policy observes it;

@@ -11,7 +11,9 @@ The tempo change is drawn per episode and not observed (a drummer hears it, the 
 frequency adaptation): at the beat nearest a time drawn in ``change_window`` (s) the tempo becomes ``tempo *
 factor`` with ``factor`` drawn log-uniformly from ``change_factor`` (kept inside ``tempo``'s bounds).
 ``reset(options=...)`` fixes any field by name (``drum_position``, ``drum_height``, ``drum_tilt``, ``tempo``,
-``new_tempo``, ``change_time``); the values are checked against the bounds.
+``new_tempo``, ``change_time``); the values are checked for type and against the bounds: ``change_time`` lies in
+the episode (the beat nearest it no later than the episode's last beat), or is ``inf``: the tempo never changes and
+``new_tempo`` is ``tempo``.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from rdmp_gym.validation import SettingTypeError, check_number, check_pair, is_number
 
 __all__ = ["FIELDS", "DrumContext", "DrumContextSpec"]
 
@@ -48,7 +52,12 @@ class DrumContext:
 
 @dataclass(frozen=True)
 class DrumContextSpec:
-    """Sampling ranges (``reset`` draws from them) and bounds (what options may give) of the context."""
+    """Sampling ranges (``reset`` draws from them) and bounds (what options may give) of the context.
+
+    Each range is ``(low, high)``, two finite numbers with ``low <= high``; ``drum_height``, ``tempo`` and
+    ``change_factor`` have ``low > 0``, ``change_window`` (s) ``low >= 0``; ``drum_tilt`` (rad) lies in ``[0, pi/2)``.
+    Anything else is a ValueError naming the field (a TypeError for a value that is not a number).
+    """
 
     drum_x: tuple[float, float] = (0.0, 0.10)
     drum_y: tuple[float, float] = (-0.10, 0.06)
@@ -57,6 +66,18 @@ class DrumContextSpec:
     tempo: tuple[float, float] = (60.0, 120.0)
     change_factor: tuple[float, float] = (0.8, 1.25)
     change_window: tuple[float, float] = (3.5, 5.5)
+
+    def __post_init__(self) -> None:
+        for name, bound in _RANGES.items():
+            low, high = check_pair(getattr(self, name), name, "a range (low, high)")
+            if low > high or (bound == "> 0" and low <= 0.0) or (bound == ">= 0" and low < 0.0):
+                extra = f" and low {bound}" if bound else ""
+                raise ValueError(f"{name}: expected (low, high) with low <= high{extra}, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, (low, high))
+        tilt = check_number(self.drum_tilt, "drum_tilt", low=0.0, strict_low=False, what=" (rad)")
+        if tilt >= 0.5 * np.pi:
+            raise ValueError(f"drum_tilt: expected a tilt bound in [0, pi/2) rad, got {self.drum_tilt!r}")
+        object.__setattr__(self, "drum_tilt", tilt)
 
     @property
     def low(self) -> np.ndarray:
@@ -70,8 +91,17 @@ class DrumContextSpec:
         return np.array([self.drum_x[1], self.drum_y[1], self.drum_height[1], self.drum_tilt, self.drum_tilt,
                          self.tempo[1]])
 
-    def sample(self, rng: np.random.Generator, options: Mapping[str, Any] | None = None) -> DrumContext:
-        """Draw a context; ``options`` fix fields by name (checked against the bounds)."""
+    @staticmethod
+    def latest_change(last_beat: float, tempo: float) -> float:
+        """The latest change time (s) whose beat, the one nearest it at ``tempo`` (bpm), comes by ``last_beat`` (s):
+        half a beat before it."""
+        return last_beat - 30.0 / tempo
+
+    def sample(self, rng: np.random.Generator, options: Mapping[str, Any] | None = None,
+               last_beat: float = np.inf) -> DrumContext:
+        """Draw a context; ``options`` fix fields by name, checked for type and against the bounds: the observed
+        fields and ``new_tempo`` against the ranges, ``change_time`` (s) against the episode, whose last beat is at
+        ``last_beat`` (s; the task's), or ``inf``: the tempo never changes, and ``new_tempo`` is ``tempo``."""
         options = dict(options or {})
         unknown = set(options) - set(FIELDS) - set(_HIDDEN)
         if unknown:
@@ -83,9 +113,7 @@ class DrumContextSpec:
         change = float(rng.uniform(*self.change_window))
         for name, (start, size) in FIELDS.items():
             if name in options:
-                value = np.asarray(options[name], dtype=np.float64).reshape(-1)
-                if value.shape != (size,) or not np.all(np.isfinite(value)):
-                    raise ValueError(f"options: {name} expects {size} finite number(s), got {options[name]!r}")
+                value = _numbers(options[name], name, size)
                 if np.any(value < low[start:start + size]) or np.any(value > high[start:start + size]):
                     raise ValueError(f"options: {name} = {value} lies outside {low[start:start + size]}.."
                                      f"{high[start:start + size]}")
@@ -93,14 +121,47 @@ class DrumContextSpec:
         tempo = float(drawn[5])
         new_tempo = float(np.clip(tempo * factor, *self.tempo))
         if "new_tempo" in options:
-            new_tempo = self._checked(options["new_tempo"], "new_tempo", *self.tempo)
+            new_tempo = float(_numbers(options["new_tempo"], "new_tempo", 1)[0])
+            if not self.tempo[0] <= new_tempo <= self.tempo[1]:
+                raise ValueError(f"options: new_tempo expects a number in [{self.tempo[0]}, {self.tempo[1]}] (bpm), "
+                                 f"got {options['new_tempo']!r}")
         if "change_time" in options:
-            change = self._checked(options["change_time"], "change_time", 0.0, np.inf)
+            change = self._change_time(options["change_time"], tempo, last_beat)
+            if change == np.inf:
+                if "new_tempo" in options and new_tempo != tempo:
+                    raise ValueError(f"options: new_tempo = {new_tempo:g} differs from tempo = {tempo:g}, but "
+                                     "change_time = inf never changes the tempo; give a finite change_time")
+                new_tempo = tempo
         return DrumContext(drawn[0:2], float(drawn[2]), drawn[3:5], tempo, new_tempo, change)
 
-    @staticmethod
-    def _checked(value: Any, name: str, low: float, high: float) -> float:
-        number = float(value)
-        if not (np.isfinite(number) or number == np.inf) or not low <= number <= high:
-            raise ValueError(f"options: {name} expects a number in [{low}, {high}], got {value!r}")
+    def _change_time(self, value: Any, tempo: float, last_beat: float) -> float:
+        """The ``change_time`` option (s) at ``tempo`` (bpm): a time whose beat comes by ``last_beat`` (s), or inf."""
+        if is_number(value) and float(value) == np.inf:
+            return np.inf
+        number = float(_numbers(value, "change_time", 1)[0])
+        latest = self.latest_change(last_beat, tempo)
+        if not 0.0 <= number <= latest:
+            raise ValueError(f"options: change_time expects a time in [0, {latest:g}] s or inf (no change), got "
+                             f"{value!r}: the tempo changes at the beat nearest it, which must come by the episode's "
+                             f"last beat at {last_beat:g} s (at {tempo:.4g} bpm)")
         return number
+
+
+#: range field -> what its low must be ("": anything)
+_RANGES = {"drum_x": "", "drum_y": "", "drum_height": "> 0", "tempo": "> 0", "change_factor": "> 0",
+           "change_window": ">= 0"}
+
+
+def _numbers(value: Any, name: str, size: int) -> np.ndarray:
+    """The option ``name`` as ``size`` finite numbers ``[size]`` (float64); a SettingTypeError for what is not numbers
+    (bools and strings too), a ValueError for a wrong count or NaN/inf."""
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError):
+        array = np.asarray(None)
+    if array.dtype.kind not in "iuf":
+        raise SettingTypeError(f"options: {name} expects {size} number(s), got {value!r} ({type(value).__name__})")
+    array = array.astype(np.float64).reshape(-1)
+    if array.shape != (size,) or not np.all(np.isfinite(array)):
+        raise ValueError(f"options: {name} expects {size} finite number(s), got {value!r}")
+    return array

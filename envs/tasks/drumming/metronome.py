@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rdmp_gym.validation import check_number, is_number
+
 __all__ = ["Metronome"]
 
 
@@ -33,6 +35,14 @@ class Metronome:
     change_time: float
     start_phase: float
     strike_phase: float
+
+    def __post_init__(self) -> None:
+        for name in ("tempo", "new_tempo"):
+            check_number(getattr(self, name), name, low=0.0, what=" (bpm)")
+        if not (is_number(self.change_time) and self.change_time >= 0.0):
+            raise ValueError(f"change_time: expected a time >= 0 s or inf (no change), got {self.change_time!r}")
+        for name in ("start_phase", "strike_phase"):
+            check_number(getattr(self, name), name, what=" (rad)")
 
     @property
     def omega(self) -> float:
@@ -71,6 +81,8 @@ class Metronome:
                          strike_phase: float) -> Metronome:
         """A metronome whose tempo changes at the beat (of the first tempo) nearest to ``near`` (s; inf: never)."""
         steady = cls(tempo, tempo, np.inf, start_phase, strike_phase)
+        if not (is_number(near) and near >= 0.0):
+            raise ValueError(f"near: expected a time >= 0 s or inf (no change), got {near!r}")
         if not np.isfinite(near):
             return steady
         beats = steady.beats(near + 60.0 / tempo)

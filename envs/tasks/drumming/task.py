@@ -32,11 +32,13 @@ import numpy as np
 from rdmp_gym import RhythmicDMP
 from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper
 from rdmp_gym.dmp.stopping import fit_ending
+from rdmp_gym.validation import SettingTypeError, check_number, check_pair
 
+from ...contract import Metric
 from ...robots import RobotDescription
 from ...task_scene import rotation_from_tilt
 from ..description import Outcome, TaskDescription, TaskPlan, ToolPath
-from .context import DrumContext, DrumContextSpec
+from .context import FIELDS, DrumContext, DrumContextSpec
 from .demonstration import drumming_demonstration
 from .metronome import Metronome
 from .scene import add_drum, add_stick, place_drum
@@ -56,11 +58,14 @@ class DrumTask(TaskDescription):
     """The drumming task; see the module docstring.
 
     Args:
-        context: the context's ranges (:class:`~.context.DrumContextSpec`).
-        tolerance: a strike's timing tolerance (s).
-        impulse_band: (min, max) impulse of a strike (N s): softer makes no sound, harder damages.
-        max_jerk_ratio: the largest integrated squared jerk of the path, relative to the imitation's in the context.
-        rest_speed: the tip's largest speed (m/s) over the last 0.3 s for the stick to be at rest.
+        context: the context's ranges (:class:`~.context.DrumContextSpec`; its ``change_window`` within the episode).
+        tolerance: a strike's timing tolerance (s, > 0).
+        impulse_band: (min, max) impulse of a strike (N s, 0 <= min < max): softer makes no sound, harder damages.
+        max_jerk_ratio: the largest integrated squared jerk of the path, relative to the imitation's in the context
+            (>= 1: the imitation's own ratio is 1).
+        rest_speed: the tip's largest speed (m/s, > 0) over the last 0.3 s for the stick to be at rest.
+
+    A setting out of its range is a ValueError naming it (a TypeError for one that is not a number).
     """
 
     name = "Drum"
@@ -72,18 +77,32 @@ class DrumTask(TaskDescription):
     extras: Mapping[str, float] = {"coupling": 1.5, "phase_gain": 1.5, "phase": 0.6}
     duration = 10.0
     control_rate = 100.0
+    #: per episode: the share of the counted beats struck, and the mean |strike - beat| over them
+    metrics = (Metric("struck_fraction", "struck fraction"),
+               Metric("mean_abs_timing_error", "timing error (s)", higher_is_better=False, unit="s"))
 
     def __init__(self, context: DrumContextSpec | None = None, tolerance: float = 0.05,
                  impulse_band: tuple[float, float] = (0.1, 1.0), max_jerk_ratio: float = 2.0,
                  rest_speed: float = 0.02):
+        if context is not None and not isinstance(context, DrumContextSpec):
+            raise SettingTypeError(f"context: expected a DrumContextSpec, got {type(context).__name__}")
         self.context_spec = DrumContextSpec() if context is None else context
-        if not (np.isfinite(tolerance) and tolerance > 0):
-            raise ValueError(f"tolerance: expected a positive number of seconds, got {tolerance!r}")
-        low, high = impulse_band
-        if not (0 <= low < high):
-            raise ValueError(f"impulse_band: expected (min, max) with 0 <= min < max, got {impulse_band!r}")
-        self.tolerance, self.impulse_band = float(tolerance), (float(low), float(high))
-        self.max_jerk_ratio, self.rest_speed = float(max_jerk_ratio), float(rest_speed)
+        self.tolerance = check_number(tolerance, "tolerance", low=0.0, what=" (s)")
+        low, high = check_pair(impulse_band, "impulse_band", "the (min, max) impulse in N s")
+        if not 0 <= low < high:
+            raise ValueError(f"impulse_band: expected (min, max) with 0 <= min < max (N s), got {impulse_band!r}")
+        self.impulse_band = (low, high)
+        # the jerk is measured relative to the imitation's in the same context (ratio 1): a bound below 1 would fail
+        # the imitation itself, the action 0 every learner starts from
+        self.max_jerk_ratio = check_number(max_jerk_ratio, "max_jerk_ratio", low=1.0, strict_low=False,
+                                           what=" (the path's integrated squared jerk over the imitation's)")
+        self.rest_speed = check_number(rest_speed, "rest_speed", low=0.0, what=" (m/s)")
+        spec, last_beat = self.context_spec, self.duration - _STOP_RESERVE
+        latest = spec.latest_change(last_beat, spec.tempo[0])
+        if spec.change_window[1] > latest:
+            raise ValueError(f"context: change_window {spec.change_window} ends after {latest:g} s, the latest time "
+                             f"whose beat at the slowest tempo ({spec.tempo[0]:g} bpm) comes by the episode's last "
+                             f"beat ({last_beat:g} s): the tempo would not change within the episode")
 
     # ------------------------------------------------------------------ objects and context
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
@@ -93,8 +112,12 @@ class DrumTask(TaskDescription):
     def context_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         return self.context_spec.low, self.context_spec.high
 
+    def context_fields(self) -> Mapping[str, tuple[int, int]]:
+        """The observation's fields (:data:`~.context.FIELDS`: the drum's position, height and tilt, the tempo)."""
+        return FIELDS
+
     def sample_context(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> DrumContext:
-        return self.context_spec.sample(rng, options)
+        return self.context_spec.sample(rng, options, last_beat=self.duration - _STOP_RESERVE)
 
     def frame(self, context: DrumContext, table_origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The drum frame in the world: the membrane's centre ``[3]`` and the drum's axes ``[3, 3]``."""

@@ -41,6 +41,7 @@ from rdmp_gym.dmp.pose import PoseDMP
 from rdmp_gym.signals.demonstrations import check_frame
 
 from ...action import ActionMap
+from ...contract import Metric
 from ...controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
 from ...ik import IKResult, PathIK
 from ...recording import SceneRenderer
@@ -216,6 +217,8 @@ class WipingTask(TaskDescription):
     max_jerk_ratio: ClassVar[float | None] = MAX_JERK_RATIO
     #: the cup's displacement counts from the robot's first touch (else from where it was placed)
     cup_from_touch: ClassVar[bool] = True
+    #: per episode: the share of the dirt wiped, and the share of the wiping time with the contact force in band
+    metrics = (Metric("coverage", "coverage"), Metric("force_in_band_fraction", "force in band"))
 
     def __init__(self, config: EnvConfig | None = None, **settings: Any):
         config = EnvConfig.from_kwargs(**settings) if config is None else config.replace(**settings)
@@ -278,6 +281,15 @@ class WipingTask(TaskDescription):
     def learner_defaults(self) -> Mapping[str, Mapping[str, Any]]:  # type: ignore[override]
         """The learner defaults of this version."""
         return self.defaults_for(self.version)
+
+    @property
+    def smoothness_measure(self) -> str:  # type: ignore[override]
+        """The version's jerk measure (v2 on: per unit of squared speed, :meth:`Smoothness.speed_normalised`)."""
+        return "speed_normalised_jerk" if self.task_version.speed_normalised_jerk else "jerk"
+
+    def context_fields(self) -> Mapping[str, tuple[int, int]]:
+        """The observation's fields (:data:`~rdmp_gym.envs.tasks.wiping.context.CONTEXT_FIELDS`)."""
+        return CONTEXT_FIELDS
 
     # ------------------------------------------------------------------ construction stages
     def _imitation(self, task: TaskConfig) -> RhythmicDMP:
@@ -707,7 +719,16 @@ class WipingTask(TaskDescription):
     def executed_path(self, theta: np.ndarray, context: Context) -> np.ndarray:
         """The sponge path ``[T_ctrl, 3]`` (nominal table frame) that an episode in ``context`` executes for parameters
         ``theta``: :meth:`rollout_path`, with :attr:`cup_clearance`'s push where that is on."""
-        path = self.rollout_path(theta, context)
+        return self._cleared(self.rollout_path(theta, context), context)
+
+    def execution_path(self, plan: TaskPlan, face: Any) -> np.ndarray:
+        """The planned sponge path with :attr:`cup_clearance`'s push where that is on (:meth:`executed_path`), in the
+        face's episode context."""
+        return self._cleared(plan.path, face.context)
+
+    def _cleared(self, path: np.ndarray, context: Context) -> np.ndarray:
+        """``path [T, 3]`` with :attr:`cup_clearance`'s push in ``context`` (as it is without the clearance, without a
+        cup, or where the path is refused before the push: not finite, outside the workspace)."""
         if (self.cup_clearance is None or not np.all(np.isfinite(path))
                 or _workspace_excess(path, self.robot.workspace) > 0):
             return path

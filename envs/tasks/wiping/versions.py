@@ -96,7 +96,7 @@ def _contextual_search(gain_groups: list[str]) -> dict:
 
 _CONTEXTUAL = ("creps", "cpibb", "cpi2", "random")
 #: the one-theta learners' and SB3's smooth exploration on the travelling versions (v1's runs keep theirs)
-_SMOOTH = {agent: {"length": 5.0} for agent in ("pi2", "pibb", "cmaes", "sac")}
+_SMOOTH = {agent: {"length": 5.0} for agent in ("pi2", "cmaes", "sac")}
 _TRAVELLING = {**{agent: _contextual_search(["amplitude", "approach", "sweep_x", "sweep_y"]) for agent in _CONTEXTUAL},
                **_SMOOTH,
                # PPO's step size with smooth actions (at v1's 3e-2 the policy mean ran far outside the action box,
