@@ -42,6 +42,8 @@ from typing import Any
 import filelock
 import numpy as np
 
+from rdmp_gym.validation import is_number
+
 from .state_files import decode, encode
 
 __all__ = ["CHECKPOINT_FIELDS", "CHECKPOINT_FORMAT", "RunDirectory", "RunLockedError", "sha256_file", "write_atomic"]
@@ -57,17 +59,13 @@ def _is_count(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
 #: the checkpoint's top-level fields (what training writes after every update): name -> (check, what it must be)
 CHECKPOINT_FIELDS: dict[str, tuple[Callable[[Any], bool], str]] = {
     "update": (_is_count, "a count (an integer >= 0)"),
     "episodes": (_is_count, "a count (an integer >= 0)"),
-    "elapsed": (lambda value: _is_number(value) and math.isfinite(value) and value >= 0,
+    "elapsed": (lambda value: is_number(value) and math.isfinite(value) and value >= 0,
                 "seconds (a finite number >= 0)"),
-    "best": (lambda value: value is None or (isinstance(value, dict) and _is_number(value.get("eval_return_mean"))),
+    "best": (lambda value: value is None or (isinstance(value, dict) and is_number(value.get("eval_return_mean"))),
              "None or the best policy's summary (a dict with a number 'eval_return_mean')"),
     "agent": (lambda value: isinstance(value, dict), "the agent's state (a dict)"),
 }
