@@ -315,7 +315,7 @@ def _baselines(spec: TaskSpec, seeds: np.ndarray, workers: int) -> tuple[dict[st
         n = tester.n_actions
         reference = np.array([path_jerk(tester.env, np.zeros(n), s) for s in seeds])
         imitation = evaluate_actions(tester, np.zeros((len(seeds), n)), seeds, reference).to_dict()
-        if not hasattr(tester.env.unwrapped, "hand_cup_gaps"):        # the coupling baseline lifts over the cup
+        if not hasattr(getattr(tester.env.unwrapped, "task", None), "hand_cup_gaps"):   # coupling lifts over the cup
             return {"imitation": imitation}, observations, reference
         coupling = coupling_baseline_scores(tester.env, seeds)
     coupling = {key: np.asarray(value).tolist() for key, value in coupling.items() if key in imitation}

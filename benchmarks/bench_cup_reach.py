@@ -58,7 +58,7 @@ def _context(env: gym.Env, seed: int, samples: np.ndarray) -> dict:
         window = np.array([int(np.argmin(np.linalg.norm(path[:, :2] - cup, axis=1)))])
     gradient = np.stack([height(e)[window] - path[window, 2] for e in np.eye(n)], axis=1).mean(axis=0)   # [n]
     transient = np.zeros(n)
-    for name, part in base.dmp.param_slices(base.groups).items():
+    for name, part in base.param_slices().items():
         if name.startswith("transient"):
             transient[part] = np.sign(gradient[part])
     result = {"seed": seed, "cup": cup.tolist(), "imitation": _episode(env, np.zeros(n), seed)}
@@ -90,7 +90,7 @@ def main() -> None:
     env = gym.make("rdmp_gym/ArmarWipe-v1", disable_env_checker=True)
     base = env.unwrapped
     n = env.action_space.shape[0]
-    noise = SmoothNoise(n, block_layout(dict(base.dmp.param_slices(base.groups)), base.dmp.n_dims), 5.0)
+    noise = SmoothNoise(n, block_layout(base.param_slices(), base.dmp.n_dims), 5.0)
     samples = squash(0.3 * noise.sample(np.ones(noise.n_blocks), 2000, np.random.default_rng(0)))
     seeds = [int(s) for s in np.concatenate([final_test_seeds(20), validation_seeds(10)])]
     cups = [s for s in seeds if env.reset(seed=s)[0][10] > 0.5][:args.contexts]

@@ -101,7 +101,7 @@ def timing(env, repeats: int) -> dict:
         solution = u.task.solve_path(path, u.context)
         plan = JointTargetPlan(solution, u.dt, u.scene.servo_lead(), u.scene.joint_lower, u.scene.joint_upper,
                                control_frame(u.task.parts, TablePose.of(u.context))[1][:, 2])
-        preload = u.adaptation_settings.target_force / u.adaptation_settings.stiffness
+        preload = u.task.adaptation_settings.target_force / u.task.adaptation_settings.stiffness
         ctrl = plan.q - preload * plan.normal_dq
         m, d = u.scene.model, u.scene.data
         u.scene.set_arm_state(solution.q[0])
@@ -200,7 +200,7 @@ def issue_items(env, contexts: int) -> dict:
     except ValueError as error:
         items["1_offtable_patch"] = {"result": f"ValueError: {error}"}
     env.reset(seed=0, options=NOMINAL)
-    start = int(np.argmax(u.periodic))
+    start = int(np.argmax(u.task.periodic))
     into = probes._blend(probes._imitation(u), np.tile([-0.30, 0.28, 0.15], (u.n_steps, 1)), start, 250)
     imitation = summary(*episode(env, NOMINAL))
     edge = {**NOMINAL, "patch_centre": [-0.09, 0.2], "patch_size": [0.10, 0.10]}

@@ -38,7 +38,7 @@ CAUSE_TERMS = {"cup": "obstacle", "joint acceleration": "joint_accel", "self-col
 
 def path_part(step: int, env) -> str:
     """``"approach"`` for a control step in the transient, else ``"wiping k"`` (k: the periodic cycle, from 1)."""
-    periodic = env.periodic
+    periodic = env.task.periodic
     if not periodic[step]:
         return "approach"
     since = env.times[step] - env.times[np.argmax(periodic)]

@@ -62,9 +62,9 @@ class _TraceTap:
 def episode(env, tilt: np.ndarray, tap: _TraceTap) -> dict:
     env.reset(seed=0, options={**OPTIONS, "table_tilt": tilt.tolist()})
     inner = env.unwrapped
-    inner.fine_force = True
+    inner.task.fine_force = True
     reward, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[1::3]
-    start, period, target = inner.dmp.transients[0].length, inner.dmp.period, inner.reward_settings.target_force
+    start, period, target = inner.dmp.transients[0].length, inner.dmp.period, inner.task.reward_settings.target_force
     fine_dt = inner.dt / inner.frame_skip
     errors = period_force_errors(info["fine_force_trace"], fine_dt, start, period, target, smoothing=0.0)
     steps = round(period / inner.dt)

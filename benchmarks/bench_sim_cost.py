@@ -101,7 +101,7 @@ class _ServoRecorder:
 def _start_state(unwrapped: gym.Env, seed: int) -> None:
     """Reset ``unwrapped`` to context ``seed`` with the arm at rest where the imitation's episode starts."""
     unwrapped.reset(seed=seed)
-    if not hasattr(unwrapped, "solve_path"):       # a task on the face's own IK: the face solves its plan
+    if not hasattr(unwrapped.task, "solve_path"):       # a task on the face's own IK: the face solves its plan
         plan = unwrapped.plan(unwrapped.action_map.theta0, np.zeros(len(unwrapped.extra_scales)))
         unwrapped.scene.set_arm_state(unwrapped.solve_plan(plan, plan.world()).q[0])
         return
@@ -130,7 +130,7 @@ def _replay(env: gym.Env, seed: int, targets: list[np.ndarray], fine: list[bool]
 def measure(env_id: str, seeds: list[int], repeats: int) -> dict:
     """Best-of-``repeats`` CPU seconds per episode: env.step, the simulation core, the bare replay."""
     env = gym.make(env_id)
-    recording = _Recorder if hasattr(env.unwrapped, "solve_path") else _ServoRecorder      # the wiping hook's
+    recording = _Recorder if hasattr(env.unwrapped.task, "solve_path") else _ServoRecorder      # the wiping hook's
     rows = []
     for seed in seeds:
         best = {"episode": np.inf, "core": np.inf, "bare": np.inf}

@@ -42,7 +42,7 @@ def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path:
                                               "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08],
                                               "obstacle": 0})
                 inner = env.unwrapped
-                inner.fine_force = True
+                inner.task.fine_force = True
                 info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
                 fine_dt = inner.dt / inner.frame_skip
                 force = info["fine_force_trace"]
@@ -50,7 +50,7 @@ def write_force_figure(out_dir: str | Path, seed: int = 0) -> Path:
                     axis.plot(np.arange(force.size) * fine_dt, force, color=color, lw=0.8,
                               label=name.split(", ", 2)[2])
                 errors[name] = period_force_errors(force, fine_dt, inner.dmp.transients[0].length, inner.dmp.period,
-                                                   inner.reward_settings.target_force, smoothing=0.0)
+                                                   inner.task.reward_settings.target_force, smoothing=0.0)
                 colors[name] = color if gain == 0.02 or flag else "tab:blue"
                 env.close()
     for axis, title in ((tilted, f"table tilted by ({tilt[0]}, {tilt[1]}) rad"),

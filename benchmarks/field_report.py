@@ -103,17 +103,18 @@ def failure_counts(runs: list[dict]) -> dict:
 
 
 def context_kinds(document: dict) -> list[str] | None:
-    """The kind of each test context of ``document`` (its env's ``context_kind`` of the stored test contexts), or
-    None where the env names no kinds or the document holds no contexts."""
+    """The kind of each test context of ``document`` (the ``context_kind`` of its env's task contract, of the stored
+    test contexts), or None where the task names no kinds or the document holds no contexts."""
     contexts = document.get("test_contexts")
     if not contexts:
         return None
     import gymnasium as gym
     import rdmp_gym.envs  # noqa: F401  (registers the ids)
+    from rdmp_gym.envs.contract import contract_of
 
     settings = document["settings"]
     env = gym.make(settings["env_id"], disable_env_checker=True, **settings.get("env_kwargs", {}))
-    kind_of = getattr(env.unwrapped, "context_kind", None)
+    kind_of = contract_of(env).context_kind
     kinds = None if kind_of is None else [str(kind_of(np.asarray(c, dtype=float))) for c in contexts]
     env.close()
     return kinds

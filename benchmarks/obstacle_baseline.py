@@ -76,9 +76,9 @@ def _online_path(env, terms: list, substeps: int, smoothing: float = 0.0) -> np.
     inner = env.unwrapped
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
         raise ValueError(f"substeps: expected an int >= 1, got {substeps!r}")
-    anchor = np.array([*inner.context.patch_centre, inner._anchor_z])
+    anchor = np.array([*inner.context.patch_centre, inner.task._anchor_z])
     fine = np.arange((inner.n_steps - 1) * substeps + 1) * (inner.dt / substeps)
-    dmp = inner.dmp.with_params(inner.action_map.theta0, inner.groups)
+    dmp = inner.policy_dmp(inner.action_map.theta0)
     path, _ = avoiding_rollout(dmp, fine, terms, smoothing=smoothing, y0=inner.context.sponge_start, anchor=anchor,
                                start_blend=True)
     return path[::substeps]

@@ -34,7 +34,7 @@ def hold_still(env: ArmarWipeEnv, depth: float = 0.0) -> np.ndarray:
     """The imitation's approach, then the sponge parked on the patch centre for the whole wiping phase."""
     path = _imitation(env)
     centre = np.array([*env.context.patch_centre, -depth])
-    start = int(np.argmax(env.periodic))
+    start = int(np.argmax(env.task.periodic))
     return _blend(path, np.tile(centre, (len(path), 1)), start, round(0.3 / env.dt))
 
 
@@ -42,7 +42,7 @@ def press_lift_grid(env: ArmarWipeEnv, grid: int = 3, lift: float = 0.03) -> np.
     """The imitation's approach, then press–hold–lift at the points of a ``grid`` x ``grid`` lattice
     over the patch (the sponge moves between points in the air)."""
     path = _imitation(env)
-    start = int(np.argmax(env.periodic))
+    start = int(np.argmax(env.task.periodic))
     count = len(path) - start
     size, centre = env.context.patch_size, env.context.patch_centre
     offsets = (np.arange(grid) + 0.5) / grid - 0.5
@@ -64,7 +64,7 @@ def into_the_torso(env: ArmarWipeEnv, point: tuple[float, float, float] = (-0.30
     """The imitation's approach, then a smooth reach to ``point`` (table frame), inside the robot's torso
     (its front face is at x = -0.26 in the table frame, for y in [0.10, 0.46] and z above 0.05 m)."""
     path = _imitation(env)
-    start = int(np.argmax(env.periodic))
+    start = int(np.argmax(env.task.periodic))
     return _blend(path, np.tile(np.asarray(point, dtype=np.float64), (len(path), 1)), start, round(1.0 / env.dt))
 
 
@@ -72,12 +72,12 @@ def wiping_force_at_500hz(env, options: dict | None, seed: int = 0) -> tuple[np.
     """Run the imitation (action 0) in ``env`` (a ``gym.make`` of the wiping env) with the sponge-table force
     recorded at every physics step. Returns the force ``[S]`` (N) from 0.5 s into the wiping phase on, and the
     episode's ``info`` (its ``fine_force_trace`` holds the whole episode)."""
-    task = env.unwrapped
-    task.fine_force = True
+    face = env.unwrapped
+    face.task.fine_force = True
     try:
         env.reset(seed=seed, options=options)
         info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))[4]
     finally:
-        task.fine_force = False
-    start = (int(np.argmax(task.periodic)) + round(0.5 / task.dt)) * task.frame_skip
+        face.task.fine_force = False
+    start = (int(np.argmax(face.task.periodic)) + round(0.5 / face.dt)) * face.frame_skip
     return info["fine_force_trace"][start:], info

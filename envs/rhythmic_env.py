@@ -21,9 +21,9 @@
 
 What the tools (learners, evaluation, logs, figures) may know of the task, the face declares from the task's
 description: :meth:`RhythmicTaskEnv.task_contract` (its metrics, context fields and kinds, success, smoothness
-measure) and :meth:`RhythmicTaskEnv.executed_path`. The task's own attributes and methods read and its attributes
-write through the face where the face has none of that name (``env.unwrapped.tolerance`` is
-``env.unwrapped.task.tolerance``), for code that knows the task; the tools never rely on it.
+measure) and :meth:`RhythmicTaskEnv.executed_path`. The task's own attributes and methods are its description's,
+``env.unwrapped.task.<name>`` (e.g. ``env.unwrapped.task.tolerance``), for code that knows the task; the face forwards
+none of them.
 
 Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`TaskDescription.render_overlay`),
 ``"depth_array"`` (depth in m) or ``"human"`` (MuJoCo's viewer, following every control step; needs a display);
@@ -75,6 +75,9 @@ class RhythmicTaskEnv(gym.Env):
         record_frames: capture frames during every step into :attr:`frames`; frame_stride: every how many control
             steps (also :meth:`record_episode`'s).
         **task_settings: keywords of the task's description (e.g. the drumming task's ``tolerance``).
+
+    The face holds the task's description as :attr:`task`: the task's own attributes and methods are
+    ``env.unwrapped.task.<name>``; the face's attributes are only its own (the episode, the stage, the action layout).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 25}
@@ -124,31 +127,13 @@ class RhythmicTaskEnv(gym.Env):
             self._renderer = SceneRenderer(self.scene, *self._render_args)
         self.frames: list[np.ndarray] = []
         self.record_frames = bool(record_frames)
-        #: the episode's context (set by ``reset``; the face's own, also where the task keeps one of that name)
+        #: the episode's context (set by ``reset``)
         self.context: Any = None
         #: what the task draws on this episode's frames (its record of the episode so far; None before the first step)
         self.overlay: Any = None
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
-        self._faced = True                    # from here on the task's own attributes write through the face
-
-    def __getattr__(self, name: str) -> Any:
-        """The task's own attribute ``name`` where the face has none (``env.unwrapped.tolerance``)."""
-        task = self.__dict__.get("task")
-        if task is None or (name.startswith("__") and name.endswith("__")):
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        return getattr(task, name)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        """Set the task's own attribute ``name`` where the face has none (``env.unwrapped.tolerance = 0.04``), once
-        the face is built; else the face's."""
-        state = self.__dict__
-        if (state.get("_faced") and name not in state and not hasattr(type(self), name)
-                and hasattr(state["task"], name)):
-            setattr(state["task"], name, value)
-        else:
-            super().__setattr__(name, value)
 
     # ------------------------------------------------------------------ action <-> parameters
     def _check_action(self, action: Any) -> np.ndarray:

@@ -8,7 +8,8 @@ from bench_failure_times import failure_moments, path_part, tally
 
 def _env(steps: int = 100, dt: float = 0.1, transient: float = 2.0, period: float = 1.5) -> SimpleNamespace:
     times = np.arange(steps) * dt
-    return SimpleNamespace(times=times, periodic=times >= transient - 1e-9, dmp=SimpleNamespace(period=period))
+    return SimpleNamespace(times=times, task=SimpleNamespace(periodic=times >= transient - 1e-9),
+                           dmp=SimpleNamespace(period=period))
 
 
 def _trace(steps: int, charged: list[int]) -> np.ndarray:

@@ -89,7 +89,7 @@ def test_clearance_keeps_the_imitation_off_a_cup_it_knocks(envs):
     assert plain.unwrapped.context.obstacle and info["obstacle_touch_steps"] > 10
     guarded_reward, guarded_info = _run(guarded, TOUCHING_SEED)
     assert guarded_info["obstacle_touch_steps"] == 0 and "cup" not in guarded_info["failure_causes"]
-    assert 0.0 < guarded_info["clearance_push"] <= 3 * guarded.unwrapped.cup_clearance.max_push
+    assert 0.0 < guarded_info["clearance_push"] <= 3 * guarded.unwrapped.task.cup_clearance.max_push
     assert abs(guarded_info["coverage"] - info["coverage"]) < 0.01 and guarded_reward > reward
     assert _run(guarded, TOUCHING_SEED)[0] == guarded_reward                    # the same seed, the same numbers
     base = guarded.unwrapped
@@ -103,7 +103,7 @@ def test_clearance_keeps_the_imitation_off_a_cup_it_knocks(envs):
     assert all(gap.shape == (base.n_steps,) for gap in gaps.values())
     before = min(g.min() for g in base.task.hand_cup_gaps(base.rollout_path(theta), base.context).values())
     after = min(g.min() for g in gaps.values())
-    assert before < 0.0 < after and after > 0.5 * base.cup_clearance.margin
+    assert before < 0.0 < after and after > 0.5 * base.task.cup_clearance.margin
     zeros = np.zeros(plain.action_space.shape)
     assert path_jerk(guarded, zeros, TOUCHING_SEED) != path_jerk(plain, zeros, TOUCHING_SEED)
 

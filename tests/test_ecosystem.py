@@ -87,7 +87,7 @@ def test_a_saved_refined_dmp_replays_the_refined_episode_without_refitting(tmp_p
     env.reset(seed=4)
     _, reward, *_, info = env.step(action)
     base = env.unwrapped
-    refined = base.dmp.with_params(base.action_to_params(action), base.groups)
+    refined = base.policy_dmp(base.action_to_params(action))
     save_dmp(refined, tmp_path / "dmp.json")
 
     monkeypatch.setattr(RhythmicDMP, "fit", classmethod(lambda *a, **k: pytest.fail("refitted")))

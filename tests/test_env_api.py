@@ -91,7 +91,7 @@ def test_seeded_determinism_is_bit_identical(env):
 def test_action_param_mapping(env):
     u = env.unwrapped
     env.reset(seed=0)
-    assert u.action_to_params(zero(env)) == pytest.approx(u.dmp.get_params(u.groups))
+    assert u.action_to_params(zero(env)) == pytest.approx(u.dmp.get_params(u.task.groups))
     a = np.random.default_rng(2).uniform(-1, 1, env.action_space.shape).astype(np.float32)
     a[-1] = 0.0                 # the approach dimension: params_to_action expresses every theta without it
     assert u.params_to_action(u.action_to_params(a)) == pytest.approx(a, abs=1e-5)
@@ -232,7 +232,7 @@ def test_the_approach_dimension_lifts_the_approach_smoothly(env):
     target = 0.06 * lift_profile(u.times, u.dmp.transients[0].length)
     assert np.abs(lift[:, 2] - target).max() < 1e-3 and lift[:, 2].max() > 0.058
     assert np.abs(lift[:, :2]).max() < 1e-9                              # only the height moves
-    assert np.abs(lift[0]).max() < 1e-9 and np.abs(lift[u.periodic]).max() < 1e-3
+    assert np.abs(lift[0]).max() < 1e-9 and np.abs(lift[u.task.periodic]).max() < 1e-3
     _, _, _, _, info = env.step(a)
     assert info["valid"] and info["peak_joint_accel"] < 10.0 and info["jerk_ratio"] < 3.0
 
@@ -254,7 +254,7 @@ def test_variants_frame_skip_xml_groups_demonstration():
 def test_v0_is_deprecated():
     with pytest.warns(DeprecationWarning, match="ArmarWipe-v1"):
         old = gym.make(DEPRECATED_ENV_ID, **FAST)
-    assert isinstance(old.unwrapped, ArmarWipeEnv) and old.unwrapped.obstacle is False
+    assert isinstance(old.unwrapped, ArmarWipeEnv) and old.unwrapped.task.obstacle is False
     assert gym.spec(ENV_ID).kwargs["obstacle"] is True
 
 

@@ -73,7 +73,7 @@ def test_reaching_into_the_robot_is_stopped_and_charged(env):
     the episode."""
     reward0, _ = imitation(env, NOMINAL)
     u = env.unwrapped
-    start = int(np.argmax(u.periodic))
+    start = int(np.argmax(u.task.periodic))
     path = probes._blend(probes._imitation(u), np.tile([-0.30, 0.28, 0.15], (u.n_steps, 1)), start, 250)
     reward, info = u.run_path(path)
     assert info["self_collision_fraction"] > 0.2
@@ -152,7 +152,7 @@ def test_knocking_the_cup_loses_and_the_approach_matters(env):
     assert info["is_success"] is False and info["reward_terms"]["obstacle"] <= -0.5
     assert knocked < clear - MARGIN
     touch = np.flatnonzero(info["cost_terms"]["obstacle"])
-    assert touch.size and touch[0] < int(np.argmax(env.unwrapped.periodic))   # charged in the approach, not at the end
+    assert touch.size and touch[0] < int(np.argmax(env.unwrapped.task.periodic))   # charged in the approach
     lift = np.zeros(env.action_space.shape, dtype=np.float32)
     lift[-1] = 1.0                                                          # the approach dimension
     env.reset(seed=0, options=options)

@@ -36,8 +36,8 @@ def test_v2_adds_two_sweep_dimensions_and_keeps_v1(env):
     slices = _slices(env)
     assert env.action_space.shape[0] == v1.action_space.shape[0] + 2
     assert list(slices)[-3:] == ["approach", "sweep_x", "sweep_y"]
-    assert "sweep" in env.unwrapped.groups and "sweep" not in v1.unwrapped.groups
-    assert env.unwrapped.task_version.version == 2 and v1.unwrapped.task_version.version == 1
+    assert "sweep" in env.unwrapped.task.groups and "sweep" not in v1.unwrapped.task.groups
+    assert env.unwrapped.task.task_version.version == 2 and v1.unwrapped.task.task_version.version == 1
     assert gym.make(ENV_ID_V2).unwrapped.n_steps > gym.make(ENV_ID).unwrapped.n_steps    # 7 periods against 4
 
 
@@ -45,7 +45,7 @@ def test_action_zero_is_the_imitation_with_the_anchor_at_rest(env):
     env.reset(seed=4)
     base = env.unwrapped
     theta = base.action_to_params(np.zeros(env.action_space.shape))
-    points = theta[base.dmp.param_slices(base.groups)["sweep"]]
+    points = theta[base.param_slices()["sweep"]]
     assert np.all(points == 0.0)
     np.testing.assert_allclose(base.rollout_path(theta), base.task.imitation_path(base.context), atol=1e-9)
     *_, info = env.step(np.zeros(env.action_space.shape, np.float32))
@@ -64,7 +64,7 @@ def test_the_sweep_carries_the_pattern_across_the_patch(env):
     points = np.c_[COVERING_FIGURE * [0.06, -0.03], np.zeros(len(COVERING_FIGURE))]
     expected = base.dmp.sweep.offsets(base.times, points[None])[0]
     np.testing.assert_allclose(shift, expected, atol=2e-4)            # carried rigidly (to 0.2 mm at 50 Hz)
-    assert np.abs(shift[~base.periodic]).max() < 1e-3                  # the approach is the imitation's
+    assert np.abs(shift[~base.task.periodic]).max() < 1e-3             # the approach is the imitation's
     assert shift[:, 0].max() == pytest.approx(0.06, abs=1e-3)          # the figure's box, no overshoot
     assert np.abs(shift[:, 1]).max() == pytest.approx(0.03, abs=1e-3)
     assert np.abs(shift[-5:]).max() < 2e-4                             # back at rest at the centre
@@ -77,7 +77,7 @@ def test_sweep_action_and_parameters_round_trip(env):
     theta = env.unwrapped.action_to_params(action)
     np.testing.assert_allclose(env.unwrapped.params_to_action(theta), action, atol=1e-5)
     off_figure = theta.copy()
-    off_figure[env.unwrapped.dmp.param_slices(env.unwrapped.groups)["sweep"].start] += 0.01
+    off_figure[env.unwrapped.param_slices()["sweep"].start] += 0.01
     with pytest.raises(ValueError, match="driven groups"):
         env.unwrapped.params_to_action(off_figure)
 
@@ -131,10 +131,10 @@ def test_the_cup_keeps_the_pads_clearance_from_the_patch():
     env = gym.make(ENV_ID_V2, **FAST).unwrapped
     half = env.task.parts.sponge_half
     clearance = float(np.hypot(half[1], half[2])) + 0.01
-    assert env.context_spec.patch_clearance == pytest.approx(clearance)
+    assert env.task.context_spec.patch_clearance == pytest.approx(clearance)
     radius, cups = env.task.parts.obstacle_radius, 0
     for seed in range(200):
-        context = env.context_spec.sample(np.random.default_rng(seed))
+        context = env.task.context_spec.sample(np.random.default_rng(seed))
         if context.obstacle:
             cups += 1
             gap = np.maximum(np.abs(context.obstacle_position - context.patch_centre) - context.patch_size / 2, 0)
@@ -154,8 +154,8 @@ def test_success_needs_an_executable_motion():
     assert not episode_success({**stats, "peak_joint_accel": 10.5}, 10.0)
     assert not episode_success({**stats, "joint_limit_fraction": 0.01}, 10.0)
     assert episode_success({**stats, "peak_joint_accel": 10.5})             # v1 does not check it
-    assert gym.make(ENV_ID_V2, **FAST).unwrapped.success_joint_accel == 10.0
-    assert gym.make(ENV_ID, **FAST).unwrapped.success_joint_accel is None
+    assert gym.make(ENV_ID_V2, **FAST).unwrapped.task.success_joint_accel == 10.0
+    assert gym.make(ENV_ID, **FAST).unwrapped.task.success_joint_accel is None
 
 
 def test_failure_causes_name_each_missed_criterion_and_only_a_success_has_none(env):
@@ -181,7 +181,7 @@ def test_a_refined_dmp_with_its_sweep_is_the_imitation_of_a_new_env(env, tmp_pat
     action[_slices(env)["sweep_x"]] = 0.5
     theta = base.action_to_params(action)
     path = tmp_path / "dmp.json"
-    save_dmp(base.dmp.with_params(theta, base.groups), path)
+    save_dmp(base.policy_dmp(theta), path)
     reloaded = gym.make(ENV_ID_V2, dmp=str(path), **FAST)
     reloaded.reset(seed=3)
     again = reloaded.unwrapped
@@ -204,7 +204,7 @@ def test_bad_arguments_raise_clear_errors():
 
 def test_the_step_twin_runs_the_v2_task_and_its_coupling_travels():
     env = gym.make(STEP_ID_V2, obstacle=False, n_periods=1, control_rate=50.0)
-    assert env.unwrapped.task.task_version.version == 2
+    assert env.unwrapped.wiping.task_version.version == 2
     np.testing.assert_allclose(env.unwrapped.max_shift, [0.06, 0.06, 0.02])
     shifts = []
     for action in (np.zeros(3, np.float32), np.array([1.0, 0.0, 0.0], np.float32)):

@@ -194,8 +194,8 @@ def test_pressing_far_into_the_table_is_penalised_not_explosive(rigid):
     u = rigid.unwrapped
     rigid.reset(seed=0, options={**NOMINAL, "table_height": 0.04})   # 4 cm higher than assumed ...
     path = u.rollout_path(u.action_map.theta0)
-    ramp = np.clip((u.times - u.times[u.periodic][0]) / 0.5, 0.0, 1.0)
-    path[u.periodic, 2] = -0.045 * ramp[u.periodic]              # ... and 4.5 cm into it: 8.5 cm deep
+    ramp = np.clip((u.times - u.times[u.task.periodic][0]) / 0.5, 0.0, 1.0)
+    path[u.task.periodic, 2] = -0.045 * ramp[u.task.periodic]    # ... and 4.5 cm into it: 8.5 cm deep
     reward, info = u.run_path(path)
     assert info["valid"] and not info["unstable"]
     assert info["force_mean"] > 60.0                              # the compliant arm gives way ...
@@ -244,7 +244,7 @@ def test_contact_sensor_force_and_coverage_match_the_contact_list(adaptive):
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
                            control_frame(parts, pose)[1][:, 2])
     scene.set_arm_state(solution.q[0])
-    adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
+    adaptation = ForceAdaptation(u.task.adaptation_settings, u.dt)
     trace = simulate_wipe(scene, parts, plan, u.rollout_path(u.action_map.theta0)[:, 2], adaptation,
                           DirtField(u.task.dirt_cells(u.context), normal), u.frame_skip, callback=check,
                           cup=u.context.obstacle)
@@ -287,11 +287,11 @@ def test_the_inlined_force_law_is_force_adaptation_update(adaptive):
     plan = JointTargetPlan(solution, u.dt, scene.servo_lead(), scene.joint_lower, scene.joint_upper,
                            control_frame(parts, TablePose.of(u.context))[1][:, 2])
     scene.set_arm_state(solution.q[0])
-    adaptation = ForceAdaptation(u.adaptation_settings, u.dt)
+    adaptation = ForceAdaptation(u.task.adaptation_settings, u.dt)
     dirt = DirtField(u.task.dirt_cells(u.context), plan.normal)
     trace = simulate_wipe(scene, parts, plan, path[:, 2], adaptation, dirt, u.frame_skip, cup=u.context.obstacle)
     assert np.array_equal(trace.contact_force, info["force_trace"])
-    replay = ForceAdaptation(u.adaptation_settings, u.dt)
+    replay = ForceAdaptation(u.task.adaptation_settings, u.dt)
     measured = np.r_[0.0, trace.wrist_force[:-1]]
     depth = np.array([replay.update(float(f), float(h)) for f, h in zip(measured, path[:, 2], strict=True)])
     assert np.ptp(depth) > 1e-3                                   # the law adapted the depth

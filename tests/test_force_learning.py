@@ -61,11 +61,11 @@ def episode(force_learning, tilt, **kwargs):
     env.reset(seed=0, options={"table_height": 0.0, "table_tilt": tilt, "patch_centre": [0.0, 0.0],
                                "patch_size": [0.12, 0.12], "sponge_start": [-0.07, 0.10, 0.08], "obstacle": 0})
     inner = env.unwrapped
-    inner.fine_force = True
+    inner.task.fine_force = True
     _, reward, _, _, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
     errors = period_force_errors(info["fine_force_trace"], inner.dt / inner.frame_skip,
-                                 inner.dmp.transients[0].length, inner.dmp.period, inner.reward_settings.target_force,
-                                 smoothing=0.0)                              # the contact force at 500 Hz
+                                 inner.dmp.transients[0].length, inner.dmp.period,
+                                 inner.task.reward_settings.target_force, smoothing=0.0)   # the contact force at 500 Hz
     return reward, info, errors
 
 

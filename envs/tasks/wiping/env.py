@@ -52,7 +52,7 @@ class ArmarWipeEnv(RhythmicTaskEnv):
 
     The settings come as one :class:`~rdmp_gym.envs.tasks.wiping.settings.EnvConfig` (``config``), as keywords
     (``gym.make``'s way), or both (the keywords change the config); every setting is validated for type and meaning,
-    with an error that names it, and ``env.config`` (the task's) saves to and loads from JSON.
+    with an error that names it, and ``env.task.config`` saves to and loads from JSON.
 
     Args:
         config: all settings at once (default: ``EnvConfig()``).
