@@ -134,6 +134,16 @@ class RhythmicTaskEnv(gym.Env):
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
+        self._built = True
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        """Set the face's attribute ``name``; once the face is built, an attribute that only the task has is refused
+        (AttributeError naming it and ``env.unwrapped.task``), so that a setting meant for the task is never lost."""
+        state = self.__dict__
+        if (state.get("_built") and name not in state and not hasattr(type(self), name)
+                and hasattr(state["task"], name)):
+            raise AttributeError(f"{name}: an attribute of the task, not of the env; set env.unwrapped.task.{name}")
+        super().__setattr__(name, value)
 
     # ------------------------------------------------------------------ action <-> parameters
     def _check_action(self, action: Any) -> np.ndarray:

@@ -285,6 +285,8 @@ def test_the_wiping_ids_are_made_by_the_generic_face(robot):
         _, reward, *_, info = env.step(action)
         results.append((observation, reward, info["coverage"], info["is_success"]))
         assert env.task.task_version.version == 3 and not hasattr(env, "task_version")       # no forwarding
+        with pytest.raises(AttributeError, match=r"fine_force.*env\.unwrapped\.task\.fine_force"):
+            env.fine_force = True                     # a setting of the task is not silently kept on the face
     for other in results[1:]:
         assert np.array_equal(other[0], results[0][0]) and other[1:] == results[0][1:]
 
