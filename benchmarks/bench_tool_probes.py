@@ -110,7 +110,7 @@ def _checkpoint(folder: Path) -> dict[str, Any]:
     run = folder / "checkpoint_run"
     status, printed = _cli("train", "--env", "rdmp_gym/DMPTracking-v0", "--agent", "cmaes", "--out", str(run), *TINY)
     document = json.loads((run / "checkpoint.json").read_text())
-    document["elapsed"] = "x"
+    document["state"]["elapsed"] = "x"
     (run / "checkpoint.json").write_text(json.dumps(document))
     status, printed = _cli("train", "--out", str(run), "--resume", "--updates", "2")
     return {"ok": status == 2 and "'elapsed'" in printed, "printed": printed.strip().splitlines()[-1][:300]}
