@@ -22,7 +22,7 @@ from .kinematics import ChainKinematics
 from .robots import RobotDescription, get_robot
 from .tasks.description import Stage, TaskDescription
 
-__all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "TaskScene", "compose_task_scene", "read_arm",
+__all__ = ["ROBOT_PREFIX", "ROOM_XML", "TOOL_PREFIX", "ArmScene", "TaskScene", "compose_task_scene", "read_arm",
            "rotation_from_tilt", "servo_lead"]
 
 ROOM_XML = Path(__file__).resolve().parent / "assets" / "room.xml"
@@ -78,7 +78,28 @@ def compose_task_scene(robot: RobotDescription, task: TaskDescription) -> mujoco
     return spec.compile()
 
 
-class TaskScene:
+class ArmScene:
+    """What the faces use of a scene with an arm: rest at a posture and the servos' lead (a subclass sets ``model``,
+    ``data`` and the arm's indices ``qpos_adr``, ``actuator_ids``, e.g. with :func:`read_arm`)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    qpos_adr: np.ndarray
+    actuator_ids: np.ndarray
+
+    def set_arm_state(self, q: np.ndarray) -> None:
+        """Reset the simulation to rest at joint positions ``q [n]`` with matching servo targets."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[self.qpos_adr] = q
+        self.data.ctrl[self.actuator_ids] = q
+        mujoco.mj_forward(self.model, self.data)
+
+    def servo_lead(self) -> np.ndarray:
+        """``kv / kp`` of the arm's position servos ``[n]`` (s): the lag a moving target sees."""
+        return servo_lead(self.model, self.actuator_ids)
+
+
+class TaskScene(ArmScene):
     """The model and data of a task on a robot, with the arm's indices and the sensors' columns.
 
     Args:
@@ -120,17 +141,6 @@ class TaskScene:
         clearance = None if geoms is None else BodyClearance(self.model, kinematics, prefix + geoms.box,
                                                              tuple(prefix + n for n in geoms.capsules))
         return PathIK(kinematics, robot.posture, robot.mobility, clearance=clearance)
-
-    def set_arm_state(self, q: np.ndarray) -> None:
-        """Reset the simulation to rest at joint positions ``q [n]`` with matching servo targets."""
-        mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[self.qpos_adr] = q
-        self.data.ctrl[self.actuator_ids] = q
-        mujoco.mj_forward(self.model, self.data)
-
-    def servo_lead(self) -> np.ndarray:
-        """``kv / kp`` of the arm's position servos ``[n]`` (s): the lag a moving target sees."""
-        return servo_lead(self.model, self.actuator_ids)
 
     def table_to_world(self, points: np.ndarray) -> np.ndarray:
         """Nominal table-frame points ``[..., 3]`` in the world frame."""

@@ -5,12 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import mujoco
-import numpy as np
 
 from ....ik import BodyClearance, PathIK
 from ....kinematics import ChainKinematics
 from ....robots import ARMAR3, RobotDescription, get_robot
-from ....task_scene import read_arm, servo_lead
+from ....task_scene import ArmScene, read_arm
 from ..scene import WipeParts
 
 __all__ = ["DEFAULT_XML", "WipeScene"]
@@ -19,7 +18,7 @@ __all__ = ["DEFAULT_XML", "WipeScene"]
 DEFAULT_XML = Path(ARMAR3.legacy_scene)
 
 
-class WipeScene:
+class WipeScene(ArmScene):
     """The MuJoCo model and data of a hand-merged wiping scene, with the arm's indices and the task's parts.
 
     Args:
@@ -57,15 +56,3 @@ class WipeScene:
         kinematics = ChainKinematics(model, "sponge_tcp", robot.joints, bodies=bodies)
         clearance = None if geoms is None else BodyClearance(model, kinematics, geoms.box, geoms.capsules)
         return PathIK(kinematics, robot.posture, robot.mobility, clearance=clearance)
-
-    def set_arm_state(self, q: np.ndarray) -> None:
-        """Reset the simulation to rest at joint positions ``q [n]`` with matching servo targets (the cup at its
-        placed rest pose)."""
-        mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[self.qpos_adr] = q
-        self.data.ctrl[self.actuator_ids] = q
-        mujoco.mj_forward(self.model, self.data)
-
-    def servo_lead(self) -> np.ndarray:
-        """``kv / kp`` of the arm's position servos ``[n]`` (s): the lag a moving target sees."""
-        return servo_lead(self.model, self.actuator_ids)
