@@ -105,7 +105,9 @@ class JointTargetPlan:
         velocity = np.gradient(q, dt, axis=0) if len(q) > 1 else np.zeros_like(q)
         self.path_q = q
         self.velocity = velocity
-        self.q = q + np.asarray(lead, dtype=np.float64) * velocity
+        self.lead = np.asarray(lead, dtype=np.float64)
+        self.dt = float(dt)
+        self.q = q + self.lead * velocity
         self.normal_dq = solution.normal_dq
         self.lower = np.asarray(lower, dtype=np.float64)
         self.upper = np.asarray(upper, dtype=np.float64)
@@ -114,6 +116,18 @@ class JointTargetPlan:
 
     def __len__(self) -> int:
         return len(self.q)
+
+    def follow(self, start: int, q: np.ndarray, normal_dq: np.ndarray) -> None:
+        """From control step ``start`` on, the targets follow the joint path ``q [T, n]`` (and the pressing direction
+        ``normal_dq [T, n]``), in place: a simulation running along this plan takes the new targets from there. The
+        steps before ``start`` (executed) keep theirs."""
+        if q.shape != self.path_q.shape or normal_dq.shape != self.normal_dq.shape:
+            raise ValueError(f"q, normal_dq: expected shape {self.path_q.shape}, got {q.shape} and {normal_dq.shape}")
+        self.path_q[start:] = q[start:]
+        self.normal_dq[start:] = normal_dq[start:]
+        velocity = np.gradient(self.path_q, self.dt, axis=0) if len(q) > 1 else np.zeros_like(q)
+        self.velocity[start:] = velocity[start:]
+        self.q[start:] = self.path_q[start:] + self.lead * velocity[start:]
 
     def target(self, k: int, depth: float) -> np.ndarray:
         """Joint targets [n] at control step ``k`` with the sponge pressed ``depth`` metres along -normal."""

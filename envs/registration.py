@@ -31,6 +31,7 @@ __all__ = [
     "STEP_ID_V2",
     "STEP_ID_V3",
     "TRACKING_ID",
+    "cycle_id",
     "env_settings",
     "learner_defaults",
     "register_envs",
@@ -64,6 +65,7 @@ ROBOT_ID_NAMES: dict[str, str] = {"armar3": "Armar", "panda": "Panda"}
 
 _RHYTHMIC = "rdmp_gym.envs.rhythmic_env:RhythmicTaskEnv"
 _RHYTHMIC_STEP = "rdmp_gym.envs.rhythmic_step:RhythmicTaskStepEnv"
+_RHYTHMIC_CYCLE = "rdmp_gym.envs.cycle_env:RhythmicCycleEnv"
 
 #: ids beside the tasks' (the tasks' ids come from :data:`rdmp_gym.envs.tasks.TASKS`): id -> (entry point, keywords)
 _SPECS: dict[str, tuple[str, dict]] = {
@@ -162,6 +164,13 @@ def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:
     return f"rdmp_gym/{name}-v{version}", f"rdmp_gym/{name}Step-v{version}"
 
 
+def cycle_id(episodic_id: str) -> str:
+    """The cycle-level face's id of an episodic id of the rhythmic face (:mod:`rdmp_gym.envs.cycle_env`), e.g.
+    ``"rdmp_gym/ArmarDrumCycle-v1"`` for ``"rdmp_gym/ArmarDrum-v1"``."""
+    head, _, version = episodic_id.rpartition("-v")
+    return f"{head}Cycle-v{version}"
+
+
 def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)) -> list[str]:
     """Register the ids of ``task`` (a name in :data:`rdmp_gym.envs.tasks.TASKS`) on ``robots`` (registered robot
     names, :data:`rdmp_gym.envs.robots.ROBOTS`) for each of its versions; returns the episodic ids. A task or robot
@@ -187,6 +196,8 @@ def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)
             for env_id, (entry_point, face_kwargs) in zip((episodic, step), faces, strict=True):
                 if env_id not in gym.registry:
                     gym.register(id=env_id, entry_point=entry_point, kwargs=face_kwargs)
+            if faces[0][0] == _RHYTHMIC and cycle_id(episodic) not in gym.registry:
+                gym.register(id=cycle_id(episodic), entry_point=_RHYTHMIC_CYCLE, kwargs=faces[0][1])
             ids.append(episodic)
     return ids
 

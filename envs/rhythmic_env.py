@@ -33,7 +33,7 @@ Rendering: ``render_mode="rgb_array"`` (frames with the task's overlay, :meth:`T
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -44,13 +44,14 @@ from rdmp_gym import RhythmicDMP
 
 from .action import checked_action
 from .contract import TaskContract
+from .controller import JointTargetPlan
 from .ik import IKResult
 from .recording import SceneRenderer, write_video
 from .robots import RobotDescription, get_robot
 from .smoothness import Smoothness
 from .task_scene import standard_stage
 from .tasks import TASKS, get_task
-from .tasks.description import Rejection, TaskDescription, TaskPlan
+from .tasks.description import Rejection, Solution, TaskDescription, TaskPlan
 from .viewer import HumanViewer
 
 __all__ = ["RhythmicTaskEnv"]
@@ -134,6 +135,12 @@ class RhythmicTaskEnv(gym.Env):
         #: the imitation's plan in this episode's context (set by ``reset``)
         self.imitation_plan: TaskPlan | None = None
         self._imitation_jerk: float | None = None
+        #: the solution the running episode executes and its servo targets (set during ``step``; a cycle-level face
+        #: changes both in place from a cycle's start on, :mod:`rdmp_gym.envs.cycle_env`)
+        self.solution: Solution | None = None
+        self.live_targets: JointTargetPlan | None = None
+        #: ``listener(k, overlay)`` after every control step ``k`` of an episode (None: no listener)
+        self.control_listener: Callable[[int, Any], None] | None = None
         self._built = True
 
     def __setattr__(self, name: str, value: Any) -> None:
@@ -315,8 +322,10 @@ class RhythmicTaskEnv(gym.Env):
         if isinstance(solution, Rejection):
             return self._invalid(info, solution)
         info.update(solution.info)
-        capture = self._capture if self.record_frames or self._viewer is not None else None
+        listening = self.record_frames or self._viewer is not None or self.control_listener is not None
+        capture = self._capture if listening else None
         self.overlay = None
+        self.solution = solution
         path = self.task.simulate(solution, self, capture)
         self.overlay = path.record
         outcome = self.task.evaluate(path, self.context, self.scene.sensor)
@@ -324,6 +333,14 @@ class RhythmicTaskEnv(gym.Env):
         info.update(outcome.info)
         return self._finish(info, outcome.terms, outcome.cost_trace, outcome.valid, outcome.reason, path.unstable,
                             causes)
+
+    def joint_targets(self, joints: IKResult, normal: np.ndarray | None = None) -> JointTargetPlan:
+        """The servo targets of the joint path ``joints`` (the servos' feed-forward, the joint limits; the pressing
+        direction ``normal [3]``, default +z), held as :attr:`live_targets` while the episode runs: a task's
+        :meth:`~TaskDescription.simulate` builds its targets here."""
+        self.live_targets = JointTargetPlan(joints, self.dt, self.servo_lead, self.scene.joint_lower,
+                                            self.scene.joint_upper, normal)
+        return self.live_targets
 
     def jerk_ratio(self, path: np.ndarray) -> float:
         """Integrated squared jerk of ``path [T, 3]`` over the imitation's in this context."""
@@ -360,8 +377,11 @@ class RhythmicTaskEnv(gym.Env):
         if overlay is not None:
             self.overlay = overlay
         if k < 0:
-            self.frames.append(self._frame())
+            if self.record_frames or self._viewer is not None:
+                self.frames.append(self._frame())
             return
+        if self.control_listener is not None:
+            self.control_listener(k, overlay)
         if self._viewer is not None:
             self._viewer.sync()
         if self.record_frames and (k + 1) % self.frame_stride == 0:

@@ -289,6 +289,29 @@ class TaskDescription(ABC):
         """The box ``(low [3], high [3])`` of the table frame the tool tip may be commanded in."""
         return robot.workspace
 
+    # ------------------------------------------------------------------ the cycle-level face
+    def cycle_starts(self, face: Any) -> np.ndarray:
+        """The start times ``[K]`` (s) of the cycles the cycle-level face (:mod:`rdmp_gym.envs.cycle_env`) steps
+        through on the episodic ``face`` (default: the DMP's, :func:`rdmp_gym.dmp.cycles.cycle_starts`)."""
+        from rdmp_gym.dmp.cycles import cycle_starts
+
+        return cycle_starts(face.dmp, face.n_steps * face.dt)
+
+    def cycle_state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low [S], high [S])`` of :meth:`cycle_state` (default: the tool's position within 2 m of the task
+        frame's origin and its offset from its path within 0.5 m)."""
+        return np.r_[np.full(3, -2.0), np.full(3, -0.5)], np.r_[np.full(3, 2.0), np.full(3, 0.5)]
+
+    def cycle_state(self, face: Any, step: int | None, overlay: Any) -> np.ndarray:
+        """What the task reports of the episode on the episodic ``face`` when a cycle starts at control step ``step``
+        (None: at rest before the first), ``[S]``; ``overlay`` is what the task's :meth:`simulate` gave its last
+        capture (None where it gives none). Default: the tool tip's position in the task frame and its offset from
+        the path it follows (m)."""
+        plan = face.imitation_plan if step is None else face.solution.plan
+        tip = face.scene.data.site_xpos[face.scene.tip_site]
+        local = (tip - plan.origin) @ plan.rotation
+        return np.r_[local, local - plan.path[0 if step is None else step - 1]]
+
     # ------------------------------------------------------------------ execution on the faces
     def stage(self, robot: RobotDescription) -> Stage | None:
         """What the faces run the task on with ``robot``, or None (the default) for the standard stage
@@ -341,13 +364,12 @@ class TaskDescription(ABC):
         frames draw of the episode so far (:meth:`render_overlay`), and ``capture(-1)`` before the first. Default:
         the core's own record (every sensor at every physics step) along the joint targets with the servos' velocity
         feed-forward."""
-        from ..controller import JointTargetPlan
         from ..servo import ServoSimulation
         from ..smoothness import Smoothness
 
         joints = solution.joints
         scene = face.scene
-        plan = JointTargetPlan(joints, face.dt, face.servo_lead, scene.joint_lower, scene.joint_upper)
+        plan = face.joint_targets(joints)
         scene.set_arm_state(joints.q[0])
         simulation = ServoSimulation(scene, face.n_steps, face.frame_skip)
         if capture is not None:

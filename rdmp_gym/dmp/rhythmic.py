@@ -18,6 +18,7 @@ from ..validation import as_finite_array, check_positive, check_time_grid
 from .basis import BasisSet, normalize
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
+from .cycles import DEFAULT_HANDOVER, cycle_starts, rollout_cycles
 from .ending import Ending, StopPlan, StopRequest, plan_stop
 from .fitting import PAPER_SETTINGS, fit_rhythmic
 from .parameters import ParameterLayout, group_key
@@ -461,6 +462,20 @@ class RhythmicDMP:
             result[rows] = self._simulate(t, decoded.rows(rows), starts.rows(rows), tempo, None, stop,
                                           velocity=False)[0]
         return result
+
+    def rollout_cycles(self, thetas: np.ndarray, t: np.ndarray, starts: np.ndarray | None = None,
+                       handover: float = DEFAULT_HANDOVER, **rollout: Any) -> np.ndarray:
+        """The path ``[T, d]`` of parameters that change from cycle to cycle: row ``k`` of ``thetas [K, P]`` from the
+        start of cycle ``k`` on (``starts [K]``, s; default: :func:`~rdmp_gym.dmp.cycles.cycle_starts` of ``t``'s
+        span), handed over within ``handover`` periods (:func:`~rdmp_gym.dmp.cycles.rollout_cycles`); ``rollout``:
+        the keywords of :meth:`rollout_batch`."""
+        t = np.asarray(t, dtype=np.float64)
+        if starts is None:
+            transient = rollout.get("transient", 0)
+            span = float(t[-1] - t[0]) + 1e-9
+            starts = cycle_starts(self, span, transient if isinstance(transient, int) else 0,
+                                  rollout.get("tempo"))[: len(thetas)]
+        return rollout_cycles(self, thetas, t, starts, handover, **rollout)
 
     def start(self, dt: float, transient: int | str = 0, y0: np.ndarray | None = None,
               yd0: np.ndarray | None = None, anchor: np.ndarray | None = None,

@@ -42,7 +42,7 @@ from rdmp_gym.signals.demonstrations import check_frame
 
 from ...action import ActionMap
 from ...contract import Metric
-from ...controller import ForceAdaptation, ForceAdaptationSettings, JointTargetPlan
+from ...controller import ForceAdaptation, ForceAdaptationSettings
 from ...ik import IKResult, PathIK
 from ...recording import SceneRenderer
 from ...robots import RobotDescription, get_robot
@@ -647,10 +647,9 @@ class WipingTask(TaskDescription):
         the wrist force along the control normal, the dirt worn step by step (the frames draw it as worn so far)."""
         path, joints = solution.plan.path, solution.joints
         scene, context = face.scene, face.context
-        smooth = self.smoothness(path, joints.q, self.imitation_jerk(context))
         pose = TablePose.of(context)
         normal = control_frame(self.parts, pose)[1][:, 2]
-        plan = JointTargetPlan(joints, self.dt, face.servo_lead, scene.joint_lower, scene.joint_upper, normal)
+        plan = face.joint_targets(joints, normal)
         scene.set_arm_state(joints.q[0])
         adaptation = self.force_adaptation()
         dirt = DirtField(self.dirt_cells(context), table_frame(self.parts, pose)[1][:, 2], wear_rate=self.wear_rate,
@@ -664,6 +663,7 @@ class WipingTask(TaskDescription):
 
         trace = simulate_wipe(scene, self.parts, plan, path[:, 2], adaptation, dirt, self.frame_skip,
                               self.simulation_settings, callback=after, cup=context.obstacle)
+        smooth = self.smoothness(path, joints.q, self.imitation_jerk(context))      # of the path as executed
         return ToolPath(TaskPlan(path, *control_frame(self.parts, pose)), joints.q, np.zeros((0, 0)), np.zeros((0, 0)),
                         np.zeros((0, 0)), trace.sponge_pos, trace.steps, trace.unstable, self.dt, self.frame_skip,
                         smooth.jerk_ratio, float(smooth.joint_accel.max()), self.robot.max_joint_accel,
@@ -685,6 +685,21 @@ class WipingTask(TaskDescription):
         cells = self.dirt_cells(context)
         dirt = np.ones(len(cells)) if overlay is None else overlay.dirt_left()
         return renderer.render(cells, dirt, 0.5 * self.cell_size, table_frame(self.parts, TablePose.of(context))[1])
+
+    def cycle_state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The default's (the sponge's position and its offset from its path), then the dirt left: the fraction of
+        the patch's and of each quarter's (x-, y- / x+, y- / x-, y+ / x+, y+ of the patch centre), in [0, 1]."""
+        low, high = super().cycle_state_bounds()
+        return np.r_[low, np.zeros(5)], np.r_[high, np.ones(5)]
+
+    def cycle_state(self, face: Any, step: int | None, overlay: Any) -> np.ndarray:
+        """The default's, then the dirt left (:meth:`cycle_state_bounds`), as worn up to control step ``step``."""
+        context = face.context
+        cells = dirt_grid(context.patch_centre, context.patch_size, self.cell_size)
+        left = np.ones(len(cells)) if overlay is None else overlay.dirt_left()
+        quarter = (cells[:, 0] >= context.patch_centre[0]) + 2 * (cells[:, 1] >= context.patch_centre[1])
+        shares = [left[quarter == q].mean() if np.any(quarter == q) else 0.0 for q in range(4)]
+        return np.r_[super().cycle_state(face, step, overlay), left.mean(), shares]
 
     def step_book(self, face: Any, reward_every: int) -> WipeStepBook:
         """The wiping task's step interface (:class:`~rdmp_gym.envs.tasks.wiping.step.WipeStepBook`: the canonical

@@ -1,0 +1,94 @@
+"""Parameters that change from one cycle to the next: a cycle schedule of a rhythmic DMP.
+
+A reacting policy chooses the DMP's parameters at the start of every cycle from what it observes there. Cycle ``k``
+starts at the ``k``-th crossing of the canonical phase through its initial value after the transient
+(:func:`cycle_starts`; cycle 0 starts at the movement's start and holds the transient). From its start on, cycle
+``k``'s parameters take over from the movement so far within a hand-over window:
+
+    y(t) = y_before(t) + s((t - t_k) / w) (y_k(t) - y_before(t)),
+
+``y_k`` the rollout of cycle ``k``'s parameters, ``y_before`` the movement so far, ``s`` the septic smoothstep
+(:func:`handover_ramp`: 0 up to the crossing, 1 from ``t_k + w`` on, its first three derivatives 0 at both ends).
+So the path is unchanged up to the crossing, it is the new parameters' own rollout from the end of the window on,
+and it is C3 at both ends of the window (position, velocity, acceleration and jerk are continuous). A cycle whose
+parameters equal the previous cycle's changes nothing, bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..validation import as_finite_array
+
+if TYPE_CHECKING:
+    from .rhythmic import RhythmicDMP
+
+__all__ = ["DEFAULT_HANDOVER", "blend_from", "cycle_starts", "handover_ramp", "rollout_cycles"]
+
+#: the hand-over window as a fraction of the period (half a cycle: a change of the size a learner explores hands
+#: over with no more jerk than the rollouts of either parameters have of their own)
+DEFAULT_HANDOVER = 0.5
+
+
+def handover_ramp(t: np.ndarray, start: float, width: float) -> np.ndarray:
+    """``s [T]``: 0 for ``t <= start``, 1 for ``t >= start + width``, the septic smoothstep
+    ``35 u^4 - 84 u^5 + 70 u^6 - 20 u^7`` of ``u = (t - start) / width`` in between (C3 at both ends)."""
+    if not (np.isfinite(width) and width > 0):
+        raise ValueError(f"width: expected a finite number > 0 (s), got {width!r}")
+    u = np.clip((np.asarray(t, dtype=np.float64) - start) / width, 0.0, 1.0)
+    return np.minimum(u**4 * (35.0 + u * (-84.0 + u * (70.0 - 20.0 * u))), 1.0)     # round-off above 1 near u = 1
+
+
+def blend_from(before: np.ndarray, after: np.ndarray, t: np.ndarray, start: float, width: float) -> np.ndarray:
+    """The path ``[T, d]`` that follows ``before [T, d]`` up to ``start`` and hands over to ``after [T, d]`` within
+    ``width`` (s): exactly ``before`` up to ``start`` and exactly ``after`` from ``start + width`` on."""
+    if before.shape != after.shape or before.shape[0] != len(t):
+        raise ValueError(f"before, after: expected two paths of shape [{len(t)}, d], got {before.shape} and "
+                         f"{after.shape}")
+    ramp = handover_ramp(t, start, width)
+    out = before.copy()
+    moving = (ramp > 0.0) & (ramp < 1.0)
+    out[moving] += ramp[moving, None] * (after[moving] - before[moving])
+    out[ramp >= 1.0] = after[ramp >= 1.0]
+    return out
+
+
+def cycle_starts(dmp: RhythmicDMP, duration: float, transient: int = 0, tempo: float | None = None) -> np.ndarray:
+    """``[K]`` start times (s) of the cycles of a movement of ``duration`` s: 0, then every crossing of the canonical
+    phase through transient ``transient``'s initial phase after that transient has ended (one period apart at the
+    DMP's tempo, or at ``tempo``) that leaves at least half a period before ``duration``."""
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration: expected a finite number > 0 (s), got {duration!r}")
+    start = dmp.transients[dmp._check_transient(transient)]
+    speed = dmp.canonical.tempo if tempo is None else float(tempo)
+    if not (np.isfinite(speed) and speed > 0):
+        raise ValueError(f"tempo: expected a finite number > 0, got {tempo!r}")
+    period = dmp.period * dmp.canonical.tempo / speed
+    first = np.ceil(start.length / period - 1e-9)
+    crossings = period * np.arange(max(first, 1.0), np.floor(duration / period - 1e-9) + 1.0)
+    return np.r_[0.0, crossings[crossings <= duration - 0.5 * period]]
+
+
+def rollout_cycles(dmp: RhythmicDMP, thetas: np.ndarray, t: np.ndarray, starts: np.ndarray,
+                   handover: float = DEFAULT_HANDOVER, **rollout: Any) -> np.ndarray:
+    """The path ``[T, d]`` of a cycle schedule: cycle ``k`` (starting at ``starts[k]``, s from ``t[0]``) runs the
+    parameters ``thetas[k]`` (``[K, P]``, the groups of ``rollout["groups"]``), handed over within ``handover``
+    periods (see the module docstring). ``rollout``: the keywords of :meth:`RhythmicDMP.rollout_batch`, the same
+    for every cycle. Equal consecutive rows change nothing: with all rows equal the path is
+    ``rollout_batch(thetas[:1], t, ...)[0]`` bit for bit."""
+    thetas = as_finite_array(thetas, "thetas", ndim=2)
+    starts = as_finite_array(starts, "starts", ndim=1)
+    if len(starts) != len(thetas) or np.any(np.diff(starts) <= 0):
+        raise ValueError(f"starts: expected {len(thetas)} increasing times (one per row of thetas), got {starts}")
+    if not (np.isfinite(handover) and handover > 0):
+        raise ValueError(f"handover: expected a finite number > 0 (periods), got {handover!r}")
+    t = np.asarray(t, dtype=np.float64)
+    path = dmp.rollout_batch(thetas[:1], t, **rollout)[0]
+    for k in range(1, len(thetas)):
+        if np.array_equal(thetas[k], thetas[k - 1]):
+            continue
+        after = dmp.rollout_batch(thetas[k:k + 1], t, **rollout)[0]
+        path = blend_from(path, after, t - t[0], float(starts[k]), handover * dmp.period)
+    return path
