@@ -20,6 +20,7 @@ import numpy as np
 from rdmp_gym import Demonstration, RhythmicDMP
 
 from .controller import CONTROLLERS, JointReader, TrackingController
+from .defaults import check_start
 
 __all__ = ["DEFAULT_GROUPS", "BlackBoxSettings"]
 
@@ -86,6 +87,8 @@ class BlackBoxSettings:
         amplitude: the default pattern's amplitude (joint units, a number or one per joint, > 0); None: from the
             joints' ranges, else 0.2.
         phases: per joint phases (rad), or a number: the lag between neighbouring joints; None: pi/2.
+        start_periods: the default pattern's start from rest (its growth from the posture into the rhythm, which
+            the DMP's transient learns), in periods, at least 0.05; None: 1.
         posture: ``[d]`` the default pattern's anchor; None: the MuJoCo env's ``init_qpos`` at the joints (inside
             their ranges), else the joint positions after ``env.reset(seed=0)``.
         joint_state: ``reader(env) -> (q [d], qd [d])``; None: the joints of a MuJoCo model's actuators.
@@ -107,6 +110,7 @@ class BlackBoxSettings:
     period: float | None = None
     amplitude: Numbers | None = None
     phases: Numbers | None = None
+    start_periods: float | None = None
     posture: tuple[float, ...] | None = None
     joint_state: JointReader | None = None
     dt: float | None = None
@@ -141,6 +145,8 @@ class BlackBoxSettings:
                                         "(joint units)", lambda x: x > 0))
         put(self, "phases", _numbers(self.phases, "phases", "a number (the lag between neighbouring joints, rad) or "
                                      "one finite phase per joint"))
+        if self.start_periods is not None:
+            put(self, "start_periods", check_start(self.start_periods, "start_periods"))
         posture = _numbers(self.posture, "posture", "[d] finite joint positions")
         put(self, "posture", None if posture is None else tuple(np.atleast_1d(posture).tolist()))
         if self.joint_state is not None and not callable(self.joint_state):

@@ -125,7 +125,7 @@ class RhythmicBlackBoxWrapper(gym.Env):
     # ------------------------------------------------------------------ construction
     def _given(self) -> dict[str, Any]:
         """The settings given (not None) among those :data:`ENV_DEFAULTS` and the model may fill in."""
-        names = ("controller", "p_gains", "d_gains", "period", "amplitude", "phases", "posture")
+        names = ("controller", "p_gains", "d_gains", "period", "amplitude", "phases", "start_periods", "posture")
         return {name: getattr(self.settings, name) for name in names if getattr(self.settings, name) is not None}
 
     @staticmethod
@@ -227,7 +227,8 @@ class RhythmicBlackBoxWrapper(gym.Env):
             return RhythmicDMP.fit(settings.demonstration, settings.n_periodic, settings.n_transient, **keywords)
         period = chosen.get("period", derived.period if derived is not None else 1.0)
         amplitude = chosen.get("amplitude", derived.amplitude if derived is not None else 0.2)
-        demo, segmentation = default_demonstration(self.posture, period, amplitude, chosen.get("phases"))
+        demo, segmentation = default_demonstration(self.posture, period, amplitude, chosen.get("phases"),
+                                                   start=chosen.get("start_periods", 1.0))
         keywords.setdefault("segmentations", [segmentation])
         keywords.setdefault("period", segmentation.period)
         return RhythmicDMP.fit(demo, settings.n_periodic, settings.n_transient, **keywords)
