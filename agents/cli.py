@@ -1,4 +1,4 @@
-"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit`` and ``main`` (the job of ``make run``).
+"""The ``rdmp-gym`` command: ``train``, ``evaluate``, ``fit``, ``cycles`` and ``main`` (the job of ``make run``).
 
 This launcher imports a command's module only when that command runs: ``fit``
 (:mod:`rdmp_gym.agents.fit_command`) needs only the core install, ``train``, ``evaluate`` and ``main``
@@ -11,6 +11,7 @@ This launcher imports a command's module only when that command runs: ``fit``
     rdmp-gym train --out runs/bbrl --resume --updates 300       # continue (and extend) a run
     rdmp-gym evaluate runs/bbrl --episodes 20 --video   # final policy on the 20 test contexts
     rdmp-gym fit --demo recording.csv --time-column time --rate 100 --plot
+    rdmp-gym cycles --env rdmp_gym/PandaWipe-v3 --out runs/cycles   # a policy that reacts cycle by cycle
     rdmp-gym main --out runs/main
 
 Every command's flags are derived with `tyro <https://brentyi.github.io/tyro/>`_ from typed dataclasses
@@ -57,6 +58,8 @@ COMMANDS: dict[str, Command] = {
                         "parse_evaluate"),
     "fit": Command("fit_command", "command_fit", "Fit the rhythmic DMP to a built-in style or to a whole recording "
                    "(rest, approach, rhythm, departure, rest).", False, "parse_fit"),
+    "cycles": Command("cycle_command", "command_cycles", "Train a policy that reacts cycle by cycle (cycle-by-cycle "
+                      "search, SAC or PPO) and score it on test contexts.", True, "parse_cycles"),
     "main": Command("run_commands", "command_main", "Imitation, the paper's figures, contextual refinement and "
                     "evaluation on test contexts, end to end.", True, "parse_main"),
 }

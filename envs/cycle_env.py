@@ -88,6 +88,12 @@ class RhythmicCycleEnv(gym.Env):
         """Cycles (steps) of an episode."""
         return len(self.starts)
 
+    @property
+    def executed_actions(self) -> list[np.ndarray]:
+        """The actions of the episode's cycles so far as they run (a refused change gives the previous cycle's),
+        copies."""
+        return [action.copy() for action in self._actions]
+
     def task_contract(self) -> TaskContract:
         """The episodic face's contract (:meth:`RhythmicTaskEnv.task_contract`): the last step's info holds its
         metrics."""

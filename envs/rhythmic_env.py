@@ -51,7 +51,7 @@ from .robots import RobotDescription, get_robot
 from .smoothness import Smoothness
 from .task_scene import standard_stage
 from .tasks import TASKS, get_task
-from .tasks.description import Rejection, Solution, TaskDescription, TaskPlan
+from .tasks.description import Rejection, Solution, TaskDescription, TaskPlan, ToolPath
 from .viewer import HumanViewer
 
 __all__ = ["RhythmicTaskEnv"]
@@ -139,6 +139,8 @@ class RhythmicTaskEnv(gym.Env):
         #: changes both in place from a cycle's start on, :mod:`rdmp_gym.envs.cycle_env`)
         self.solution: Solution | None = None
         self.live_targets: JointTargetPlan | None = None
+        #: what the last episode executed (None before the first step and after a refused one)
+        self.tool_path: ToolPath | None = None
         #: ``listener(k, overlay)`` after every control step ``k`` of an episode (None: no listener)
         self.control_listener: Callable[[int, Any], None] | None = None
         self._built = True
@@ -327,6 +329,7 @@ class RhythmicTaskEnv(gym.Env):
         self.overlay = None
         self.solution = solution
         path = self.task.simulate(solution, self, capture)
+        self.tool_path = path
         self.overlay = path.record
         outcome = self.task.evaluate(path, self.context, self.scene.sensor)
         causes = ("unstable",) if path.unstable and outcome.valid else outcome.causes
@@ -350,6 +353,7 @@ class RhythmicTaskEnv(gym.Env):
 
     def _invalid(self, info: dict, rejection: Rejection) -> tuple[float, dict]:
         """The task's graded penalty for a plan that is not executed (:meth:`TaskDescription.invalid`)."""
+        self.tool_path = None
         info.update(rejection.info)
         outcome = self.task.invalid(rejection.reason, rejection.severity, self.n_steps, self.context)
         info.update(outcome.info)

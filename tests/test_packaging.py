@@ -122,10 +122,12 @@ def test_version_flag(capsys):
 
 
 def test_every_command_has_help_with_defaults_and_the_launcher_describes_it_as_its_flags_do(capsys):
+    from rdmp_gym.agents.cycle_command import CycleCommand
     from rdmp_gym.agents.fit_command import FitCommand
     from rdmp_gym.agents.run_commands import EvaluateCommand, MainCommand, TrainCommand
 
-    kinds = {"train": TrainCommand, "evaluate": EvaluateCommand, "fit": FitCommand, "main": MainCommand}
+    kinds = {"train": TrainCommand, "evaluate": EvaluateCommand, "fit": FitCommand, "main": MainCommand,
+             "cycles": CycleCommand}
     assert set(kinds) == set(cli.COMMANDS)
     for name, kind in kinds.items():
         assert cli.COMMANDS[name][2] == kind.__doc__, name

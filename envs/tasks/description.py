@@ -363,7 +363,8 @@ class TaskDescription(ABC):
         executed; ``capture(k)`` (where not None) after control step ``k``, or ``capture(k, overlay)`` with what the
         frames draw of the episode so far (:meth:`render_overlay`), and ``capture(-1)`` before the first. Default:
         the core's own record (every sensor at every physics step) along the joint targets with the servos' velocity
-        feed-forward."""
+        feed-forward; its overlay is the core itself
+        (:class:`~rdmp_gym.envs.servo.ServoSimulation`, its record so far)."""
         from ..servo import ServoSimulation
         from ..smoothness import Smoothness
 
@@ -374,7 +375,7 @@ class TaskDescription(ABC):
         simulation = ServoSimulation(scene, face.n_steps, face.frame_skip)
         if capture is not None:
             capture(-1)
-        simulation.run(plan.q, capture)
+        simulation.run(plan.q, None if capture is None else lambda k: capture(k, simulation))
         return ToolPath(solution.plan, joints.q, simulation.sensors, simulation.qpos, simulation.qvel, simulation.tip,
                         simulation.steps, simulation.unstable, face.dt, face.frame_skip,
                         face.jerk_ratio(solution.plan.path), float(Smoothness.peak_accel(joints.q, face.dt).max()),

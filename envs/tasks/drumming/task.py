@@ -203,6 +203,38 @@ class DrumTask(TaskDescription):
         return TaskPlan(path, origin, rotation, {"beats": beats, "counted": counted, "stop_at": stop_at,
                                                  "change_time": metronome.change_time})
 
+    # ------------------------------------------------------------------ the cycle-level face
+    def cycle_state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The default's (the tip's position and its offset from its path), then the timing errors of the last two
+        beats played (s, within ±:data:`_ERROR_BOUND`) and whether the last was missed (0 or 1)."""
+        low, high = super().cycle_state_bounds()
+        return np.r_[low, -_ERROR_BOUND, -_ERROR_BOUND, 0.0], np.r_[high, _ERROR_BOUND, _ERROR_BOUND, 1.0]
+
+    def cycle_state(self, face: Any, step: int | None, overlay: Any) -> np.ndarray:
+        """The default's, then the last two played beats' timing errors and the last one's miss, from the membrane's
+        force up to control step ``step`` (``overlay``: the simulation core and its record so far); a beat is played
+        once the window that could hold its strike has passed, and a missed beat's error is the bound."""
+        errors, missed = np.zeros(2), 0.0
+        if step is not None and overlay is not None:
+            plan = face.solution.plan
+            errors, missed = self._played_errors(overlay.sensors[: step * face.frame_skip], plan, face,
+                                                 step * face.dt)
+        return np.r_[super().cycle_state(face, step, overlay), errors, missed]
+
+    def _played_errors(self, sensors: np.ndarray, plan: TaskPlan, face: Any, now: float
+                       ) -> tuple[np.ndarray, float]:
+        """``(errors [2], missed)`` of the last two beats played by ``now`` (s) (see :meth:`cycle_state`)."""
+        beats = np.asarray(plan.extras["beats"])
+        gaps = np.diff(beats) if beats.size > 1 else np.full(1, np.inf)
+        played = beats[beats + 0.5 * np.r_[gaps, gaps[-1:]][: beats.size] <= now]
+        if played.size < 2:
+            return np.zeros(2), 0.0
+        hit = sensors[:, face.scene.sensor["drum_hit"]]
+        strikes = Strikes.from_force(np.abs(hit[:, 1:4] @ plan.rotation[:, 2]), face.dt / face.frame_skip)
+        error = score_beats(strikes, played, self.tolerance, self.impulse_band).error[-2:]
+        missed = float(np.isnan(error[-1]))
+        return np.clip(np.nan_to_num(error, nan=_ERROR_BOUND), -_ERROR_BOUND, _ERROR_BOUND), missed
+
     # ------------------------------------------------------------------ judgement
     def evaluate(self, path: ToolPath, context: DrumContext, sensor: Mapping[str, slice]) -> Outcome:
         plan, steps, frame_skip = path.plan, path.steps, path.frame_skip
@@ -283,6 +315,10 @@ class DrumTask(TaskDescription):
                "jerk": path.jerk_ratio <= self.max_jerk_ratio,
                "rest": info["end_speed"] <= self.rest_speed}
         return tuple(name for name, ok in met.items() if not ok)
+
+
+#: the bound (s) of the timing errors the cycle-level face observes (a missed beat observes it)
+_ERROR_BOUND = 0.15
 
 
 def _touches(live: np.ndarray, sensor: Mapping[str, slice], tip_found: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,0 +1,241 @@
+"""Cycle-by-cycle policy search: each cycle's DMP parameters chosen from what is observed at its start.
+
+The policy runs on a task's cycle-level face (:mod:`rdmp_gym.envs.cycle_env`): at the start of cycle ``c`` it
+observes ``o_c`` (the context, the task's state, the cycle's place in the episode) and acts
+
+    a_c = clip(W_c x(o_c) + ε_c, -1, 1),        x(o) = [1, (o - centre) / scale]        ([n], [F + 1])
+
+one linear map ``W_c [n, F + 1]`` per cycle, ``ε_c = √ρ ε + √(1 - ρ) ε'_c`` smooth exploration in the DMP's
+weights (:class:`~rdmp_gym.agents.learners.smooth_exploration.SmoothNoise`, standard deviation ``sigma``): a part
+``ρ`` (``shared``) of its variance is one draw for the whole episode, the rest is the cycle's own, so that an
+exploring episode's cycles differ by less than independent draws would (each difference is a hand-over). From the
+second cycle on, the dimensions that act in no control step of the cycle (a transient's weights once it has ended,
+:meth:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv.action_time_weights`) keep the previous cycle's value, so the
+cycle changes only what it can change.
+
+**Per-cycle credit.** Cycle ``c``'s action is judged by the cost that follows its start: ``S_c = J - Σ_{t < t_c}
+cost(t)`` (the episode cost less what was spent before the cycle started; the part of ``J`` the cost trace does not
+spread over time counts in every cycle). Its samples (this batch and the ``reuse - 1`` before it) are weighted by
+``P ∝ exp(-(S_c - b_c(x)) / η)`` over a ridge baseline ``b_c`` of the observation, with the temperature ``η`` set
+so that ``KL(P || uniform) = epsilon`` (the update's trust region: the weighted samples stay a distribution close
+to the one they were drawn from). The new ``W_c`` is the weighted ridge fit of the executed actions on ``x``,
+pulled towards the old one by ``gain_prior`` (:func:`~rdmp_gym.agents.learners.credit.weighted_ridge`; the
+constant column unpenalised). The exploration decays geometrically, ``sigma <- max(min_sigma, decay sigma)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from rdmp_gym.validation import check_range
+
+from ..config import Settings
+from .base import ridge_hat
+from .credit import weighted_ridge
+from .smooth_exploration import SmoothNoise
+
+__all__ = ["CycleBatch", "CycleSearch", "CycleSearchConfig", "act_with", "stack_cycles", "trust_region_weights"]
+
+
+@dataclass(frozen=True)
+class CycleSearchConfig(Settings):
+    """Settings of :class:`CycleSearch`.
+
+    Attributes:
+        sigma: initial exploration standard deviation (action units, the mean over the weights).
+        length: correlation length of the exploration in neighbouring DMP weights (0 = independent).
+        epsilon: the trust region, ``KL(P || uniform)`` of each cycle's sample weights.
+        shared: the part of the exploration's variance that every cycle of an episode shares (0: independent
+            cycles, 1: one draw per episode).
+        reuse: batches (this one and earlier ones) whose samples enter each update.
+        gain_prior: ridge pulling each cycle's map towards its previous value (and of the baselines).
+        decay: factor applied to sigma after every update.
+        min_sigma: exploration floor.
+    """
+
+    sigma: float = 0.3
+    length: float = 5.0
+    epsilon: float = 1.0
+    shared: float = 0.8
+    reuse: int = 3
+    gain_prior: float = 1.0
+    decay: float = 0.96
+    min_sigma: float = 0.03
+
+    def __post_init__(self) -> None:
+        check_range(self.sigma, "sigma", 0.0, 1.0, low_open=True)
+        check_range(self.length, "length", 0.0, None)
+        check_range(self.epsilon, "epsilon", 0.0, None, low_open=True)
+        check_range(self.shared, "shared", 0.0, 1.0)
+        check_range(self.reuse, "reuse", 1, None)
+        check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
+        check_range(self.decay, "decay", 0.0, 1.0, low_open=True)
+        check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+
+
+@dataclass(frozen=True)
+class CycleBatch:
+    """Results of ``N`` episodes on a cycle-level face with ``C`` cycles.
+
+    Attributes:
+        observations: ``[N, C, o]`` each cycle's observation (NaN for cycles an episode did not reach).
+        actions: ``[N, C, n]`` each cycle's executed action (clipped).
+        costs: ``[N]`` episode costs ``-return``.
+        spent: ``[N, C]`` the cost trace summed before each cycle's start (0 for the first cycle).
+    """
+
+    observations: np.ndarray
+    actions: np.ndarray
+    costs: np.ndarray
+    spent: np.ndarray
+
+    def __post_init__(self) -> None:
+        size, cycles = self.observations.shape[:2]
+        if self.actions.shape[:2] != (size, cycles) or self.costs.shape != (size,) or self.spent.shape != (
+                size, cycles):
+            raise ValueError(f"batch: expected observations [N, C, o], actions [N, C, n], costs [N], spent [N, C]; "
+                             f"got {self.observations.shape}, {self.actions.shape}, {self.costs.shape}, "
+                             f"{self.spent.shape}")
+        if not np.all(np.isfinite(self.costs)):
+            raise ValueError("batch.costs: contains NaN or infinite values")
+
+
+def trust_region_weights(advantages: np.ndarray, epsilon: float) -> np.ndarray:
+    """``[N]`` weights ``∝ exp(-A / η)`` of advantages ``[N]`` (lower is better) with ``η`` such that
+    ``KL(P || uniform) = epsilon`` (uniform where the advantages are all equal, or where even ``η -> 0`` stays
+    within the bound: then the best sample takes nearly all weight)."""
+    spread = advantages.max() - advantages.min()
+    if not spread > 0:
+        return np.full(advantages.size, 1.0 / advantages.size)
+    scaled = (advantages - advantages.min()) / spread
+
+    def weights(log_temperature: float) -> np.ndarray:
+        logits = -scaled / np.exp(log_temperature)
+        p = np.exp(logits - logits.max())
+        return p / p.sum()
+
+    def excess(log_temperature: float) -> float:
+        p = weights(log_temperature)
+        return float(np.sum(p * np.log(np.maximum(p * p.size, 1e-300)))) - epsilon
+
+    low, high = np.log(1e-4), np.log(1e4)
+    if excess(low) <= 0:
+        return weights(low)
+    return weights(brentq(excess, low, high, xtol=1e-6) if excess(high) < 0 else high)
+
+
+class CycleSearch:
+    """The cycle-by-cycle policy and its search (see the module docstring).
+
+    Args:
+        n_actions: the cycle face's action size ``n``.
+        active: ``[C, n]`` whether each action dimension acts during each cycle.
+        center, scale: ``[o]`` standardisation of the observation (scale 0: the entry is left out).
+        blocks: the exploration's blocks (:func:`~rdmp_gym.agents.learners.smooth_exploration.block_layout`).
+        config: the settings.
+        rng: the only source of the exploration noise.
+    """
+
+    def __init__(self, n_actions: int, active: np.ndarray, center: np.ndarray, scale: np.ndarray,
+                 blocks: list[tuple[slice, bool | None]], config: CycleSearchConfig, rng: np.random.Generator):
+        self.active = np.asarray(active, dtype=bool)
+        if self.active.ndim != 2 or self.active.shape[1] != n_actions:
+            raise ValueError(f"active: expected shape [C, {n_actions}], got {self.active.shape}")
+        self.center, self.scale = np.asarray(center, dtype=np.float64), np.asarray(scale, dtype=np.float64)
+        if self.center.shape != self.scale.shape or self.center.ndim != 1:
+            raise ValueError(f"center, scale: expected two arrays [o], got {self.center.shape}, {self.scale.shape}")
+        self.config, self.rng = config, rng
+        self.noise = SmoothNoise(n_actions, blocks, config.length)
+        self.sigma = config.sigma
+        #: ``[C, n, F + 1]`` the policy: one linear map per cycle (0: the imitation in every cycle)
+        self.maps = np.zeros((self.n_cycles, n_actions, self.center.size + 1))
+        self.updates = 0
+        self._history: list[CycleBatch] = []
+
+    @property
+    def n_cycles(self) -> int:
+        """Cycles ``C`` of an episode."""
+        return self.active.shape[0]
+
+    def features(self, observation: np.ndarray) -> np.ndarray:
+        """``[F + 1]`` the regressors ``x(o)`` of an observation ``[o]``."""
+        return _features(observation, self.center, self.scale)
+
+    def exploration(self, count: int) -> np.ndarray:
+        """``[count, C, n]`` the exploration noise of ``count`` episodes (the generator advances)."""
+        scales = np.full(self.noise.n_blocks, self.sigma)
+        own = self.noise.sample(scales, count * self.n_cycles, self.rng).reshape(count, self.n_cycles, -1)
+        shared = self.noise.sample(scales, count, self.rng)[:, None, :]
+        return np.sqrt(self.config.shared) * shared + np.sqrt(1.0 - self.config.shared) * own
+
+    def act(self, cycle: int, observation: np.ndarray, previous: np.ndarray | None, noise: np.ndarray | None = None
+            ) -> np.ndarray:
+        """``[n]`` the action of cycle ``cycle`` at ``observation [o]`` (with ``noise [n]`` where given); the
+        dimensions that do not act in the cycle keep ``previous [n]`` (the last cycle's action)."""
+        return act_with(self._view(), cycle, observation, previous, noise)
+
+    def update(self, batch: CycleBatch) -> None:
+        """Refit every cycle's map from ``batch`` and the ``reuse - 1`` batches before it."""
+        self._history = [*self._history, batch][-self.config.reuse:]
+        observations = np.concatenate([b.observations for b in self._history])
+        actions = np.concatenate([b.actions for b in self._history])
+        to_go = np.concatenate([b.costs[:, None] - b.spent for b in self._history])          # [N, C]
+        for cycle in range(self.n_cycles):
+            reached = np.all(np.isfinite(observations[:, cycle]), axis=1)
+            if reached.sum() < 2:
+                continue
+            self.maps[cycle] = self._fit(cycle, observations[reached, cycle], actions[reached, cycle],
+                                         to_go[reached, cycle])
+        self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
+        self.updates += 1
+
+    def _fit(self, cycle: int, observations: np.ndarray, actions: np.ndarray, to_go: np.ndarray) -> np.ndarray:
+        """``[n, F + 1]`` cycle ``cycle``'s new map from its samples (observations ``[N, o]``, actions ``[N, n]``,
+        cost-to-go ``[N]``)."""
+        x = np.stack([self.features(o) for o in observations])
+        advantages = to_go - ridge_hat(x, self.config.gain_prior) @ to_go
+        weights = trust_region_weights(advantages, self.config.epsilon)
+        fitted = weighted_ridge(x, weights[None], actions, self.maps[cycle], self.config.gain_prior)[0]
+        return np.where(self.active[cycle][:, None], fitted, self.maps[cycle])
+
+    def state_dict(self) -> dict[str, Any]:
+        """What continues the search exactly: the maps, the exploration, the generator, the standardisation."""
+        return {"maps": self.maps.copy(), "sigma": self.sigma, "updates": self.updates,
+                "rng": self.rng.bit_generator.state, "center": self.center.copy(), "scale": self.scale.copy()}
+
+    def policy(self) -> dict[str, np.ndarray]:
+        """The policy without its search: ``{"maps", "center", "scale", "active"}`` (what :func:`act_with` runs),
+        copies."""
+        return {key: value.copy() for key, value in self._view().items()}
+
+    def _view(self) -> dict[str, np.ndarray]:
+        return {"maps": self.maps, "center": self.center, "scale": self.scale, "active": self.active}
+
+
+def _features(observation: np.ndarray, center: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``[F + 1]``: ``[1, (o - center) / scale]``, 0 where the scale is 0."""
+    return np.r_[1.0, np.divide(observation - center, scale, out=np.zeros_like(center), where=scale > 0)]
+
+
+def act_with(policy: dict[str, np.ndarray], cycle: int, observation: np.ndarray, previous: np.ndarray | None,
+             noise: np.ndarray | None = None) -> np.ndarray:
+    """``[n]`` the action of a policy ``{"maps" [C, n, F + 1], "center", "scale" [o], "active" [C, n]}`` (see
+    :meth:`CycleSearch.act`)."""
+    action = policy["maps"][cycle] @ _features(observation, policy["center"], policy["scale"])
+    action = np.clip(action if noise is None else action + noise, -1.0, 1.0)
+    if cycle > 0 and previous is not None:
+        action = np.where(policy["active"][cycle], action, previous)
+    return action
+
+
+def stack_cycles(rows: Sequence[np.ndarray], cycles: int, size: int) -> np.ndarray:
+    """``[C, size]`` the rows ``[c, size]`` of the cycles an episode reached, NaN for the rest."""
+    out = np.full((cycles, size), np.nan)
+    if len(rows):
+        out[: len(rows)] = np.stack(rows)
+    return out
