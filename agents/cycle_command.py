@@ -46,6 +46,8 @@ class CycleCommand:
     """validation contexts (the curve and the choice of the best policy)"""
     test: int = 50
     """test contexts (never used for training or selection)"""
+    validation_pool: int = 400
+    """validation contexts sorted by kind before the stratified choice (400: as for the other learners)"""
 
 
 def parse_cycles(argv: Sequence[str]) -> CycleCommand:
@@ -64,12 +66,13 @@ def _run(command: CycleCommand) -> CycleRun:
         if command.agent == "cycle":
             return train_cycle_search(command.env, episodes=command.episodes, rollouts=command.rollouts,
                                       seed=command.seed, workers=command.workers, config=CycleSearchConfig(),
-                                      validation=command.validation, test=command.test, progress=progress)
+                                      validation=command.validation, test=command.test, progress=progress,
+                                      validation_pool=command.validation_pool)
         from .cycle_sb3 import train_cycle_sb3
 
         return train_cycle_sb3(command.env, command.agent, episodes=command.episodes, seed=command.seed,
                                rollouts=command.rollouts, validation=command.validation, test=command.test,
-                               progress=progress)
+                               progress=progress, validation_pool=command.validation_pool)
     finally:
         bar.close()
 

@@ -80,17 +80,19 @@ class _Evaluation(BaseCallback):
 
 def train_cycle_sb3(env_id: str, algorithm: str = "sac", *, episodes: int = 1000, seed: int = 0, sigma: float = 0.3,
                     rollouts: int = 16, eval_every: int = 80, validation: int = 20, test: int = 50,
-                    progress: Callable[[int, dict[str, float]], None] | None = None) -> CycleRun:
+                    progress: Callable[[int, dict[str, float]], None] | None = None, validation_pool: int = 400
+                    ) -> CycleRun:
     """SAC or PPO (``algorithm``) on the cycle face of ``env_id`` for ``episodes`` training episodes (PPO updates
     every ``rollouts`` episodes); the deterministic policy is evaluated every ``eval_every`` episodes on the
-    validation contexts and the best one scored on the test contexts."""
+    validation contexts (``validation_pool`` as in :func:`~rdmp_gym.agents.cycle_training.train_cycle_search`) and
+    the best one scored on the test contexts."""
     torch.set_num_threads(1)
     face_id = env_id if "Cycle-v" in env_id else cycle_id(env_id)
     start = time.perf_counter()
     env, judge = gym.make(face_id), gym.make(face_id).unwrapped
     steps = judge.n_cycles
     model = _model(algorithm, env, seed, sigma, steps, rollouts)
-    validation_seeds = stratified_validation_seeds(judge.face, validation)
+    validation_seeds = stratified_validation_seeds(judge.face, validation, pool=max(validation_pool, validation))
 
     def act(cycle: int, observation: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
         return model.predict(observation.astype(np.float32), deterministic=True)[0]

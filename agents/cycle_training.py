@@ -10,8 +10,10 @@ used. The same seed gives the same numbers, whatever the number of workers.
 
 from __future__ import annotations
 
+import collections
 import json
 import os
+import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -28,10 +30,11 @@ from .episodes import episode_metrics
 from .learners.contextual import action_layout
 from .learners.cycle_search import CycleBatch, CycleSearch, CycleSearchConfig, act_with, stack_cycles
 from .learners.smooth_exploration import block_layout
+from .pool import watch_parent
 from .protocol import TRAIN_SEED_LIMIT, final_test_seeds, interval, path_smoothness, stratified_validation_seeds
 
-__all__ = ["CycleActor", "CycleRun", "CycleRunner", "cycle_episode", "executed_jerk_ratio", "linear_actor", "scores",
-           "summarise", "train_cycle_search"]
+__all__ = ["CycleActor", "CycleRun", "CycleRunner", "cycle_episode", "executed_jerk_ratio", "failure_counts",
+           "linear_actor", "scores", "summarise", "train_cycle_search"]
 
 #: an action dimension acts in a cycle where its activation reaches this anywhere in the cycle
 _ACTIVE = 1e-3
@@ -90,8 +93,10 @@ def executed_jerk_ratio(env: Any) -> float:
 _WORKER_ENV: Any = None
 
 
-def _start_worker(env_id: str, env_kwargs: dict[str, Any]) -> None:
+def _start_worker(env_id: str, env_kwargs: dict[str, Any], parent: int) -> None:
     global _WORKER_ENV
+    # a worker whose run is killed exits at once instead of finishing the episodes queued for it
+    threading.Thread(target=watch_parent, args=(parent,), daemon=True, name="parent-watchdog").start()
     os.environ.setdefault("MUJOCO_GL", "egl")
     import rdmp_gym.envs  # noqa: F401  (registers the ids)
 
@@ -111,7 +116,8 @@ class CycleRunner:
         self.env_id, self.env_kwargs = env_id, dict(env_kwargs or {})
         self.env = gym.make(env_id, **self.env_kwargs).unwrapped
         self._pool = None if workers == 1 else ProcessPoolExecutor(
-            workers, mp_context=get_context("spawn"), initializer=_start_worker, initargs=(env_id, self.env_kwargs))
+            workers, mp_context=get_context("spawn"), initializer=_start_worker,
+            initargs=(env_id, self.env_kwargs, os.getpid()))
 
     def run(self, policy: dict[str, np.ndarray], seeds: Sequence[int], noises: np.ndarray | None = None
             ) -> list[dict[str, Any]]:
@@ -183,10 +189,13 @@ def scores(results: list[dict[str, Any]], seeds: np.ndarray) -> dict[str, Any]:
 def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16, seed: int = 0, workers: int = 2,
                        config: CycleSearchConfig | None = None, eval_every: int = 5, validation: int = 20,
                        test: int = 50, random_returns: bool = False, env_kwargs: dict[str, Any] | None = None,
-                       progress: Callable[[int, dict[str, float]], None] | None = None) -> CycleRun:
+                       progress: Callable[[int, dict[str, float]], None] | None = None, validation_pool: int = 400
+                       ) -> CycleRun:
     """Train the cycle-by-cycle search on ``env_id`` (an episodic id or its cycle face's) within ``episodes``
     training episodes of ``rollouts`` per update; ``random_returns``: the control that sees standard-normal costs
-    instead of the episodes'. ``progress(episodes, row)`` after each evaluation. Returns what it measured."""
+    instead of the episodes'. ``progress(episodes, row)`` after each evaluation; ``validation_pool``: the validation
+    contexts the stratified choice sorts (:func:`~rdmp_gym.agents.protocol.stratified_validation_seeds`; its
+    default is the other learners'). Returns what it measured."""
     config = config or CycleSearchConfig()
     face_id = env_id if "Cycle-v" in env_id else cycle_id(env_id)
     start = time.perf_counter()
@@ -204,7 +213,7 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
         center, scale = _standardisation(observed[np.all(np.isfinite(observed), axis=1)])
         search = CycleSearch(env.action_space.shape[0], active, center, scale, blocks, config,
                              np.random.default_rng(learner_seq))
-        validation_seeds = stratified_validation_seeds(env.face, validation)
+        validation_seeds = stratified_validation_seeds(env.face, validation, pool=max(validation_pool, validation))
         run = CycleRun(face_id, seed, {"episodes": episodes, "rollouts": rollouts, "random_returns": random_returns,
                                        **config.to_dict()})
         best, best_key, used = search.policy(), (-1.0, -np.inf), rollouts
@@ -221,7 +230,8 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
             if search.updates % eval_every == 0 or used + rollouts > episodes:
                 judged = scores(runner.run(search.policy(), validation_seeds), validation_seeds)
                 row = {"episodes": used, "validation_success": judged["success_rate"],
-                       "validation_return": judged["mean_return"], "sigma": search.sigma}
+                       "validation_return": judged["mean_return"], "sigma": search.sigma,
+                       "validation_failures": failure_counts(judged["failures"])}
                 run.curve.append(row)
                 if progress is not None:
                     progress(used, row)
@@ -234,6 +244,11 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
         return run
     finally:
         runner.close()
+
+
+def failure_counts(failures: Sequence[str]) -> dict[str, int]:
+    """``{cause: episodes}`` of per-episode failures (causes joined by ``"+"``, ``""`` for a success)."""
+    return dict(collections.Counter(cause for entry in failures for cause in filter(None, entry.split("+"))))
 
 
 def summarise(runs: Sequence[CycleRun]) -> dict[str, Any]:

@@ -36,7 +36,7 @@ from .errors import WorkerError
 from .learners.base import EpisodeBatch
 from .tasks import TaskSpec
 
-__all__ = ["BACKENDS", "WATCHDOG_PERIOD", "Evaluator", "WorkerError", "run_episode"]
+__all__ = ["BACKENDS", "WATCHDOG_PERIOD", "Evaluator", "WorkerError", "run_episode", "watch_parent"]
 
 logger = logging.getLogger(__name__)
 
@@ -47,7 +47,7 @@ WATCHDOG_PERIOD = 0.25
 _WORKER: dict[str, Any] = {}
 
 
-def _watch_parent(parent: int) -> None:
+def watch_parent(parent: int) -> None:
     """Exit this process as soon as ``parent`` is no longer its parent (it died; we were re-parented)."""
     while os.getppid() == parent:
         time.sleep(WATCHDOG_PERIOD)
@@ -55,7 +55,7 @@ def _watch_parent(parent: int) -> None:
 
 
 def _start_worker(spec: TaskSpec, parent: int) -> None:
-    threading.Thread(target=_watch_parent, args=(parent,), daemon=True, name="parent-watchdog").start()
+    threading.Thread(target=watch_parent, args=(parent,), daemon=True, name="parent-watchdog").start()
     _WORKER["env"] = spec.make()
     _WORKER["options"] = spec.options
 

@@ -80,7 +80,7 @@ def _measure(env, size: float, seed: int) -> dict:
                                       and np.array_equal(again["trace"], base["trace"]))}
 
 
-def _figure(env_id: str, path: Path) -> None:
+def _figure(env_id: str, out: Path) -> None:
     """A path coordinate, its acceleration and its jerk across a hand-over (imitation, the changed parameters' own
     rollout, the executed blend)."""
     import matplotlib
@@ -98,7 +98,7 @@ def _figure(env_id: str, path: Path) -> None:
     t = face.times[span]
     figure, axes = plt.subplots(3, 1, figsize=(7, 6.5), sharex=True)
     for label, path, style in (("imitation", base["path"], ":"), ("changed parameters' own rollout", own, "--"),
-                               ("executed (hand-over)", changed["path"], "-")):
+                               ("executed (hand-over)", changed["path"], "-")):  # the planned tool paths
         axes[0].plot(t, path[span, 0], style, label=label)
         axes[1].plot(t[1:-1], (np.diff(path, n=2, axis=0) / dt**2)[span.start:span.stop - 2, 0], style)
         axes[2].plot(t[2:-1], (np.diff(path, n=3, axis=0) / dt**3)[span.start:span.stop - 3, 0], style)
@@ -107,10 +107,10 @@ def _figure(env_id: str, path: Path) -> None:
         axis.set_ylabel(label)
     axes[0].legend(fontsize=8)
     axes[2].set_xlabel("time (s); shaded: the hand-over of cycle 2's change")
-    axes[0].set_title(f"{env_id}: a change of 0.1 per action dimension at cycle 2")
+    axes[0].set_title(f"{env_id.split('/')[-1]}: a change of 0.1 per action dimension at cycle 2", fontsize=10)
     figure.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=110)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(out, dpi=110)
     env.close()
 
 

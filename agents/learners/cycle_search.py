@@ -7,8 +7,9 @@ observes ``o_c`` (the context, the task's state, the cycle's place in the episod
 
 one linear map ``W_c [n, F + 1]`` per cycle, ``ε_c = √ρ ε + √(1 - ρ) ε'_c`` smooth exploration in the DMP's
 weights (:class:`~rdmp_gym.agents.learners.smooth_exploration.SmoothNoise`, standard deviation ``sigma``): a part
-``ρ`` (``shared``) of its variance is one draw for the whole episode, the rest is the cycle's own, so that an
-exploring episode's cycles differ by less than independent draws would (each difference is a hand-over). From the
+``ρ`` (``shared``) of its variance is one draw for the whole episode (a change that helps in every cycle is then
+seen in the whole episode's cost, not diluted over the cycles' independent draws), the rest is the cycle's own. From
+the
 second cycle on, the dimensions that act in no control step of the cycle (a transient's weights once it has ended,
 :meth:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv.action_time_weights`) keep the previous cycle's value, so the
 cycle changes only what it can change.
@@ -16,11 +17,15 @@ cycle changes only what it can change.
 **Per-cycle credit.** Cycle ``c``'s action is judged by the cost that follows its start: ``S_c = J - Σ_{t < t_c}
 cost(t)`` (the episode cost less what was spent before the cycle started; the part of ``J`` the cost trace does not
 spread over time counts in every cycle). Its samples (this batch and the ``reuse - 1`` before it) are weighted by
-``P ∝ exp(-(S_c - b_c(x)) / η)`` over a ridge baseline ``b_c`` of the observation, with the temperature ``η`` set
+``P ∝ exp(-(S_c - b_c) / η)`` over a ridge baseline ``b_c`` of the context (the first cycle's observation: it does
+not depend on any draw), with the temperature ``η`` set
 so that ``KL(P || uniform) = epsilon`` (the update's trust region: the weighted samples stay a distribution close
 to the one they were drawn from). The new ``W_c`` is the weighted ridge fit of the executed actions on ``x``,
 pulled towards the old one by ``gain_prior`` (:func:`~rdmp_gym.agents.learners.credit.weighted_ridge`; the
-constant column unpenalised). The exploration decays geometrically, ``sigma <- max(min_sigma, decay sigma)``.
+constant column unpenalised), less the same fit with uniform weights: only the reweighting by the costs moves the
+map (what a cycle observes depends on the episode's shared draw, so a plain fit would also follow the draw's
+correlation with the observation; with uniform weights, e.g. equal costs, nothing moves). The exploration decays
+geometrically, ``sigma <- max(min_sigma, decay sigma)``.
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ class CycleSearchConfig(Settings):
         sigma: initial exploration standard deviation (action units, the mean over the weights).
         length: correlation length of the exploration in neighbouring DMP weights (0 = independent).
         epsilon: the trust region, ``KL(P || uniform)`` of each cycle's sample weights.
-        shared: the part of the exploration's variance that every cycle of an episode shares (0: independent
+        shared: the part of the exploration's variance that the cycles of an episode share (0: independent
             cycles, 1: one draw per episode).
         reuse: batches (this one and earlier ones) whose samples enter each update.
         gain_prior: ridge pulling each cycle's map towards its previous value (and of the baselines).
@@ -61,7 +66,7 @@ class CycleSearchConfig(Settings):
     sigma: float = 0.3
     length: float = 5.0
     epsilon: float = 1.0
-    shared: float = 0.8
+    shared: float = 0.7
     reuse: int = 3
     gain_prior: float = 1.0
     decay: float = 0.96
@@ -185,23 +190,26 @@ class CycleSearch:
         observations = np.concatenate([b.observations for b in self._history])
         actions = np.concatenate([b.actions for b in self._history])
         to_go = np.concatenate([b.costs[:, None] - b.spent for b in self._history])          # [N, C]
+        contexts = np.stack([self.features(o) for o in observations[:, 0]])
         for cycle in range(self.n_cycles):
             reached = np.all(np.isfinite(observations[:, cycle]), axis=1)
             if reached.sum() < 2:
                 continue
             self.maps[cycle] = self._fit(cycle, observations[reached, cycle], actions[reached, cycle],
-                                         to_go[reached, cycle])
+                                         to_go[reached, cycle], contexts[reached])
         self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
         self.updates += 1
 
-    def _fit(self, cycle: int, observations: np.ndarray, actions: np.ndarray, to_go: np.ndarray) -> np.ndarray:
+    def _fit(self, cycle: int, observations: np.ndarray, actions: np.ndarray, to_go: np.ndarray,
+             contexts: np.ndarray) -> np.ndarray:
         """``[n, F + 1]`` cycle ``cycle``'s new map from its samples (observations ``[N, o]``, actions ``[N, n]``,
-        cost-to-go ``[N]``)."""
+        cost-to-go ``[N]``, the regressors of their first cycles' observations ``[N, F + 1]``)."""
         x = np.stack([self.features(o) for o in observations])
-        advantages = to_go - ridge_hat(x, self.config.gain_prior) @ to_go
-        weights = trust_region_weights(advantages, self.config.epsilon)
-        fitted = weighted_ridge(x, weights[None], actions, self.maps[cycle], self.config.gain_prior)[0]
-        return np.where(self.active[cycle][:, None], fitted, self.maps[cycle])
+        # the baseline's ridge grows with the samples: it shrinks as a prior of that many samples would
+        advantages = to_go - ridge_hat(contexts, self.config.gain_prior * len(to_go)) @ to_go
+        weights = np.stack([trust_region_weights(advantages, self.config.epsilon), np.full(len(x), 1.0 / len(x))])
+        by_cost, uniform = weighted_ridge(x, weights, actions, self.maps[cycle], self.config.gain_prior)
+        return np.where(self.active[cycle][:, None], self.maps[cycle] + by_cost - uniform, self.maps[cycle])
 
     def state_dict(self) -> dict[str, Any]:
         """What continues the search exactly: the maps, the exploration, the generator, the standardisation."""
