@@ -14,13 +14,15 @@ each candidate on one episode of 1000 env steps from a training reset seed; the 
 generations of 10 episodes), as the locomotion study's learners (``bench_locomotion.py``). After each generation
 (every 10k env steps) CMA-ES's mean is evaluated on the 3 validation contexts, and at the end on the 10 test contexts
 of :mod:`rdmp_gym.agents.protocol` (those evaluations are not counted in the budget). Per seed: the best training
-episode's return ("best"), the final mean's test return ("final"), the curve, and the seconds the training took
-(wall clock and process CPU; the evaluations apart). The summary: the interquartile mean over seeds with its 95 %
-percentile-bootstrap interval (``rdmp_gym.agents.protocol.interval``, fixed seed).
+episode's return ("best"), the final mean's test return ("final"), the best candidate's test return ("best_test"),
+the curve, and the seconds the training took (wall clock and process CPU; the evaluations apart). The summary: the
+interquartile mean over seeds with its 95 % percentile-bootstrap interval (``rdmp_gym.agents.protocol.interval``,
+fixed seed).
 
 The reference rows, on reset seeds 0-9: the authors' published Swimmer oscillator (0.62 Hz, phases 0 and
 0.95 x 2 pi, amplitude 1 rad, PD 10 / 0.5; the code on their RLC 2024 slides), and the rhythmic black-box wrapper's
-default pattern (``make_blackbox(env_id)``, action 0) with the raw zero action beside it.
+default pattern (``make_blackbox(env_id)``, action 0) with the other patterns of :data:`ALTERNATIVES` and the raw zero
+action beside it.
 
 One JSON per (env, seed) under ``--run-dir``: a finished seed is skipped, so an interrupted run resumes. One process
 (the CPU is shared), ``OMP_NUM_THREADS=1``. About 20-30 s of CPU per seed and env on one core.
@@ -76,6 +78,14 @@ ENVS: dict[str, EnvSetting] = {
 
 #: the authors' published Swimmer oscillator (the code on their RLC 2024 slides)
 PUBLISHED_SWIMMER = {"frequency": 0.62, "phases": (0.0, 0.95 * 2.0 * np.pi), "amplitude": 1.0, "kp": 10.0, "kd": 0.5}
+#: other patterns of the wrapper beside its default, by env: (label, settings)
+ALTERNATIVES: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
+    "Swimmer-v5": (("a start of one period", {"start_periods": 1.0}),
+                   ("amplitude 0.5 and a start of one period", {"amplitude": 0.5, "start_periods": 1.0})),
+    "HalfCheetah-v5": (("a wave about the reset posture (3 Hz, joint j at phase j pi / 3, 0.5 rad, PD 1 / 0.02)",
+                        {"period": 1.0 / 3.0, "phases": -np.pi / 3.0, "amplitude": 0.5, "d_gains": 0.02,
+                         "posture": (0.0,) * 6}),),
+}
 BUDGET = 100_000
 POPSIZE = 10
 SIGMA0 = 0.5
@@ -97,6 +107,12 @@ class OscillatorParams:
     def to_dict(self) -> dict[str, Any]:
         return {"amplitude": self.amplitude.tolist(), "phase": self.phase.tolist(), "offset": self.offset.tolist(),
                 "f_swing": self.f_swing, "f_stance": self.f_stance}
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> OscillatorParams:
+        """The parameters of :meth:`to_dict`'s record."""
+        return cls(*(np.asarray(values[key], dtype=np.float64) for key in ("amplitude", "phase", "offset")),
+                   float(values["f_swing"]), float(values["f_stance"]))
 
 
 class OscillatorSpace:
@@ -299,9 +315,9 @@ def reference_rows(env_ids: Sequence[str], seeds: Sequence[int] = REFERENCE_SEED
         if env_id == "Swimmer-v5":
             cases.append(("published oscillator (the authors' Swimmer parameters)", lambda: published_swimmer(seeds)))
         cases.append(("make_blackbox default pattern, a = 0", lambda e=env_id: wrapper_default(e, seeds)))
-        if env_id == "Swimmer-v5":
-            cases.append(("make_blackbox, amplitude 0.5 and a start of one period, a = 0",
-                          lambda: wrapper_default("Swimmer-v5", seeds, amplitude=0.5, start_periods=1.0)))
+        for label, settings in ALTERNATIVES.get(env_id, ()):
+            cases.append((f"make_blackbox, {label}, a = 0",
+                          lambda e=env_id, s=settings: wrapper_default(e, seeds, **s)))
         cases.append(("raw zero action", lambda e=env_id: zero_action(e, seeds)))
         for label, run in cases:
             returns = run()
@@ -333,24 +349,39 @@ def seed_path(root: Path, env_id: str, split: bool, seed: int) -> Path:
     return root / env_id / ("swing-stance" if split else "one-frequency") / f"seed_{seed}.json"
 
 
+def best_test_return(env_id: str, setting: EnvSetting, best_params: dict[str, Any]) -> float:
+    """The mean return of the best training candidate (``best_params``, a :meth:`OscillatorParams.to_dict` record)
+    on the test contexts."""
+    env = gym.make(env_id)
+    _, joints = env_space(env, setting)
+    policy = Oscillator(OscillatorParams.from_dict(best_params), setting.kp, setting.kd, env.action_space.low,
+                        env.action_space.high)
+    value = mean_return(env, joints, policy, final_test_seeds(TEST_EPISODES).tolist())
+    env.close()
+    return value
+
+
 def run_seed(env_id: str, seed: int, root: Path, budget: int, popsize: int, split: str = "env") -> dict[str, Any]:
-    """The run of (env, seed): loaded if finished under ``root`` with the same settings, else trained and saved."""
+    """The run of (env, seed): loaded if finished under ``root`` with the same settings, else trained and saved;
+    the best training candidate's test return (``best_test``) is added to the seed's JSON where it is missing."""
     setting = env_setting(env_id, split)
     path = seed_path(root, env_id, setting.split, seed)
     settings = run_settings(env_id, budget, popsize, split)
     if path.exists():
-        done = json.loads(path.read_text())
-        if done["settings"] != settings:
-            raise ValueError(f"--run-dir: {path} was run with other settings ({done['settings']}); pass another "
+        document = json.loads(path.read_text())
+        if document["settings"] != settings:
+            raise ValueError(f"--run-dir: {path} was run with other settings ({document['settings']}); pass another "
                              f"--run-dir")
-        return done
-    env = gym.make(env_id)
-    result = cma_search(env, setting, seed, budget, popsize, validation_seeds(EVAL_EPISODES).tolist(),
-                        final_test_seeds(TEST_EPISODES).tolist())
-    env.close()
-    document = {"settings": settings, "seed": seed, **result}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(document, indent=1) + "\n")
+    else:
+        env = gym.make(env_id)
+        result = cma_search(env, setting, seed, budget, popsize, validation_seeds(EVAL_EPISODES).tolist(),
+                            final_test_seeds(TEST_EPISODES).tolist())
+        env.close()
+        document = {"settings": settings, "seed": seed, **result}
+    if "best_test" not in document:
+        document["best_test"] = best_test_return(env_id, setting, document["best_params"])
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(document, indent=1) + "\n")
     return document
 
 
@@ -358,6 +389,7 @@ def summarise(env_id: str, runs: list[dict[str, Any]]) -> dict[str, Any]:
     """IQM [95 % CI] over seeds of the final and best returns, the curve, the training seconds per seed."""
     finals = np.array([r["final"] for r in runs])
     bests = np.array([r["best"] for r in runs])
+    best_tests = np.array([r["best_test"] for r in runs])
     marks = [m["env_steps"] for m in runs[0]["curve"]]
     curve = []
     for index, steps in enumerate(marks):
@@ -367,24 +399,31 @@ def summarise(env_id: str, runs: list[dict[str, Any]]) -> dict[str, Any]:
     return {"env": env_id, "split": runs[0]["settings"]["split"], "seeds": [r["seed"] for r in runs],
             "n_params": runs[0]["n_params"],
             "env_steps": int(np.median([r["env_steps"] for r in runs])), "final": interval(finals).to_dict(),
-            "best": interval(bests).to_dict(), "final_per_seed": finals.tolist(), "best_per_seed": bests.tolist(),
+            "best": interval(bests).to_dict(), "best_test": interval(best_tests).to_dict(),
+            "final_per_seed": finals.tolist(), "best_per_seed": bests.tolist(),
+            "best_test_per_seed": best_tests.tolist(), "best_params_per_seed": [r["best_params"] for r in runs],
             "train_wall_s_per_seed": [round(r["train_wall_s"], 2) for r in runs],
             "train_cpu_s_per_seed": [round(r["train_cpu_s"], 2) for r in runs], "curve": curve,
             "settings": runs[0]["settings"]}
 
 
+def _cell(value: dict[str, float]) -> str:
+    return f"{value['estimate']:.1f} [{value['low']:.1f}, {value['high']:.1f}]"
+
+
 def table(rows: list[dict[str, Any]], references: list[dict[str, Any]]) -> str:
-    """Markdown: per env the IQM [95 % CI] of the final and best returns, the env steps and the seconds per seed."""
-    lines = ["| env | swing/stance split | parameters | env steps | final return, IQM [95% CI] | "
-             "best return, IQM [95% CI] | seconds per seed (wall / CPU, median) | seeds |",
-             "|---|---|---|---|---|---|---|---|"]
+    """Markdown: per env the IQM [95 % CI] over seeds of the returns (CMA-ES's final mean and the best training
+    candidate on the test contexts, the best training episode), the env steps and the seconds per seed."""
+    lines = ["| env | swing/stance split | parameters | env steps | final mean, test | best candidate, test | "
+             "best training episode | seconds per seed (wall / CPU, median) | seeds |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for row in rows:
-        final, best = row["final"], row["best"]
         split = "yes" if row["split"] else "no"
-        lines.append(f"| {row['env']} | {split} | {row['n_params']} | {row['env_steps']} | {final['estimate']:.1f} "
-                     f"[{final['low']:.1f}, {final['high']:.1f}] | {best['estimate']:.1f} [{best['low']:.1f}, "
-                     f"{best['high']:.1f}] | {np.median(row['train_wall_s_per_seed']):.1f} / "
-                     f"{np.median(row['train_cpu_s_per_seed']):.1f} | {len(row['seeds'])} |")
+        lines.append(f"| {row['env']} | {split} | {row['n_params']} | {row['env_steps']} | {_cell(row['final'])} | "
+                     f"{_cell(row['best_test'])} | {_cell(row['best'])} | "
+                     f"{np.median(row['train_wall_s_per_seed']):.1f} / {np.median(row['train_cpu_s_per_seed']):.1f} "
+                     f"| {len(row['seeds'])} |")
+    lines.insert(0, "IQM over seeds [95% bootstrap CI]; returns of 1000-step episodes")
     lines += ["", "| env | reference (reset seeds 0-9, 1000 steps) | mean return | std |", "|---|---|---|---|"]
     lines += [f"| {r['env']} | {r['method']} | {r['mean']:.2f} | {r['std']:.2f} |" for r in references]
     return "\n".join(lines)

@@ -150,7 +150,7 @@ def test_known_envs_keep_their_published_defaults():
     plain = RhythmicBlackBoxWrapper(gym.make("Swimmer-v5"))                 # the wrapper looks the env up too
     assert np.array_equal(plain.theta0, swimmer.theta0)
     swimmer.reset(seed=0)
-    # the return of a = 0 as published (results/blackbox_defaults.json: 347-354 on seeds 0-4); a change of the
+    # the return of a = 0 as published (results/blackbox_defaults.json: 347-353 on seeds 0-4); a change of the
     # defaults moves it far more
     assert swimmer.step(np.zeros(swimmer.action_space.shape, np.float32))[1] == pytest.approx(347.082, rel=1e-3)
     swimmer.close()

@@ -1,5 +1,5 @@
-"""The open-loop oscillator baseline (benchmarks/bench_open_loop_oscillator.py) and the Swimmer default pattern that
-stands beside it (the published oscillator at its own amplitude, with a short start from rest)."""
+"""The open-loop oscillator baseline (benchmarks/bench_open_loop_oscillator.py) and the wrapper's default patterns
+that stand beside it (Swimmer: the published oscillator with a short start from rest; HalfCheetah: a tuned gait)."""
 
 from __future__ import annotations
 
@@ -74,8 +74,7 @@ def test_cma_best_is_the_running_maximum_and_replays_from_its_seed(short_swimmer
     assert np.all(np.diff(best_so_far) >= 0.0)
     np.testing.assert_array_equal(best_so_far, np.maximum.accumulate(returns))
     assert result["best"] == returns.max() == result["curve"][-1]["best_so_far"]
-    best = osc.OscillatorParams(**{key: np.asarray(value) if isinstance(value, list) else value
-                                   for key, value in result["best_params"].items()})
+    best = osc.OscillatorParams.from_dict(result["best_params"])
     _, joints = osc.env_space(short_swimmer, setting)
     policy = osc.Oscillator(best, setting.kp, setting.kd, short_swimmer.action_space.low,
                             short_swimmer.action_space.high)
@@ -92,6 +91,15 @@ def test_swimmer_default_swims_as_far_as_the_published_oscillator():
     published = osc.published_swimmer([seed])[0]
     default = osc.wrapper_default("Swimmer-v5", [seed])[0]
     assert default >= 349.0 and default >= published - 1.0
+
+
+def test_halfcheetah_default_runs_upright():
+    env = make_blackbox("HalfCheetah-v5")
+    env.reset(seed=0)
+    _, episode_return, _, _, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    upright = abs(env.env.unwrapped.data.qpos[2]) < 1.0                 # the root's pitch: not on its back
+    env.close()
+    assert episode_return >= 950.0 and upright and info["env_steps"] == 1000     # measured: 1055
 
 
 def test_the_start_from_rest_is_a_setting_in_periods():
