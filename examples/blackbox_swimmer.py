@@ -19,7 +19,8 @@ parser.add_argument("--updates", type=int, default=6, help="CMA-ES updates (8 ep
 parser.add_argument("--seed", type=int, default=0)
 args = parser.parse_args()
 
-# Swimmer's entry in ENV_DEFAULTS: PD gains 10 / 0.5, period 1 / 0.62 s, phases 0 and 0.95 x 2 pi, 0.5 rad
+# Swimmer's entry in ENV_DEFAULTS: PD gains 10 / 0.5, period 1 / 0.62 s, phases 0 and 0.95 x 2 pi, 1 rad, a start
+# of 0.1 period
 env = make_blackbox("Swimmer-v5")
 n = env.action_space.shape[0]
 print(f"{n} action dimensions: " + ", ".join(f"{k} {s.stop - s.start}" for k, s in env.param_map.slices.items()))
