@@ -211,7 +211,8 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
         first = runner.run(zero, episode_rng.integers(0, TRAIN_SEED_LIMIT, rollouts))      # the imitation
         observed = np.concatenate([r["observations"] for r in first])
         center, scale = _standardisation(observed[np.all(np.isfinite(observed), axis=1)])
-        search = CycleSearch(env.action_space.shape[0], active, center, scale, blocks, config,
+        search = CycleSearch(env.action_space.shape[0], env.face.observation_space.shape[0], active, center, scale,
+                             blocks, config,
                              np.random.default_rng(learner_seq))
         validation_seeds = stratified_validation_seeds(env.face, validation, pool=max(validation_pool, validation))
         run = CycleRun(face_id, seed, {"episodes": episodes, "rollouts": rollouts, "random_returns": random_returns,

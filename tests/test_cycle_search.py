@@ -62,7 +62,7 @@ def _batch(search, rng, count, explore=True) -> CycleBatch:
 def _search(seed: int, active: np.ndarray | None = None) -> CycleSearch:
     active = np.ones((CYCLES, ACTIONS), dtype=bool) if active is None else active
     config = CycleSearchConfig(sigma=0.3, length=0.0, reuse=2, decay=0.95)
-    return CycleSearch(ACTIONS, active, np.zeros(2), np.array([0.6, 0.3]), [(slice(0, ACTIONS), None)], config,
+    return CycleSearch(ACTIONS, 1, active, np.zeros(2), np.array([0.6, 0.3]), [(slice(0, ACTIONS), None)], config,
                        np.random.default_rng(seed))
 
 
@@ -109,7 +109,10 @@ def test_a_dimension_that_does_not_act_in_a_cycle_keeps_the_previous_value():
 
 def test_bad_inputs_are_refused_by_name():
     with pytest.raises(ValueError, match="active"):
-        CycleSearch(ACTIONS, np.ones((CYCLES, ACTIONS + 1), bool), np.zeros(2), np.ones(2), [], CycleSearchConfig(),
+        CycleSearch(ACTIONS, 1, np.ones((CYCLES, ACTIONS + 1), bool), np.zeros(2), np.ones(2), [],
+                    CycleSearchConfig(), np.random.default_rng(0))
+    with pytest.raises(ValueError, match="context_size"):
+        CycleSearch(ACTIONS, 3, np.ones((CYCLES, ACTIONS), bool), np.zeros(2), np.ones(2), [], CycleSearchConfig(),
                     np.random.default_rng(0))
     with pytest.raises(ValueError, match="sigma"):
         CycleSearchConfig(sigma=0.0)
