@@ -41,6 +41,7 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
     def progress(episodes: int, row: dict[str, float]) -> None:
         print(f"  seed {seed}: {episodes:5d} episodes  validation success {row['validation_success']:.2f}  "
               f"return {row['validation_return']:.3f}  sigma {row.get('sigma', float('nan')):.3f}  "
+              f"failures {row.get('validation_failures', {})}  "
               f"{time.perf_counter() - start:.0f} s", flush=True)
 
     if args.agent == "cycle":
