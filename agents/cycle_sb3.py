@@ -21,7 +21,7 @@ from rdmp_gym.envs.registration import cycle_id
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import BaseCallback
 
-from .cycle_training import CycleRun, cycle_episode, scores
+from .cycle_training import CycleRun, cycle_episode, failure_counts, scores
 from .protocol import final_test_seeds, stratified_validation_seeds
 
 __all__ = ["train_cycle_sb3"]
@@ -68,7 +68,7 @@ class _Evaluation(BaseCallback):
     def check(self, episodes: int) -> None:
         judged = self.evaluate()
         row = {"episodes": episodes, "validation_success": judged["success_rate"],
-               "validation_return": judged["mean_return"]}
+               "validation_return": judged["mean_return"], "validation_failures": failure_counts(judged["failures"])}
         self.run.curve.append(row)
         if self.progress is not None:
             self.progress(episodes, row)

@@ -220,13 +220,14 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
         best, best_key, used = search.policy(), (-1.0, -np.inf), rollouts
         while used + rollouts <= episodes:
             seeds = episode_rng.integers(0, TRAIN_SEED_LIMIT, rollouts)
-            results = runner.run(search.policy(), seeds, search.exploration(rollouts))
+            shared, own = search.exploration(rollouts)
+            results = runner.run(search.policy(), seeds, shared[:, None, :] + own)
             costs = np.array([-r["return"] for r in results])
             if random_returns:
                 costs = control_rng.standard_normal(rollouts)
             search.update(CycleBatch(np.stack([r["observations"] for r in results]),
                                      np.stack([r["actions"] for r in results]), costs,
-                                     np.stack([r["spent"] for r in results])))
+                                     np.stack([r["spent"] for r in results]), shared, own))
             used += rollouts
             if search.updates % eval_every == 0 or used + rollouts > episodes:
                 judged = scores(runner.run(search.policy(), validation_seeds), validation_seeds)

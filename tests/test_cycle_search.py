@@ -35,28 +35,23 @@ def _targets(context: np.ndarray) -> np.ndarray:
     return np.stack([0.5 * np.tanh(context[0] + cycle) * np.ones(ACTIONS) * (-1) ** cycle for cycle in range(CYCLES)])
 
 
-def _episodes(search: CycleSearch, rng: np.random.Generator, count: int, explore: bool = True):
+def _batch(search: CycleSearch, rng: np.random.Generator, count: int, explore: bool = True) -> CycleBatch:
     """``count`` episodes of a task where cycle c costs ``|a_c - target_c(context)|^2``."""
     observations = np.zeros((count, CYCLES, 2))
     actions = np.zeros((count, CYCLES, ACTIONS))
-    spent = np.zeros((count, CYCLES))
-    noise = search.exploration(count) if explore else np.zeros((count, CYCLES, ACTIONS))
+    spent, costs = np.zeros((count, CYCLES)), np.zeros(count)
+    shared, own = search.exploration(count) if explore else (np.zeros((count, ACTIONS)),
+                                                             np.zeros((count, CYCLES, ACTIONS)))
     for i in range(count):
-        context, previous, total = rng.uniform(-1, 1), None, 0.0
+        context, previous = rng.uniform(-1, 1), None
         target = _targets(np.array([context]))
         for cycle in range(CYCLES):
             observations[i, cycle] = (context, cycle / CYCLES)
-            spent[i, cycle] = total
-            previous = search.act(cycle, observations[i, cycle], previous, noise[i, cycle])
+            spent[i, cycle] = costs[i]
+            previous = search.act(cycle, observations[i, cycle], previous, shared[i] + own[i, cycle])
             actions[i, cycle] = previous
-            total += float(np.sum((previous - target[cycle]) ** 2))
-        yield observations[i], actions[i], total, spent[i]
-
-
-def _batch(search, rng, count, explore=True) -> CycleBatch:
-    rows = list(_episodes(search, rng, count, explore))
-    return CycleBatch(np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows]), np.array([r[2] for r in rows]),
-                      np.stack([r[3] for r in rows]))
+            costs[i] += float(np.sum((previous - target[cycle]) ** 2))
+    return CycleBatch(observations, actions, costs, spent, shared, own)
 
 
 def _search(seed: int, active: np.ndarray | None = None) -> CycleSearch:
@@ -71,7 +66,8 @@ def _train(seed: int, random_costs: bool) -> float:
     for _ in range(40):
         batch = _batch(search, rng, 16)
         if random_costs:
-            batch = CycleBatch(batch.observations, batch.actions, rng.standard_normal(16), batch.spent)
+            batch = CycleBatch(batch.observations, batch.actions, rng.standard_normal(16), batch.spent, batch.shared,
+                               batch.own)
         search.update(batch)
     return float(np.mean(_batch(search, np.random.default_rng(999), 64, explore=False).costs))
 

@@ -14,22 +14,18 @@ second cycle on, the dimensions that act in no control step of the cycle (a tran
 :meth:`~rdmp_gym.envs.rhythmic_env.RhythmicTaskEnv.action_time_weights`) keep the previous cycle's value, so the
 cycle changes only what it can change.
 
-**Per-cycle credit.** Cycle ``c``'s action is judged by the cost that follows its start: ``S_c = J - Σ_{t < t_c}
-cost(t)`` (the episode cost less what was spent before the cycle started; the part of ``J`` the cost trace does not
-spread over time counts in every cycle). Its samples (this batch and the ``reuse - 1`` before it) are weighted by
-``P ∝ exp(-(S_c - b_c) / η)`` over a ridge baseline ``b_c`` of the context (the first cycle's observation: it does
-not depend on any draw), with the temperature ``η`` set
-so that ``KL(P || uniform) = epsilon`` (the update's trust region: the weighted samples stay a distribution close
-to the one they were drawn from). The new ``W_c`` is the weighted ridge fit of the executed actions on ``x``,
-pulled towards the old one by ``gain_prior`` (:func:`~rdmp_gym.agents.learners.credit.weighted_ridge`; the
-constant column unpenalised), less the same fit with uniform weights: only the reweighting by the costs moves the
-map (what a cycle observes depends on the episode's shared draw, so a plain fit would also follow the draw's
-correlation with the observation; with uniform weights, e.g. equal costs, nothing moves). The intercepts and the
-gains on the context are pulled towards their previous values, the gains on the rest of the observation (the task's
-state: the feedback) towards zero: a feedback gain stays only while the costs keep asking for it (pulled towards
-their previous values, the feedback gains took up the draws' chance correlations with the state as a random walk;
-on ``ArmarWipe-v3`` the policy lost the imitation's smoothness within 400 episodes). The exploration decays
-geometrically, ``sigma <- max(min_sigma, decay sigma)``.
+**Credit where each draw acts.** A draw is judged by the cost that follows where it acts: the shared draw by the
+whole episode's cost ``J``, cycle ``c``'s own draw by ``S_c = J - Σ_{t < t_c} cost(t)`` (the episode cost less what
+was spent before the cycle started; the part of ``J`` the cost trace does not spread over time counts in every
+cycle). Its samples (this batch and the ``reuse - 1`` before it) are weighted by ``P ∝ exp(-(S - b) / η)`` over a
+ridge baseline ``b`` of the context (the first cycle's observation: it depends on no draw), with the temperature
+``η`` set so that ``KL(P || uniform) = epsilon`` (the update's trust region). The shared draws move every cycle's map
+alike: by the weighted ridge fit of the draws on the context's regressors less the same fit with uniform weights
+(PI²'s reweighted noise, with gains on the context). Cycle ``c``'s own draws move its map alone, by the same fit on
+``x(o_c)``; its gains on the task's state (the feedback) are that update's alone, pulled towards zero at each
+update, not accumulated. Measured on ``ArmarWipe-v3``: with every cycle fitted by its own credit (shared draws
+included) the cycles' maps drifted apart, each difference a hand-over, and the policy lost the imitation's
+smoothness within 400 episodes. The exploration decays geometrically, ``sigma <- max(min_sigma, decay sigma)``.
 """
 
 from __future__ import annotations
@@ -96,12 +92,16 @@ class CycleBatch:
         actions: ``[N, C, n]`` each cycle's executed action (clipped).
         costs: ``[N]`` episode costs ``-return``.
         spent: ``[N, C]`` the cost trace summed before each cycle's start (0 for the first cycle).
+        shared, own: ``[N, n]``, ``[N, C, n]`` the exploration's parts as drawn (:meth:`CycleSearch.exploration`),
+            scaled as executed; None for the batch of a policy that did not explore.
     """
 
     observations: np.ndarray
     actions: np.ndarray
     costs: np.ndarray
     spent: np.ndarray
+    shared: np.ndarray | None = None
+    own: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         size, cycles = self.observations.shape[:2]
@@ -112,6 +112,9 @@ class CycleBatch:
                              f"{self.spent.shape}")
         if not np.all(np.isfinite(self.costs)):
             raise ValueError("batch.costs: contains NaN or infinite values")
+        if (self.shared is None) != (self.own is None) or (self.own is not None and (
+                self.own.shape != self.actions.shape or self.shared.shape != (size, self.actions.shape[2]))):
+            raise ValueError("batch.shared, batch.own: expected both (shapes [N, n], [N, C, n]) or neither")
 
 
 def trust_region_weights(advantages: np.ndarray, epsilon: float) -> np.ndarray:
@@ -180,12 +183,13 @@ class CycleSearch:
         """``[F + 1]`` the regressors ``x(o)`` of an observation ``[o]``."""
         return _features(observation, self.center, self.scale)
 
-    def exploration(self, count: int) -> np.ndarray:
-        """``[count, C, n]`` the exploration noise of ``count`` episodes (the generator advances)."""
+    def exploration(self, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """The exploration of ``count`` episodes as executed: ``(shared [count, n], own [count, C, n])``, each cycle's
+        draw ``shared + own[:, c]`` (the generator advances)."""
         scales = np.full(self.noise.n_blocks, self.sigma)
         own = self.noise.sample(scales, count * self.n_cycles, self.rng).reshape(count, self.n_cycles, -1)
-        shared = self.noise.sample(scales, count, self.rng)[:, None, :]
-        return np.sqrt(self.config.shared) * shared + np.sqrt(1.0 - self.config.shared) * own
+        shared = self.noise.sample(scales, count, self.rng)
+        return np.sqrt(self.config.shared) * shared, np.sqrt(1.0 - self.config.shared) * own
 
     def act(self, cycle: int, observation: np.ndarray, previous: np.ndarray | None, noise: np.ndarray | None = None
             ) -> np.ndarray:
@@ -194,33 +198,38 @@ class CycleSearch:
         return act_with(self._view(), cycle, observation, previous, noise)
 
     def update(self, batch: CycleBatch) -> None:
-        """Refit every cycle's map from ``batch`` and the ``reuse - 1`` batches before it."""
+        """Move the maps by the credit of the draws of ``batch`` and the ``reuse - 1`` batches before it."""
+        if batch.own is None:
+            raise ValueError("batch: expected the exploration's draws (shared, own) of its episodes")
         self._history = [*self._history, batch][-self.config.reuse:]
         observations = np.concatenate([b.observations for b in self._history])
-        actions = np.concatenate([b.actions for b in self._history])
+        shared = np.concatenate([b.shared for b in self._history])                           # [N, n]
+        own = np.concatenate([b.own for b in self._history])                                 # [N, C, n]
         to_go = np.concatenate([b.costs[:, None] - b.spent for b in self._history])          # [N, C]
         contexts = np.stack([self.features(o) for o in observations[:, 0]])
+        baseline = ridge_hat(contexts, self.config.gain_prior * len(contexts))   # shrinks as that many samples
+        common = self._reweighted(contexts, shared, to_go[:, 0] - baseline @ to_go[:, 0])     # [n, F + 1]
         for cycle in range(self.n_cycles):
             reached = np.all(np.isfinite(observations[:, cycle]), axis=1)
-            if reached.sum() < 2:
-                continue
-            self.maps[cycle] = self._fit(cycle, observations[reached, cycle], actions[reached, cycle],
-                                         to_go[reached, cycle], contexts[reached])
+            change = common.copy()
+            if reached.sum() >= 2:
+                x = np.stack([self.features(o) for o in observations[reached, cycle]])
+                to_go_c = to_go[reached, cycle]
+                hat = ridge_hat(contexts[reached], self.config.gain_prior * int(reached.sum()))
+                change += self._reweighted(x, own[reached, cycle], to_go_c - hat @ to_go_c)
+            updated = self.maps[cycle] + change
+            updated[:, 1 + self.context_size:] = change[:, 1 + self.context_size:]      # feedback: this update's
+            self.maps[cycle] = np.where(self.active[cycle][:, None], updated, self.maps[cycle])
         self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
         self.updates += 1
 
-    def _fit(self, cycle: int, observations: np.ndarray, actions: np.ndarray, to_go: np.ndarray,
-             contexts: np.ndarray) -> np.ndarray:
-        """``[n, F + 1]`` cycle ``cycle``'s new map from its samples (observations ``[N, o]``, actions ``[N, n]``,
-        cost-to-go ``[N]``, the regressors of their first cycles' observations ``[N, F + 1]``)."""
-        x = np.stack([self.features(o) for o in observations])
-        # the baseline's ridge grows with the samples: it shrinks as a prior of that many samples would
-        advantages = to_go - ridge_hat(contexts, self.config.gain_prior * len(to_go)) @ to_go
+    def _reweighted(self, x: np.ndarray, draws: np.ndarray, advantages: np.ndarray) -> np.ndarray:
+        """``[n, F + 1]`` the fit of ``draws [N, n]`` on ``x [N, F + 1]`` weighted by the advantages ``[N]`` (within
+        the trust region) less the same fit with uniform weights."""
         weights = np.stack([trust_region_weights(advantages, self.config.epsilon), np.full(len(x), 1.0 / len(x))])
-        prior = self.maps[cycle].copy()
-        prior[:, 1 + self.context_size:] = 0.0                       # the feedback gains are pulled towards zero
-        by_cost, uniform = weighted_ridge(x, weights, actions, prior, self.config.gain_prior)
-        return np.where(self.active[cycle][:, None], prior + by_cost - uniform, self.maps[cycle])
+        by_cost, uniform = weighted_ridge(x, weights, draws, np.zeros((draws.shape[1], x.shape[1])),
+                                          self.config.gain_prior)
+        return by_cost - uniform
 
     def state_dict(self) -> dict[str, Any]:
         """What continues the search exactly: the maps, the exploration, the generator, the standardisation."""
@@ -236,9 +245,16 @@ class CycleSearch:
         return {"maps": self.maps, "center": self.center, "scale": self.scale, "active": self.active}
 
 
+#: the standardised observation is clipped to this many standard deviations: the standardisation comes from the
+#: imitation's episodes, in which the task's state (e.g. the tool's offset from its path) barely varies, and an
+#: exploring episode's state may lie far outside it (unclipped, a feedback gain on it saturated the actions)
+FEATURE_CLIP = 3.0
+
+
 def _features(observation: np.ndarray, center: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """``[F + 1]``: ``[1, (o - center) / scale]``, 0 where the scale is 0."""
-    return np.r_[1.0, np.divide(observation - center, scale, out=np.zeros_like(center), where=scale > 0)]
+    """``[F + 1]``: ``[1, (o - center) / scale]`` clipped to ``±FEATURE_CLIP``, 0 where the scale is 0."""
+    scaled = np.divide(observation - center, scale, out=np.zeros_like(center), where=scale > 0)
+    return np.r_[1.0, np.clip(scaled, -FEATURE_CLIP, FEATURE_CLIP)]
 
 
 def act_with(policy: dict[str, np.ndarray], cycle: int, observation: np.ndarray, previous: np.ndarray | None,
