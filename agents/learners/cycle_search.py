@@ -246,8 +246,9 @@ class CycleSearch:
 
 
 #: the standardised observation is clipped to this many standard deviations: the standardisation comes from the
-#: imitation's episodes, in which the task's state (e.g. the tool's offset from its path) barely varies, and an
-#: exploring episode's state may lie far outside it (unclipped, a feedback gain on it saturated the actions)
+#: imitation's episodes, in which the task's state (e.g. the tool's offset from its path) varies little, and an
+#: exploring episode's state may lie outside it (measured on ``ArmarWipe-v3``: up to 6 standard deviations), where a
+#: gain's effect stays bounded
 FEATURE_CLIP = 3.0
 
 
