@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Literal
 
 import tyro
+from rdmp_gym.envs.registration import LATEST_ENV_ID
 from tqdm.auto import tqdm
 
 from .cycle_training import CycleRun, train_cycle_search
@@ -30,8 +31,8 @@ class CycleCommand:
 
     out: Path
     """the run's directory (run.json, curve.png)"""
-    env: str = "rdmp_gym/ArmarWipe-v3"
-    """an episodic task id (rdmp_gym/{Robot}{Task}-vN) or its cycle face's id"""
+    env: str = LATEST_ENV_ID
+    """an episodic task id (rdmp_gym/{Robot}{Task}-vN) or its cycle face's id (default: the current wiping task)"""
     agent: Literal["cycle", "sac", "ppo"] = "cycle"
     """cycle: the cycle-by-cycle search; sac, ppo: stable-baselines3 on the cycle face"""
     episodes: int = 1000

@@ -21,7 +21,7 @@ from rdmp_gym.envs.registration import cycle_id
 from stable_baselines3 import PPO, SAC
 from stable_baselines3.common.callbacks import BaseCallback
 
-from .cycle_training import CycleRun, cycle_episode, failure_counts, scores
+from .cycle_training import CycleRun, cycle_episode, cycle_scores, failure_counts
 from .protocol import final_test_seeds, stratified_validation_seeds
 
 __all__ = ["train_cycle_sb3"]
@@ -98,7 +98,7 @@ def train_cycle_sb3(env_id: str, algorithm: str = "sac", *, episodes: int = 1000
         return model.predict(observation.astype(np.float32), deterministic=True)[0]
 
     def evaluate(seeds: np.ndarray = validation_seeds) -> dict[str, Any]:
-        return scores([cycle_episode(judge, act, s) for s in seeds], seeds)
+        return cycle_scores([cycle_episode(judge, act, s) for s in seeds], seeds)
 
     run = CycleRun(face_id, seed, {"algorithm": algorithm, "episodes": episodes, "sigma": sigma,
                                    "rollouts": rollouts})

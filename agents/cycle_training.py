@@ -33,8 +33,8 @@ from .learners.smooth_exploration import block_layout
 from .pool import watch_parent
 from .protocol import TRAIN_SEED_LIMIT, final_test_seeds, interval, path_smoothness, stratified_validation_seeds
 
-__all__ = ["CycleActor", "CycleRun", "CycleRunner", "cycle_episode", "executed_jerk_ratio", "failure_counts",
-           "linear_actor", "scores", "summarise", "train_cycle_search"]
+__all__ = ["CycleActor", "CycleRun", "CycleRunner", "cycle_episode", "cycle_scores", "executed_jerk_ratio",
+           "failure_counts", "linear_actor", "summarise", "train_cycle_search"]
 
 #: an action dimension acts in a cycle where its activation reaches this anywhere in the cycle
 _ACTIVE = 1e-3
@@ -93,7 +93,7 @@ def executed_jerk_ratio(env: Any) -> float:
 _WORKER_ENV: Any = None
 
 
-def _start_worker(env_id: str, env_kwargs: dict[str, Any], parent: int) -> None:
+def _start_cycle_worker(env_id: str, env_kwargs: dict[str, Any], parent: int) -> None:
     global _WORKER_ENV
     # a worker whose run is killed exits at once instead of finishing the episodes queued for it
     threading.Thread(target=watch_parent, args=(parent,), daemon=True, name="parent-watchdog").start()
@@ -103,7 +103,7 @@ def _start_worker(env_id: str, env_kwargs: dict[str, Any], parent: int) -> None:
     _WORKER_ENV = gym.make(env_id, **env_kwargs).unwrapped
 
 
-def _worker_episode(policy: dict[str, np.ndarray], seed: int, noise: np.ndarray | None) -> dict[str, Any]:
+def _cycle_worker_episode(policy: dict[str, np.ndarray], seed: int, noise: np.ndarray | None) -> dict[str, Any]:
     return cycle_episode(_WORKER_ENV, linear_actor(policy, noise), seed)
 
 
@@ -116,7 +116,7 @@ class CycleRunner:
         self.env_id, self.env_kwargs = env_id, dict(env_kwargs or {})
         self.env = gym.make(env_id, **self.env_kwargs).unwrapped
         self._pool = None if workers == 1 else ProcessPoolExecutor(
-            workers, mp_context=get_context("spawn"), initializer=_start_worker,
+            workers, mp_context=get_context("spawn"), initializer=_start_cycle_worker,
             initargs=(env_id, self.env_kwargs, os.getpid()))
 
     def run(self, policy: dict[str, np.ndarray], seeds: Sequence[int], noises: np.ndarray | None = None
@@ -125,7 +125,7 @@ class CycleRunner:
         noise_rows = [None] * len(seeds) if noises is None else list(noises)
         if self._pool is None:
             return [cycle_episode(self.env, linear_actor(policy, n), s) for s, n in zip(seeds, noise_rows, strict=True)]
-        return list(self._pool.map(_worker_episode, [policy] * len(seeds), seeds, noise_rows))
+        return list(self._pool.map(_cycle_worker_episode, [policy] * len(seeds), seeds, noise_rows))
 
     def close(self) -> None:
         """Stop the workers and close the env."""
@@ -176,7 +176,7 @@ def _standardisation(observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return center, scale
 
 
-def scores(results: list[dict[str, Any]], seeds: np.ndarray) -> dict[str, Any]:
+def cycle_scores(results: list[dict[str, Any]], seeds: np.ndarray) -> dict[str, Any]:
     """The per-context scores of evaluation episodes, and their means."""
     success = np.array([bool(r["success"]) for r in results])
     metrics = {key: [float(r["metrics"][key]) for r in results] for key in results[0]["metrics"]}
@@ -230,7 +230,7 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
                                      np.stack([r["spent"] for r in results]), shared, own))
             used += rollouts
             if search.updates % eval_every == 0 or used + rollouts > episodes:
-                judged = scores(runner.run(search.policy(), validation_seeds), validation_seeds)
+                judged = cycle_scores(runner.run(search.policy(), validation_seeds), validation_seeds)
                 row = {"episodes": used, "validation_success": judged["success_rate"],
                        "validation_return": judged["mean_return"], "sigma": search.sigma,
                        "validation_failures": failure_counts(judged["failures"])}
@@ -241,7 +241,7 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
                 if key > best_key:
                     best, best_key, run.best_episodes = search.policy(), key, used
         test_seeds = final_test_seeds(test)
-        run.test = scores(runner.run(best, test_seeds), test_seeds)
+        run.test = cycle_scores(runner.run(best, test_seeds), test_seeds)
         run.wall_seconds = time.perf_counter() - start
         return run
     finally:

@@ -9,8 +9,9 @@
 
 Each seed's run is written to ``RUN_DIR/seed_<n>.json`` as it finishes, and a seed whose file exists is skipped, so
 an interrupted benchmark continues where it stopped (two processes with different ``--seeds`` may share a run
-directory). ``--random-returns`` runs the control that sees standard-normal costs. ``--gather`` prints the table
-over the seeds found and writes it. Every run uses the test contexts of
+directory). ``--random-returns`` runs the control that sees standard-normal costs. ``--gather NAME`` prints the
+table over the seeds found and writes it as NAME (in ``benchmarks/results/`` with ``--save``, else under
+``runs/benchmarks/``). Every run uses the test contexts of
 :func:`rdmp_gym.agents.protocol.final_test_seeds` (never used in training or selection) and the validation contexts
 for the curve and the choice of the best policy.
 """
@@ -23,6 +24,7 @@ import json
 import time
 from pathlib import Path
 
+from output import add_save_argument, results_dir
 from rdmp_gym.agents.cycle_training import CycleRun, summarise, train_cycle_search
 from rdmp_gym.agents.learners.cycle_search import CycleSearchConfig
 
@@ -59,7 +61,7 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
           f"failures {dict(causes)}, {run.wall_seconds:.0f} s", flush=True)
 
 
-def _gather(run_dir: Path, out: Path | None) -> None:
+def _gather(run_dir: Path, out: Path) -> None:
     runs = [CycleRun(**json.loads(path.read_text())) for path in sorted(run_dir.glob("seed_*.json"))]
     if not runs:
         raise SystemExit(f"--gather: no seed_*.json in {run_dir}")
@@ -75,9 +77,7 @@ def _gather(run_dir: Path, out: Path | None) -> None:
           f"[{success['low']:.3f}, {success['high']:.3f}], jerk ratio {table['jerk_ratio']:.2f}, "
           f"validation 0.8 after {table['episodes_to_0.8']}, 0.9 after {table['episodes_to_0.9']}, "
           f"failures {dict(causes)}")
-    if out is not None:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(table, indent=1))
+    out.write_text(json.dumps(table, indent=1))
 
 
 def main() -> None:
@@ -92,11 +92,12 @@ def main() -> None:
     parser.add_argument("--test", type=int, default=50)
     parser.add_argument("--random-returns", action="store_true")
     parser.add_argument("--run-dir", type=Path, required=True)
-    parser.add_argument("--gather", type=Path, nargs="?", const=Path("-"), default=None,
-                        help="print the table over the seeds in --run-dir (and write it to this JSON path)")
+    parser.add_argument("--gather", default=None, metavar="NAME",
+                        help="print the table over the seeds in --run-dir and write it as the JSON file NAME")
+    add_save_argument(parser)
     args = parser.parse_args()
     if args.gather is not None:
-        _gather(args.run_dir, None if str(args.gather) == "-" else args.gather)
+        _gather(args.run_dir, results_dir(args.save) / args.gather)
         return
     for seed in args.seeds:
         path = args.run_dir / f"seed_{seed}.json"

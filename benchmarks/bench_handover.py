@@ -26,12 +26,15 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
+from output import add_save_argument, results_dir
 from rdmp_gym.agents.cycle_training import executed_jerk_ratio
 
 ENVS = ("rdmp_gym/PandaWipeCycle-v3", "rdmp_gym/ArmarWipeCycle-v3", "rdmp_gym/PandaDrumCycle-v1",
         "rdmp_gym/ArmarDrumCycle-v1")
 SIZES = (0.02, 0.05, 0.1, 0.2)
 CYCLE = 2
+#: the committed figure (``--save``)
+FIGURE = Path(__file__).resolve().parent.parent / "docs" / "assets" / "handover.png"
 
 
 def _episode(env, change: np.ndarray | None, seed: int) -> dict:
@@ -117,8 +120,7 @@ def _figure(env_id: str, out: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--out", type=Path)
-    parser.add_argument("--figure", type=Path)
+    add_save_argument(parser)
     args = parser.parse_args()
     table = {}
     for env_id in ENVS:
@@ -133,11 +135,9 @@ def main() -> None:
             print(f"  {size:4.2f}  " + "  ".join(f"{np.nanmax([r[key] for r in mine]):11.2f}" for key in (
                 "jerk_ratio_planned", "accel_step_planned", "jerk_ratio_executed", "joint_accel_ratio",
                 "episode_jerk_ratio")) + f"  {all(r['zero_change_exact'] for r in mine)}")
-    if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps({"sizes": SIZES, "cycle": CYCLE, "rows": table}, indent=1))
-    if args.figure is not None:
-        _figure(ENVS[0], args.figure)
+    (results_dir(args.save) / "handover.json").write_text(json.dumps({"sizes": SIZES, "cycle": CYCLE, "rows": table},
+                                                                      indent=1))
+    _figure(ENVS[0], FIGURE if args.save else results_dir(False) / "handover.png")
 
 
 if __name__ == "__main__":
