@@ -2,10 +2,11 @@
 
 One env step is one cycle (:mod:`rdmp_gym.envs.cycle_env`); the episode's reward comes at its last step. The
 policy starts at the imitation: its mean action is 0 before learning (the output layer's weights scaled by 0.01 and
-its bias 0, as SB3 initialises PPO's) and its exploration standard deviation is ``sigma`` (SAC's and PPO's
-``log_std_init``); SAC acts with its policy from the first step (no uniform random warm-up, which would leave the
-imitation). Validation and test are as for :func:`~rdmp_gym.agents.cycle_training.train_cycle_search` (the
-deterministic policy on the same contexts), so their runs compare seed by seed.
+its bias 0) and its exploration standard deviation is ``sigma`` (PPO's ``log_std_init``; SAC's set as the one-step
+SAC agent sets it, :func:`~rdmp_gym.agents.sb3.start_sac_actor`); SAC acts with its policy from the first step
+(no uniform random warm-up, which would leave the imitation). Validation and test are as for
+:func:`~rdmp_gym.agents.cycle_training.train_cycle_search` (the deterministic policy on the same contexts), so their
+runs compare seed by seed.
 """
 
 from __future__ import annotations
@@ -23,25 +24,26 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from .cycle_training import CycleRun, cycle_episode, cycle_scores, failure_counts
 from .protocol import final_test_seeds, stratified_validation_seeds
+from .sb3 import start_sac_actor
 
 __all__ = ["train_cycle_sb3"]
 
 
 def _model(algorithm: str, env: gym.Env, seed: int, sigma: float, episode_steps: int, rollouts: int) -> Any:
     """SAC or PPO on ``env`` with the policy at the imitation (see the module docstring)."""
-    kwargs = {"policy_kwargs": {"log_std_init": float(np.log(sigma))}, "seed": seed, "verbose": 0, "device": "cpu"}
+    kwargs = {"seed": seed, "verbose": 0, "device": "cpu"}
     if algorithm == "sac":
         model = SAC("MlpPolicy", env, learning_starts=0, batch_size=64, buffer_size=100_000, **kwargs)
-        head = model.actor.mu
-    elif algorithm == "ppo":
-        model = PPO("MlpPolicy", env, n_steps=episode_steps * rollouts, batch_size=episode_steps * rollouts // 2,
-                    n_epochs=10, ent_coef=0.0, target_kl=0.05, **kwargs)
-        head = model.policy.action_net
-    else:
+        start_sac_actor(model, np.zeros(env.action_space.shape), sigma)
+        return model
+    if algorithm != "ppo":
         raise ValueError(f"algorithm: expected 'sac' or 'ppo', got {algorithm!r}")
+    model = PPO("MlpPolicy", env, n_steps=episode_steps * rollouts, batch_size=episode_steps * rollouts // 2,
+                n_epochs=10, ent_coef=0.0, target_kl=0.05, policy_kwargs={"log_std_init": float(np.log(sigma))},
+                **kwargs)
     with torch.no_grad():
-        head.weight.mul_(0.01)
-        head.bias.zero_()
+        model.policy.action_net.weight.mul_(0.01)
+        model.policy.action_net.bias.zero_()
     return model
 
 

@@ -35,7 +35,7 @@ from .sb3_config import PPOConfig, SACConfig
 from .sb3_smooth_actions import SmoothActions, SmoothActionVecEnv
 from .tasks import TaskSpec
 
-__all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs"]
+__all__ = ["PPOAgent", "SACAgent", "load_weights", "parallel_envs", "start_sac_actor"]
 
 
 class _EpisodeCollector(BaseCallback):
@@ -133,6 +133,19 @@ def load_weights(model: PPO | SAC, state: Mapping[str, Any], name: str) -> None:
     except (ValueError, KeyError, RuntimeError) as error:
         raise ValueError(f"state.model: not a {name} model of this run's shape ({error})") from error
     model.num_timesteps, model._n_updates = state["num_timesteps"], state["n_updates"]
+
+
+def start_sac_actor(model: SAC, action: np.ndarray, sigma: float) -> None:
+    """Start SAC's policy at ``action [n]`` (its mean, squashed) with standard deviation ``sigma`` (before the
+    squash) for every observation: the output layers' weights scaled by 0.01 (SAC's standard deviation is an output
+    of the network, not a parameter; ``log_std_init`` does not set it)."""
+    start = np.arctanh(np.clip(np.asarray(action, dtype=np.float64), -0.999, 0.999))
+    actor = model.actor
+    with torch.no_grad():
+        actor.mu.weight.mul_(0.01)
+        actor.mu.bias.copy_(torch.as_tensor(start, dtype=torch.float32))
+        actor.log_std.weight.mul_(0.01)
+        actor.log_std.bias.fill_(math.log(sigma))
 
 
 class _SB3Agent:
@@ -267,13 +280,7 @@ class SACAgent(_SB3Agent):
                          gamma=0.0, train_freq=(rollouts, "step"), gradient_steps=self.config.gradient_steps * rollouts,
                          seed=seed, device="cpu", verbose=0,
                          policy_kwargs={"net_arch": hidden})
-        start = np.arctanh(np.clip(_latent(self.smooth, initial_action), -0.999, 0.999))
-        actor = self.model.actor
-        with torch.no_grad():    # mean at the start action and std = sigma for every context, at first
-            actor.mu.weight.mul_(0.01)
-            actor.mu.bias.copy_(torch.as_tensor(start, dtype=torch.float32))
-            actor.log_std.weight.mul_(0.01)
-            actor.log_std.bias.fill_(math.log(self.config.sigma))
+        start_sac_actor(self.model, _latent(self.smooth, initial_action), self.config.sigma)
         self.model.set_logger(_logger(False, None))
         self._collector = _EpisodeCollector(_task_contract(task), "actions", self.smooth)
 

@@ -45,6 +45,20 @@ def test_the_zero_policy_is_the_imitation_in_every_cycle(tiny_runs):
     env.close()
 
 
+@pytest.mark.parametrize("algorithm", ["sac", "ppo"])
+def test_sb3_on_the_cycle_face_starts_at_the_imitation_with_the_given_exploration(algorithm):
+    import gymnasium as gym
+    from rdmp_gym.agents.cycle_sb3 import _model
+
+    env = gym.make("rdmp_gym/PandaWipeCycle-v3")
+    model = _model(algorithm, env, seed=0, sigma=0.3, episode_steps=7, rollouts=2)
+    observation = env.observation_space.sample()
+    assert np.abs(model.predict(observation, deterministic=True)[0]).max() < 0.01
+    draws = np.stack([model.predict(observation, deterministic=False)[0] for _ in range(200)])
+    assert 0.25 < draws.std() < 0.32                 # SAC squashes its N(0, 0.3): a standard deviation near 0.29
+    env.close()
+
+
 @pytest.mark.slow
 def test_sac_on_the_cycle_face_runs_and_keeps_the_best_policy():
     from rdmp_gym.agents.cycle_sb3 import train_cycle_sb3
