@@ -225,8 +225,7 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
             costs = np.array([-r["return"] for r in results])
             if random_returns:
                 costs = control_rng.standard_normal(rollouts)
-            search.update(CycleBatch(np.stack([r["observations"] for r in results]),
-                                     np.stack([r["actions"] for r in results]), costs,
+            search.update(CycleBatch(np.stack([r["observations"] for r in results]), costs,
                                      np.stack([r["spent"] for r in results]), shared, own))
             used += rollouts
             if search.updates % eval_every == 0 or used + rollouts > episodes:

@@ -38,7 +38,6 @@ def _targets(context: np.ndarray) -> np.ndarray:
 def _batch(search: CycleSearch, rng: np.random.Generator, count: int, explore: bool = True) -> CycleBatch:
     """``count`` episodes of a task where cycle c costs ``|a_c - target_c(context)|^2``."""
     observations = np.zeros((count, CYCLES, 2))
-    actions = np.zeros((count, CYCLES, ACTIONS))
     spent, costs = np.zeros((count, CYCLES)), np.zeros(count)
     shared, own = search.exploration(count) if explore else (np.zeros((count, ACTIONS)),
                                                              np.zeros((count, CYCLES, ACTIONS)))
@@ -49,9 +48,8 @@ def _batch(search: CycleSearch, rng: np.random.Generator, count: int, explore: b
             observations[i, cycle] = (context, cycle / CYCLES)
             spent[i, cycle] = costs[i]
             previous = search.act(cycle, observations[i, cycle], previous, shared[i] + own[i, cycle])
-            actions[i, cycle] = previous
             costs[i] += float(np.sum((previous - target[cycle]) ** 2))
-    return CycleBatch(observations, actions, costs, spent, shared, own)
+    return CycleBatch(observations, costs, spent, shared, own)
 
 
 def _search(seed: int, active: np.ndarray | None = None) -> CycleSearch:
@@ -66,8 +64,7 @@ def _train(seed: int, random_costs: bool) -> float:
     for _ in range(40):
         batch = _batch(search, rng, 16)
         if random_costs:
-            batch = CycleBatch(batch.observations, batch.actions, rng.standard_normal(16), batch.spent, batch.shared,
-                               batch.own)
+            batch = CycleBatch(batch.observations, rng.standard_normal(16), batch.spent, batch.shared, batch.own)
         search.update(batch)
     return float(np.mean(_batch(search, np.random.default_rng(999), 64, explore=False).costs))
 
@@ -113,6 +110,9 @@ def test_bad_inputs_are_refused_by_name():
     with pytest.raises(ValueError, match="sigma"):
         CycleSearchConfig(sigma=0.0)
     with pytest.raises(ValueError, match="batch"):
-        CycleBatch(np.zeros((2, 3, 2)), np.zeros((2, 2, 4)), np.zeros(2), np.zeros((2, 3)))
+        CycleBatch(np.zeros((2, 3, 2)), np.zeros(2), np.zeros((2, 3)), np.zeros((2, 4)), np.zeros((2, 2, 4)))
+    with pytest.raises(ValueError, match="batch"):
+        CycleBatch(np.zeros((2, 3, 2)), np.zeros(2), np.zeros((2, 3)), np.zeros((2, 5)), np.zeros((2, 3, 4)))
     with pytest.raises(ValueError, match="costs"):
-        CycleBatch(np.zeros((2, 3, 2)), np.zeros((2, 3, 4)), np.array([0.0, np.nan]), np.zeros((2, 3)))
+        CycleBatch(np.zeros((2, 3, 2)), np.array([0.0, np.nan]), np.zeros((2, 3)), np.zeros((2, 4)),
+                   np.zeros((2, 3, 4)))

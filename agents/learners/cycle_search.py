@@ -58,7 +58,7 @@ class CycleSearchConfig(Settings):
         shared: the part of the exploration's variance that the cycles of an episode share (0: independent
             cycles, 1: one draw per episode).
         reuse: batches (this one and earlier ones) whose samples enter each update.
-        gain_prior: ridge pulling each cycle's map towards its previous value (and of the baselines).
+        gain_prior: the ridge of the gains in each update's fits of the draws (and of the baselines).
         decay: factor applied to sigma after every update.
         min_sigma: exploration floor.
     """
@@ -85,36 +85,31 @@ class CycleSearchConfig(Settings):
 
 @dataclass(frozen=True)
 class CycleBatch:
-    """Results of ``N`` episodes on a cycle-level face with ``C`` cycles.
+    """Results of ``N`` exploring episodes on a cycle-level face with ``C`` cycles.
 
     Attributes:
         observations: ``[N, C, o]`` each cycle's observation (NaN for cycles an episode did not reach).
-        actions: ``[N, C, n]`` each cycle's executed action (clipped).
         costs: ``[N]`` episode costs ``-return``.
         spent: ``[N, C]`` the cost trace summed before each cycle's start (0 for the first cycle).
         shared, own: ``[N, n]``, ``[N, C, n]`` the exploration's parts as drawn (:meth:`CycleSearch.exploration`),
-            scaled as executed; None for the batch of a policy that did not explore.
+            scaled as executed.
     """
 
     observations: np.ndarray
-    actions: np.ndarray
     costs: np.ndarray
     spent: np.ndarray
-    shared: np.ndarray | None = None
-    own: np.ndarray | None = None
+    shared: np.ndarray
+    own: np.ndarray
 
     def __post_init__(self) -> None:
         size, cycles = self.observations.shape[:2]
-        if self.actions.shape[:2] != (size, cycles) or self.costs.shape != (size,) or self.spent.shape != (
-                size, cycles):
-            raise ValueError(f"batch: expected observations [N, C, o], actions [N, C, n], costs [N], spent [N, C]; "
-                             f"got {self.observations.shape}, {self.actions.shape}, {self.costs.shape}, "
-                             f"{self.spent.shape}")
+        if (self.costs.shape != (size,) or self.spent.shape != (size, cycles) or self.own.shape[:2] != (size, cycles)
+                or self.shared.shape != (size, self.own.shape[2])):
+            raise ValueError(f"batch: expected observations [N, C, o], costs [N], spent [N, C], shared [N, n], own "
+                             f"[N, C, n]; got {self.observations.shape}, {self.costs.shape}, {self.spent.shape}, "
+                             f"{self.shared.shape}, {self.own.shape}")
         if not np.all(np.isfinite(self.costs)):
             raise ValueError("batch.costs: contains NaN or infinite values")
-        if (self.shared is None) != (self.own is None) or (self.own is not None and (
-                self.own.shape != self.actions.shape or self.shared.shape != (size, self.actions.shape[2]))):
-            raise ValueError("batch.shared, batch.own: expected both (shapes [N, n], [N, C, n]) or neither")
 
 
 def trust_region_weights(advantages: np.ndarray, epsilon: float) -> np.ndarray:
@@ -199,8 +194,6 @@ class CycleSearch:
 
     def update(self, batch: CycleBatch) -> None:
         """Move the maps by the credit of the draws of ``batch`` and the ``reuse - 1`` batches before it."""
-        if batch.own is None:
-            raise ValueError("batch: expected the exploration's draws (shared, own) of its episodes")
         self._history = [*self._history, batch][-self.config.reuse:]
         observations = np.concatenate([b.observations for b in self._history])
         shared = np.concatenate([b.shared for b in self._history])                           # [N, n]
