@@ -9,7 +9,6 @@ the validation contexts, the best policy's scores on the test contexts) and ``cu
 
 from __future__ import annotations
 
-import collections
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +18,7 @@ import tyro
 from rdmp_gym.envs.registration import LATEST_ENV_ID
 from tqdm.auto import tqdm
 
-from .cycle_training import CycleRun, train_cycle_search
+from .cycle_training import CycleRun, failure_counts, train_cycle_search
 from .learners.cycle_search import CycleSearchConfig
 
 __all__ = ["CycleCommand", "command_cycles", "parse_cycles"]
@@ -104,7 +103,7 @@ def command_cycles(argv: Sequence[str]) -> None:
     run = _run(command)
     run.save(command.out / "run.json")
     _plot(run, command.out / "curve.png")
-    causes = collections.Counter(c for entry in run.test["failures"] for c in filter(None, entry.split("+")))
+    causes = failure_counts(run.test["failures"])
     print(f"{run.env_id} ({command.agent}, seed {command.seed}): test success {run.test['success_rate']:.2f} on "
           f"{len(run.test['seeds'])} contexts (best policy after {run.best_episodes} episodes), mean return "
-          f"{run.test['mean_return']:.3f}, failures {dict(causes)}; {run.wall_seconds:.0f} s -> {command.out}")
+          f"{run.test['mean_return']:.3f}, failures {causes}; {run.wall_seconds:.0f} s -> {command.out}")

@@ -10,7 +10,6 @@ used. The same seed gives the same numbers, whatever the number of workers.
 
 from __future__ import annotations
 
-import collections
 import json
 import os
 import threading
@@ -26,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 from rdmp_gym.envs.registration import cycle_id
 
-from .episodes import episode_metrics
+from .episodes import episode_metrics, failure_contexts
 from .learners.contextual import action_layout
 from .learners.cycle_search import CycleBatch, CycleSearch, CycleSearchConfig, act_with, stack_cycles
 from .learners.smooth_exploration import block_layout
@@ -249,7 +248,7 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
 
 def failure_counts(failures: Sequence[str]) -> dict[str, int]:
     """``{cause: episodes}`` of per-episode failures (causes joined by ``"+"``, ``""`` for a success)."""
-    return dict(collections.Counter(cause for entry in failures for cause in filter(None, entry.split("+"))))
+    return {cause: len(where) for cause, where in failure_contexts(list(failures)).items()}
 
 
 def summarise(runs: Sequence[CycleRun]) -> dict[str, Any]:

@@ -19,13 +19,12 @@ for the curve and the choice of the best policy.
 from __future__ import annotations
 
 import argparse
-import collections
 import json
 import time
 from pathlib import Path
 
 from output import add_save_argument, results_dir
-from rdmp_gym.agents.cycle_training import CycleRun, summarise, train_cycle_search
+from rdmp_gym.agents.cycle_training import CycleRun, failure_counts, summarise, train_cycle_search
 from rdmp_gym.agents.learners.cycle_search import CycleSearchConfig
 
 
@@ -56,9 +55,9 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
         run = train_cycle_sb3(args.env, args.agent, episodes=args.episodes, seed=seed, rollouts=args.rollouts,
                               validation=args.validation, test=args.test, progress=progress)
     run.save(path)
-    causes = collections.Counter(c for entry in run.test["failures"] for c in filter(None, entry.split("+")))
+    causes = failure_counts(run.test["failures"])
     print(f"seed {seed}: test success {run.test['success_rate']:.2f} (best after {run.best_episodes} episodes), "
-          f"failures {dict(causes)}, {run.wall_seconds:.0f} s", flush=True)
+          f"failures {causes}, {run.wall_seconds:.0f} s", flush=True)
 
 
 def _gather(run_dir: Path, out: Path) -> None:
@@ -66,9 +65,8 @@ def _gather(run_dir: Path, out: Path) -> None:
     if not runs:
         raise SystemExit(f"--gather: no seed_*.json in {run_dir}")
     table = summarise(runs)
-    causes = collections.Counter(c for run in runs for entry in run.test["failures"]
-                                 for c in filter(None, entry.split("+")))
-    table.update({"env": runs[0].env_id, "seeds": [run.seed for run in runs], "failure_causes": dict(causes),
+    causes = failure_counts([entry for run in runs for entry in run.test["failures"]])
+    table.update({"env": runs[0].env_id, "seeds": [run.seed for run in runs], "failure_causes": causes,
                   "config": runs[0].config, "wall_seconds": [run.wall_seconds for run in runs],
                   "curves": {run.seed: run.curve for run in runs},
                   "test_success_per_seed": [run.test["success_rate"] for run in runs]})
@@ -76,7 +74,7 @@ def _gather(run_dir: Path, out: Path) -> None:
     print(f"{table['env']}: {len(runs)} seeds, test success IQM {success['estimate']:.3f} "
           f"[{success['low']:.3f}, {success['high']:.3f}], jerk ratio {table['jerk_ratio']:.2f}, "
           f"validation 0.8 after {table['episodes_to_0.8']}, 0.9 after {table['episodes_to_0.9']}, "
-          f"failures {dict(causes)}")
+          f"failures {causes}")
     out.write_text(json.dumps(table, indent=1))
 
 
