@@ -30,10 +30,17 @@ from .learners.contextual import action_layout
 from .learners.cycle_search import CycleBatch, CycleSearch, CycleSearchConfig, act_with, stack_cycles
 from .learners.smooth_exploration import block_layout
 from .pool import watch_parent
-from .protocol import TRAIN_SEED_LIMIT, final_test_seeds, interval, path_smoothness, stratified_validation_seeds
+from .protocol import (
+    TRAIN_SEED_LIMIT,
+    context_observations,
+    final_test_seeds,
+    interval,
+    path_smoothness,
+    stratified_validation_seeds,
+)
 
-__all__ = ["CycleActor", "CycleRun", "CycleRunner", "cycle_episode", "cycle_scores", "executed_jerk_ratio",
-           "failure_counts", "linear_actor", "summarise", "train_cycle_search"]
+__all__ = ["CycleActor", "CycleRun", "CycleRunner", "EpisodicPolicy", "cycle_episode", "cycle_scores",
+           "executed_jerk_ratio", "failure_counts", "linear_actor", "summarise", "train_cycle_search"]
 
 #: an action dimension acts in a cycle where its activation reaches this anywhere in the cycle
 _ACTIVE = 1e-3
@@ -41,6 +48,8 @@ _ACTIVE = 1e-3
 
 #: ``act(cycle, observation [o], previous [n] or None) -> action [n]``: a policy on a cycle face
 CycleActor = Callable[[int, np.ndarray, "np.ndarray | None"], np.ndarray]
+#: ``policy(contexts [E, c]) -> actions [E, n]``: an episodic policy (one action per context for the whole episode)
+EpisodicPolicy = Callable[[np.ndarray], np.ndarray]
 
 
 def linear_actor(policy: dict[str, np.ndarray], noise: np.ndarray | None = None) -> CycleActor:
@@ -188,13 +197,15 @@ def cycle_scores(results: list[dict[str, Any]], seeds: np.ndarray) -> dict[str, 
 def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16, seed: int = 0, workers: int = 2,
                        config: CycleSearchConfig | None = None, eval_every: int = 5, validation: int = 20,
                        test: int = 50, random_returns: bool = False, env_kwargs: dict[str, Any] | None = None,
-                       progress: Callable[[int, dict[str, float]], None] | None = None, validation_pool: int = 400
-                       ) -> CycleRun:
+                       progress: Callable[[int, dict[str, float]], None] | None = None, validation_pool: int = 400,
+                       base: EpisodicPolicy | None = None) -> CycleRun:
     """Train the cycle-by-cycle search on ``env_id`` (an episodic id or its cycle face's) within ``episodes``
     training episodes of ``rollouts`` per update; ``random_returns``: the control that sees standard-normal costs
     instead of the episodes'. ``progress(episodes, row)`` after each evaluation; ``validation_pool``: the validation
     contexts the stratified choice sorts (:func:`~rdmp_gym.agents.protocol.stratified_validation_seeds`; its
-    default is the other learners'). Returns what it measured."""
+    default is the other learners'); ``base``: an episodic policy whose action for the episode's context every
+    cycle's action is taken around (the maps are then cycle-by-cycle changes of it; None: of the imitation).
+    Returns what it measured."""
     config = config or CycleSearchConfig()
     face_id = env_id if "Cycle-v" in env_id else cycle_id(env_id)
     start = time.perf_counter()
@@ -207,20 +218,25 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
         size = env.observation_space.shape[0]
         zero = {"maps": np.zeros((env.n_cycles, env.action_space.shape[0], size + 1)), "center": np.zeros(size),
                 "scale": np.zeros(size), "active": active}
-        first = runner.run(zero, episode_rng.integers(0, TRAIN_SEED_LIMIT, rollouts))      # the imitation
+        seeds = episode_rng.integers(0, TRAIN_SEED_LIMIT, rollouts)
+        first = runner.run(zero, seeds, _offsets(env, base, seeds))                      # the start policy
         observed = np.concatenate([r["observations"] for r in first])
         center, scale = _standardisation(observed[np.all(np.isfinite(observed), axis=1)])
         search = CycleSearch(env.action_space.shape[0], env.face.observation_space.shape[0], active, center, scale,
                              blocks, config,
                              np.random.default_rng(learner_seq))
         validation_seeds = stratified_validation_seeds(env.face, validation, pool=max(validation_pool, validation))
+        validation_offsets = _offsets(env, base, validation_seeds)
         run = CycleRun(face_id, seed, {"episodes": episodes, "rollouts": rollouts, "random_returns": random_returns,
                                        **config.to_dict()})
-        best, best_key, used = search.policy(), (-1.0, -np.inf), rollouts
+        chosen = _BestPolicy(runner, validation_seeds, validation_offsets, run, progress)
+        used = rollouts
+        if base is not None:
+            chosen.consider(search, 0)                            # the base alone is a candidate
         while used + rollouts <= episodes:
             seeds = episode_rng.integers(0, TRAIN_SEED_LIMIT, rollouts)
             shared, own = search.exploration(rollouts)
-            results = runner.run(search.policy(), seeds, shared[:, None, :] + own)
+            results = runner.run(search.policy(), seeds, _offsets(env, base, seeds) + shared[:, None, :] + own)
             costs = np.array([-r["return"] for r in results])
             if random_returns:
                 costs = control_rng.standard_normal(rollouts)
@@ -228,22 +244,51 @@ def train_cycle_search(env_id: str, *, episodes: int = 1000, rollouts: int = 16,
                                      np.stack([r["spent"] for r in results]), shared, own))
             used += rollouts
             if search.updates % eval_every == 0 or used + rollouts > episodes:
-                judged = cycle_scores(runner.run(search.policy(), validation_seeds), validation_seeds)
-                row = {"episodes": used, "validation_success": judged["success_rate"],
-                       "validation_return": judged["mean_return"], "sigma": search.sigma,
-                       "validation_failures": failure_counts(judged["failures"])}
-                run.curve.append(row)
-                if progress is not None:
-                    progress(used, row)
-                key = (judged["success_rate"], judged["mean_return"])
-                if key > best_key:
-                    best, best_key, run.best_episodes = search.policy(), key, used
+                chosen.consider(search, used)
+        best = chosen.policy or search.policy()
         test_seeds = final_test_seeds(test)
-        run.test = cycle_scores(runner.run(best, test_seeds), test_seeds)
+        run.test = cycle_scores(runner.run(best, test_seeds, _offsets(env, base, test_seeds)), test_seeds)
         run.wall_seconds = time.perf_counter() - start
         return run
     finally:
         runner.close()
+
+
+class _BestPolicy:
+    """The best of a search's policies on the validation contexts (success rate, then mean return), each evaluation
+    a row of the run's curve."""
+
+    def __init__(self, runner: CycleRunner, seeds: np.ndarray, offsets: np.ndarray, run: CycleRun,
+                 progress: Callable[[int, dict[str, float]], None] | None):
+        self.runner, self.seeds, self.offsets, self.run, self.progress = runner, seeds, offsets, run, progress
+        self.policy: dict[str, np.ndarray] | None = None
+        self.key = (-1.0, -np.inf)
+
+    def consider(self, search: CycleSearch, used: int) -> None:
+        """Evaluate ``search``'s policy after ``used`` episodes, note the row and keep the policy if it is the best."""
+        policy = search.policy()
+        judged = cycle_scores(self.runner.run(policy, self.seeds, self.offsets), self.seeds)
+        row = {"episodes": used, "validation_success": judged["success_rate"],
+               "validation_return": judged["mean_return"], "sigma": search.sigma,
+               "validation_failures": failure_counts(judged["failures"])}
+        self.run.curve.append(row)
+        if self.progress is not None:
+            self.progress(used, row)
+        key = (judged["success_rate"], judged["mean_return"])
+        if key > self.key:
+            self.policy, self.key, self.run.best_episodes = policy, key, used
+
+
+def _offsets(env: Any, base: EpisodicPolicy | None, seeds: np.ndarray) -> np.ndarray:
+    """``[N, C, n]`` the base policy's action for the context of each reset seed ``[N]``, in every cycle (0 without a
+    base: the imitation)."""
+    zero = np.zeros((len(seeds), env.n_cycles, env.action_space.shape[0]))
+    if base is None:
+        return zero
+    actions = np.asarray(base(context_observations(env.face, seeds)), dtype=np.float64)
+    if actions.shape != (len(seeds), zero.shape[2]) or not np.all(np.isfinite(actions)):
+        raise ValueError(f"base: expected finite actions [{len(seeds)}, {zero.shape[2]}], got shape {actions.shape}")
+    return zero + actions[:, None, :]
 
 
 def failure_counts(failures: Sequence[str]) -> dict[str, int]:

@@ -1,6 +1,8 @@
 """Learners on a task's cycle-level face: test success, episodes to validation 0.8 / 0.9, jerk, failure causes.
 
 ``--agent cycle`` (default) is the cycle-by-cycle search (:func:`rdmp_gym.agents.cycle_training.train_cycle_search`),
+``--agent reacting`` the reacting learner (:func:`rdmp_gym.agents.reacting.train_reacting`: an open-loop stage, then
+the cycles' changes of its policy; its stages' runs in ``RUN_DIR/seed_<n>/``),
 ``--agent sac`` / ``ppo`` stable-baselines3 on the same face (:func:`rdmp_gym.agents.cycle_sb3.train_cycle_sb3`).
 
     python benchmarks/bench_cycle_search.py --env rdmp_gym/ArmarWipe-v3 --seeds 0-9 --run-dir runs/cycle_armar
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import time
 from pathlib import Path
 
@@ -46,13 +49,21 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
               f"{time.perf_counter() - start:.0f} s", flush=True)
 
     if args.agent == "cycle":
-        run = train_cycle_search(args.env, episodes=args.episodes, rollouts=args.rollouts, seed=seed,
+        run = train_cycle_search(args.env, episodes=args.episodes, rollouts=args.rollouts or 16, seed=seed,
                                  workers=args.workers, config=CycleSearchConfig(), validation=args.validation,
                                  test=args.test, random_returns=args.random_returns, progress=progress)
+    elif args.agent == "reacting":
+        from rdmp_gym.agents.reacting import train_reacting
+
+        stages = args.run_dir / f"seed_{seed}"
+        shutil.rmtree(stages, ignore_errors=True)            # an interrupted seed starts again
+        run = train_reacting(args.env, stages, episodes=args.episodes, open_loop=args.open_loop, seed=seed,
+                             workers=args.workers, rollouts=args.rollouts or 20, validation=args.validation,
+                             test=args.test, progress=progress)
     else:
         from rdmp_gym.agents.cycle_sb3 import train_cycle_sb3
 
-        run = train_cycle_sb3(args.env, args.agent, episodes=args.episodes, seed=seed, rollouts=args.rollouts,
+        run = train_cycle_sb3(args.env, args.agent, episodes=args.episodes, seed=seed, rollouts=args.rollouts or 16,
                               validation=args.validation, test=args.test, progress=progress)
     run.save(path)
     causes = failure_counts(run.test["failures"])
@@ -81,10 +92,12 @@ def _gather(run_dir: Path, out: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="rdmp_gym/ArmarWipe-v3")
-    parser.add_argument("--agent", choices=("cycle", "sac", "ppo"), default="cycle")
+    parser.add_argument("--agent", choices=("cycle", "reacting", "sac", "ppo"), default="cycle")
     parser.add_argument("--seeds", default="0-9", type=_seeds)
     parser.add_argument("--episodes", type=int, default=1000)
-    parser.add_argument("--rollouts", type=int, default=16)
+    parser.add_argument("--rollouts", type=int, default=None, help="episodes per update (default: 16; reacting 20)")
+    parser.add_argument("--open-loop", type=float, default=0.6,
+                        help="reacting: the share of the episodes for the open-loop stage")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--validation", type=int, default=20)
     parser.add_argument("--test", type=int, default=50)
