@@ -42,7 +42,8 @@ def train_reacting(env_id: str, out: str | Path, *, episodes: int = 1000, open_l
                    options: Mapping[str, Any] | None = None, residual: CycleSearchConfig | None = None,
                    progress: Callable[[int, dict[str, float]], None] | None = None) -> CycleRun:
     """Train the reacting learner on the episodic task ``env_id`` within ``episodes`` episodes (see the module
-    docstring); the open-loop stage's run directory is ``out / "open_loop"``. ``options``: the open-loop learner's
+    docstring); the open-loop stage's run directory is ``out / "open_loop"`` (a run there with the same settings is
+    continued, or reused where it has finished). ``options``: the open-loop learner's
     settings (default :data:`OPEN_LOOP_OPTIONS`), ``residual``: the reacting stage's (default :data:`RESIDUAL`).
     Returns the reacting stage's run, its curve preceded by the open-loop stage's."""
     if not 0.0 < open_loop < 1.0:
@@ -53,7 +54,8 @@ def train_reacting(env_id: str, out: str | Path, *, episodes: int = 1000, open_l
     config = TrainConfig(agent="bbrl", env_id=env_id, updates=updates, rollouts=rollouts, seed=seed, workers=workers,
                          env_kwargs={}, options=dict(OPEN_LOOP_OPTIONS if options is None else options),
                          eval_episodes=validation, eval_every=5, shared_context=False, stratified_validation=True)
-    run_dir = train(config, Path(out) / "open_loop")
+    stage = Path(out) / "open_loop"
+    run_dir = train(config, stage, resume=(stage / "config.json").exists())
     used = updates * rollouts
     state = run_dir.load_checkpoint()["agent"]["learner"]
 

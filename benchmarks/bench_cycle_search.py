@@ -2,7 +2,8 @@
 
 ``--agent cycle`` (default) is the cycle-by-cycle search (:func:`rdmp_gym.agents.cycle_training.train_cycle_search`),
 ``--agent reacting`` the reacting learner (:func:`rdmp_gym.agents.reacting.train_reacting`: an open-loop stage, then
-the cycles' changes of its policy; its stages' runs in ``RUN_DIR/seed_<n>/``),
+the cycles' changes of its policy; its open-loop stage's run in ``RUN_DIR/seed_<n>/open_loop``, continued or reused
+where it exists),
 ``--agent sac`` / ``ppo`` stable-baselines3 on the same face (:func:`rdmp_gym.agents.cycle_sb3.train_cycle_sb3`).
 
     python benchmarks/bench_cycle_search.py --env rdmp_gym/ArmarWipe-v3 --seeds 0-9 --run-dir runs/cycle_armar
@@ -22,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import time
 from pathlib import Path
 
@@ -39,6 +39,15 @@ def _seeds(text: str) -> list[int]:
     return [int(part) for part in text.split(",")]
 
 
+def _settings(default: CycleSearchConfig, changes: list[str]) -> CycleSearchConfig:
+    """``default`` with the ``KEY=VALUE`` changes of ``--set`` (VALUE read as JSON)."""
+    values = default.to_dict()
+    for change in changes:
+        key, _, value = change.partition("=")
+        values[key] = json.loads(value)
+    return CycleSearchConfig.from_dict(values)
+
+
 def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
     start = time.perf_counter()
 
@@ -50,21 +59,22 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
 
     if args.agent == "cycle":
         run = train_cycle_search(args.env, episodes=args.episodes, rollouts=args.rollouts or 16, seed=seed,
-                                 workers=args.workers, config=CycleSearchConfig(), validation=args.validation,
+                                 workers=args.workers, config=_settings(CycleSearchConfig(), args.set),
+                                 validation=args.validation,
                                  test=args.test, random_returns=args.random_returns, progress=progress)
     elif args.agent == "reacting":
-        from rdmp_gym.agents.reacting import train_reacting
+        from rdmp_gym.agents.reacting import RESIDUAL, train_reacting
 
-        stages = args.run_dir / f"seed_{seed}"
-        shutil.rmtree(stages, ignore_errors=True)            # an interrupted seed starts again
-        run = train_reacting(args.env, stages, episodes=args.episodes, open_loop=args.open_loop, seed=seed,
-                             workers=args.workers, rollouts=args.rollouts or 20, validation=args.validation,
-                             test=args.test, progress=progress)
+        run = train_reacting(args.env, args.run_dir / f"seed_{seed}", episodes=args.episodes,
+                             open_loop=args.open_loop, seed=seed, workers=args.workers, rollouts=args.rollouts or 20,
+                             validation=args.validation, test=args.test, residual=_settings(RESIDUAL, args.set),
+                             progress=progress)
     else:
         from rdmp_gym.agents.cycle_sb3 import train_cycle_sb3
 
         run = train_cycle_sb3(args.env, args.agent, episodes=args.episodes, seed=seed, rollouts=args.rollouts or 16,
-                              validation=args.validation, test=args.test, progress=progress)
+                              validation=args.validation, test=args.test, residual=_settings(RESIDUAL, args.set),
+                             progress=progress)
     run.save(path)
     causes = failure_counts(run.test["failures"])
     print(f"seed {seed}: test success {run.test['success_rate']:.2f} (best after {run.best_episodes} episodes), "
@@ -102,6 +112,8 @@ def main() -> None:
     parser.add_argument("--validation", type=int, default=20)
     parser.add_argument("--test", type=int, default=50)
     parser.add_argument("--random-returns", action="store_true")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a setting of the cycle search (reacting: of its reacting stage), e.g. pooled=true")
     parser.add_argument("--run-dir", type=Path, required=True)
     parser.add_argument("--gather", default=None, metavar="NAME",
                         help="print the table over the seeds in --run-dir and write it as the JSON file NAME")

@@ -61,6 +61,9 @@ class CycleSearchConfig(Settings):
         gain_prior: the ridge of the gains in each update's fits of the draws (and of the baselines).
         decay: factor applied to sigma after every update.
         min_sigma: exploration floor.
+        pooled: the cycles after the first share one map, fitted to the own draws of all of them (each judged by its
+            own cycle's credit), instead of one map per cycle: the cycles then differ only where what they observe
+            differs, and every cycle's samples inform the one map.
     """
 
     sigma: float = 0.3
@@ -71,6 +74,7 @@ class CycleSearchConfig(Settings):
     gain_prior: float = 1.0
     decay: float = 0.96
     min_sigma: float = 0.03
+    pooled: bool = False
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, 1.0, low_open=True)
@@ -203,19 +207,38 @@ class CycleSearch:
         contexts[:, 1 + self.context_size:] = 0.0        # the shared map's gains: on the context alone
         baseline = ridge_hat(contexts, self.config.gain_prior * len(contexts))   # shrinks as that many samples
         common = self._reweighted(contexts, shared, to_go[:, 0] - baseline @ to_go[:, 0])     # [n, F + 1]
-        for cycle in range(self.n_cycles):
-            reached = np.all(np.isfinite(observations[:, cycle]), axis=1)
-            change = common.copy()
-            if reached.sum() >= 2:
-                x = np.stack([self.features(o) for o in observations[reached, cycle]])
-                to_go_c = to_go[reached, cycle]
-                hat = ridge_hat(contexts[reached], self.config.gain_prior * int(reached.sum()))
-                change += self._reweighted(x, own[reached, cycle], to_go_c - hat @ to_go_c)
-            updated = self.maps[cycle] + change
-            updated[:, 1 + self.context_size:] = change[:, 1 + self.context_size:]      # feedback: this update's
-            self.maps[cycle] = np.where(self.active[cycle][:, None], updated, self.maps[cycle])
+        groups = [[0], list(range(1, self.n_cycles))] if self.config.pooled else [[c] for c in range(self.n_cycles)]
+        for group in filter(None, groups):
+            change = common + self._own_change(group, observations, own, to_go, contexts)
+            for cycle in group:
+                updated = self.maps[cycle] + change
+                updated[:, 1 + self.context_size:] = change[:, 1 + self.context_size:]  # feedback: this update's
+                self.maps[cycle] = np.where(self.active[cycle][:, None], updated, self.maps[cycle])
         self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
         self.updates += 1
+
+    def _own_change(self, group: list[int], observations: np.ndarray, own: np.ndarray, to_go: np.ndarray,
+                    contexts: np.ndarray) -> np.ndarray:
+        """``[n, F + 1]`` the change of the map the cycles of ``group`` share, from their own draws ``own [N, C, n]``
+        at their observations ``[N, C, o]``, each judged by its cycle's cost-to-go ``to_go [N, C]`` over a ridge
+        baseline on the context (``contexts [N, F + 1]``) within the trust region (every cycle of the group counts
+        alike)."""
+        rows, weights, uniform = [], [], []
+        for cycle in group:
+            reached = np.all(np.isfinite(observations[:, cycle]), axis=1)
+            if reached.sum() < 2:
+                continue
+            to_go_c = to_go[reached, cycle]
+            hat = ridge_hat(contexts[reached], self.config.gain_prior * int(reached.sum()))
+            rows.append((np.stack([self.features(o) for o in observations[reached, cycle]]), own[reached, cycle]))
+            weights.append(trust_region_weights(to_go_c - hat @ to_go_c, self.config.epsilon))
+            uniform.append(np.full(int(reached.sum()), 1.0 / reached.sum()))
+        if not rows:
+            return np.zeros_like(self.maps[0])
+        x, draws = np.concatenate([r[0] for r in rows]), np.concatenate([r[1] for r in rows])
+        both = np.stack([np.concatenate(weights), np.concatenate(uniform)]) / len(rows)
+        by_cost, even = weighted_ridge(x, both, draws, np.zeros((draws.shape[1], x.shape[1])), self.config.gain_prior)
+        return by_cost - even
 
     def _reweighted(self, x: np.ndarray, draws: np.ndarray, advantages: np.ndarray) -> np.ndarray:
         """``[n, F + 1]`` the fit of ``draws [N, n]`` on ``x [N, F + 1]`` weighted by the advantages ``[N]`` (within
