@@ -12,6 +12,14 @@ starts at the ``k``-th crossing of the canonical phase through its initial value
 So the path is unchanged up to the crossing, it is the new parameters' own rollout from the end of the window on,
 and it is C3 at both ends of the window (position, velocity, acceleration and jerk are continuous). A cycle whose
 parameters equal the previous cycle's changes nothing, bit for bit.
+
+The online integrator follows the same schedule: :meth:`rdmp_gym.DMPStepper.change_weights` hands a
+running stepper over to new forcing weights from the next cycle start (:func:`next_cycle_start`) or from a given
+time on. The transformation system is linear in the forcing term, so ``delta = y_k - y_before`` is the response
+from rest at the movement's start to the difference of the two parameters' inputs. The stepper integrates it from
+the start up to the request, then step by step beside its own state; it outputs ``y_before + s delta`` and adds
+``delta`` to its own state at the end of the window. Without a coupling term its path is that of
+:func:`rollout_cycles`; a coupling term acts on the stepper's own state, with or without a change.
 """
 
 from __future__ import annotations
@@ -25,7 +33,8 @@ from ..validation import as_finite_array
 if TYPE_CHECKING:
     from .rhythmic import RhythmicDMP
 
-__all__ = ["DEFAULT_HANDOVER", "blend_from", "cycle_starts", "handover_ramp", "rollout_cycles"]
+__all__ = ["DEFAULT_HANDOVER", "blend_from", "cycle_starts", "handover_ramp", "handover_ramp_rate", "handover_width",
+           "next_cycle_start", "rollout_cycles"]
 
 #: the hand-over window as a fraction of the period (half a cycle: a change of the size a learner explores hands
 #: over with no more jerk than the rollouts of either parameters have of their own)
@@ -35,10 +44,28 @@ DEFAULT_HANDOVER = 0.5
 def handover_ramp(t: np.ndarray, start: float, width: float) -> np.ndarray:
     """``s [T]``: 0 for ``t <= start``, 1 for ``t >= start + width``, the septic smoothstep
     ``35 u^4 - 84 u^5 + 70 u^6 - 20 u^7`` of ``u = (t - start) / width`` in between (C3 at both ends)."""
+    u = _ramp_argument(t, start, width)
+    return np.minimum(u**4 * (35.0 + u * (-84.0 + u * (70.0 - 20.0 * u))), 1.0)     # round-off above 1 near u = 1
+
+
+def handover_ramp_rate(t: np.ndarray, start: float, width: float) -> np.ndarray:
+    """``ds/dt [T]`` (1/s) of :func:`handover_ramp`: ``140 u^3 (1 - u)^3 / width``, 0 outside the window."""
+    u = _ramp_argument(t, start, width)
+    return 140.0 * (u * (1.0 - u)) ** 3 / width
+
+
+def _ramp_argument(t: np.ndarray, start: float, width: float) -> np.ndarray:
+    """``u = (t - start) / width`` clipped to [0, 1], ``[T]``."""
     if not (np.isfinite(width) and width > 0):
         raise ValueError(f"width: expected a finite number > 0 (s), got {width!r}")
-    u = np.clip((np.asarray(t, dtype=np.float64) - start) / width, 0.0, 1.0)
-    return np.minimum(u**4 * (35.0 + u * (-84.0 + u * (70.0 - 20.0 * u))), 1.0)     # round-off above 1 near u = 1
+    return np.clip((np.asarray(t, dtype=np.float64) - start) / width, 0.0, 1.0)
+
+
+def handover_width(dmp: RhythmicDMP, handover: float) -> float:
+    """The hand-over window (s) of ``handover`` periods of ``dmp``."""
+    if not (np.isfinite(handover) and handover > 0):
+        raise ValueError(f"handover: expected a finite number > 0 (periods), got {handover!r}")
+    return handover * dmp.period
 
 
 def blend_from(before: np.ndarray, after: np.ndarray, t: np.ndarray, start: float, width: float) -> np.ndarray:
@@ -62,13 +89,26 @@ def cycle_starts(dmp: RhythmicDMP, duration: float, transient: int = 0, tempo: f
     if not (np.isfinite(duration) and duration > 0):
         raise ValueError(f"duration: expected a finite number > 0 (s), got {duration!r}")
     start = dmp.transients[dmp._check_transient(transient)]
-    speed = dmp.canonical.tempo if tempo is None else float(tempo)
-    if not (np.isfinite(speed) and speed > 0):
-        raise ValueError(f"tempo: expected a finite number > 0, got {tempo!r}")
-    period = dmp.period * dmp.canonical.tempo / speed
+    period = _period(dmp, tempo)
     first = np.ceil(start.length / period - 1e-9)
     crossings = period * np.arange(max(first, 1.0), np.floor(duration / period - 1e-9) + 1.0)
     return np.r_[0.0, crossings[crossings <= duration - 0.5 * period]]
+
+
+def _period(dmp: RhythmicDMP, tempo: float | None) -> float:
+    """The period (s) of ``dmp`` at ``tempo`` (``None``: its own)."""
+    speed = dmp.canonical.tempo if tempo is None else float(tempo)
+    if not (np.isfinite(speed) and speed > 0):
+        raise ValueError(f"tempo: expected a finite number > 0, got {tempo!r}")
+    return dmp.period * dmp.canonical.tempo / speed
+
+
+def next_cycle_start(dmp: RhythmicDMP, time: float, transient: int = 0, tempo: float | None = None) -> float:
+    """The first cycle start after the transient (an entry of :func:`cycle_starts` other than 0) at or after
+    ``time`` (s since the start)."""
+    horizon = max(time, dmp.transients[dmp._check_transient(transient)].length) + 2.0 * _period(dmp, tempo)
+    crossings = cycle_starts(dmp, horizon, transient, tempo)[1:]
+    return float(crossings[crossings >= time][0])
 
 
 def rollout_cycles(dmp: RhythmicDMP, thetas: np.ndarray, t: np.ndarray, starts: np.ndarray,
@@ -82,13 +122,12 @@ def rollout_cycles(dmp: RhythmicDMP, thetas: np.ndarray, t: np.ndarray, starts: 
     starts = as_finite_array(starts, "starts", ndim=1)
     if len(starts) != len(thetas) or np.any(np.diff(starts) <= 0):
         raise ValueError(f"starts: expected {len(thetas)} increasing times (one per row of thetas), got {starts}")
-    if not (np.isfinite(handover) and handover > 0):
-        raise ValueError(f"handover: expected a finite number > 0 (periods), got {handover!r}")
+    width = handover_width(dmp, handover)
     t = np.asarray(t, dtype=np.float64)
     path = dmp.rollout_batch(thetas[:1], t, **rollout)[0]
     for k in range(1, len(thetas)):
         if np.array_equal(thetas[k], thetas[k - 1]):
             continue
         after = dmp.rollout_batch(thetas[k:k + 1], t, **rollout)[0]
-        path = blend_from(path, after, t - t[0], float(starts[k]), handover * dmp.period)
+        path = blend_from(path, after, t - t[0], float(starts[k]), width)
     return path

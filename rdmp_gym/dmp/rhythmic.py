@@ -7,8 +7,8 @@ The formulation (basis functions, fades, mixture) is in :mod:`rdmp_gym.dmp.basis
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
-from dataclasses import replace
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -18,7 +18,15 @@ from ..validation import as_finite_array, check_positive, check_time_grid
 from .basis import BasisSet, normalize
 from .batched import batched_forcing
 from .canonical import CanonicalSystem
-from .cycles import DEFAULT_HANDOVER, cycle_starts, rollout_cycles
+from .cycles import (
+    DEFAULT_HANDOVER,
+    cycle_starts,
+    handover_ramp,
+    handover_ramp_rate,
+    handover_width,
+    next_cycle_start,
+    rollout_cycles,
+)
 from .ending import Ending, StopPlan, StopRequest, plan_stop
 from .fitting import PAPER_SETTINGS, fit_rhythmic
 from .parameters import ParameterLayout, group_key
@@ -412,6 +420,11 @@ class RhythmicDMP:
         return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
                            self.amplitude, ending, self.sweep)
 
+    def with_weights(self, weights: np.ndarray) -> RhythmicDMP:
+        """A copy of this DMP with the forcing weights ``weights [d, D]`` (periodic first, then each transient's)."""
+        return RhythmicDMP(self.canonical, self.basis, weights, self.transients, self.anchor, self.alpha_z,
+                           self.amplitude, self.ending, self.sweep)
+
     def with_sweep(self, sweep: Sweep | None) -> RhythmicDMP:
         """A copy of this DMP whose anchor travels along ``sweep`` (``None``: the anchor stays in place)."""
         return RhythmicDMP(self.canonical, self.basis, self.weights, self.transients, self.anchor, self.alpha_z,
@@ -487,14 +500,19 @@ class RhythmicDMP:
         amplitudes = self.amplitude[None]
         k = self._transients(transient, y0, 1, amplitudes)
         y0, yd0 = self._start(k, y0, yd0, tempo, anchors, amplitudes)
-        offsets = None
-        if start_blend:
-            start = self.transients[int(k[0])]
-            y_settled, yd_settled = self._settled(replace(self.canonical, tempo=tempo), self.weights[None],
-                                                  np.array([[start.phi0, start.r0]]), anchors, amplitudes, None)
-            offsets = (y0[0] - y_settled[0], yd0[0] - yd_settled[0])
+        offsets = self._blend_offsets(int(k[0]), y0[0], yd0[0], tempo, anchors[0]) if start_blend else None
         return DMPStepper(self, check_positive(dt, "dt"), int(k[0]), y0[0].copy(), yd0[0].copy(), anchors[0].copy(),
                           tempo, offsets)
+
+    def _blend_offsets(self, transient: int, y0: np.ndarray, yd0: np.ndarray, tempo: float, anchor: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+        """The smooth start's offsets ``(y0 - y_settled, yd0 - yd_settled)`` ``[d]`` of a stepper that starts
+        transient ``transient`` at ``(y0, yd0)`` ``[d]`` about ``anchor [d]`` (see :meth:`settled_start`)."""
+        start = self.transients[transient]
+        y_settled, yd_settled = self._settled(replace(self.canonical, tempo=tempo), self.weights[None],
+                                              np.array([[start.phi0, start.r0]]), anchor[None],
+                                              self.amplitude[None], None)
+        return y0 - y_settled[0], yd0 - yd_settled[0]
 
     def forcing(self, t: np.ndarray, transient: int = 0) -> np.ndarray:
         """The forcing term f along transient ``transient``'s canonical path, ``[T, d]`` (t from the start)."""
@@ -621,6 +639,41 @@ class RhythmicDMP:
                 f"transient_sizes={self.basis.transient_sizes})")
 
 
+class _Blocks:
+    """An input ``[d]`` per sample ``step`` (at ``step * dt``), computed ahead in blocks of ``size`` samples by
+    ``compute(times [size]) -> [size, d]``."""
+
+    def __init__(self, compute: Callable[[np.ndarray], np.ndarray], dt: float, size: int) -> None:
+        self.compute, self.dt, self.size = compute, dt, size
+        self.index, self.block = -1, np.empty(0)
+
+    def __call__(self, step: int) -> np.ndarray:
+        index, offset = divmod(step, self.size)
+        if index != self.index:
+            self.block = self.compute((index * self.size + np.arange(self.size)) * self.dt)
+            self.index = index
+        return self.block[offset]
+
+    def reset(self) -> None:
+        """Compute the block again at the next sample (the input has changed)."""
+        self.index = -1
+
+
+@dataclass
+class _Change:
+    """A change of a stepper's weights: the new parameters (``dmp`` and its start ``offsets``), the hand-over window
+    from ``start`` for ``width`` s, the difference of the two inputs (``drive``) and the response to it from rest
+    at the movement's start, ``y``, ``z`` ``[d]``."""
+
+    dmp: RhythmicDMP
+    offsets: tuple[np.ndarray, np.ndarray] | None
+    start: float
+    width: float
+    drive: _Blocks
+    y: np.ndarray
+    z: np.ndarray
+
+
 class DMPStepper:
     """Online integration of a :class:`RhythmicDMP`, one sample at a time, with an optional coupling term.
 
@@ -629,7 +682,8 @@ class DMPStepper:
     (4) and held over the step: ``dz/dt = Omega (alpha_z (beta_z (g - y) - z) + f + c)``. The
     canonical system does not depend on ``y``, so the open-loop part of the input (anchor, moved by the
     smooth start's offset, and forcing term) is computed ahead in blocks of ``BLOCK`` samples; a step then
-    costs one 2x2 update.
+    costs one 2x2 update. :meth:`change_weights` hands the movement over to other forcing weights at a cycle
+    start, as :func:`~rdmp_gym.dmp.cycles.rollout_cycles` does.
     """
 
     BLOCK = 256
@@ -643,8 +697,11 @@ class DMPStepper:
         self.omega = self.canonical.omega * tempo
         self.system = cached_system(self.omega, dt, dmp.alpha_z)
         self.steps = 0
-        self.y, self.z = y0, yd0 / self.omega
-        self._block_index, self._block = -1, np.empty((0, dmp.n_dims))
+        self._start = (y0.copy(), yd0.copy())
+        self._y, self._z = y0, yd0 / self.omega
+        self._drive = _Blocks(lambda times: self._open_loop(times, self.dmp.weights, self.start_offsets), dt,
+                              self.BLOCK)
+        self._change: _Change | None = None
         self.stop: StopPlan | None = None
 
     @property
@@ -652,35 +709,51 @@ class DMPStepper:
         """Time since the start (s)."""
         return self.steps * self.dt
 
-    def _drive(self, step: int) -> np.ndarray:
-        """Open-loop part of the input at sample ``step``, ``alpha_z beta_z g(t) + f(t)`` ``[d]``."""
-        index, offset = divmod(step, self.BLOCK)
-        if index != self._block_index:
-            start = self.dmp.transients[self.transient]
-            times = (index * self.BLOCK + np.arange(self.BLOCK)) * self.dt
-            phi, r = self.canonical.state(times, start.phi0, start.r0)
-            travel = 0.0 if self.dmp.sweep is None else travel_input(
-                self.dmp.sweep, times * self.canonical.tempo, None, self.dmp.canonical.omega, self.dmp.alpha_z)
-            anchor = self.anchor + travel
-            if self.start_offsets is not None:
-                anchor = anchor + blend_shift(times, np.array([self.blend_length]), self.start_offsets[0][None],
-                                               self.start_offsets[1][None], self.omega, self.dmp.alpha_z)[0]
-            if self.stop is None:
-                forcing = self.dmp.basis.forcing(phi, r, self.dmp.weights)
-            else:
-                tau = (times - self.stop.exit_time) * self.canonical.tempo
-                forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, self.dmp.weights,
-                                                  self.dmp.ending.weights)
-                away = self.stop.goal[0] - self.anchor - travel
-                anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * away
-            self._block = self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing
-            self._block_index = index
-        return self._block[offset]
+    def _open_loop(self, times: np.ndarray, weights: np.ndarray, offsets: tuple[np.ndarray, np.ndarray] | None
+                   ) -> np.ndarray:
+        """Open-loop part of the input at ``times [T]`` (s), ``alpha_z beta_z g(t) + f(t)`` ``[T, d]``, of the
+        forcing weights ``weights [d, D]`` and the smooth start's ``offsets`` (``None``: the paper's start)."""
+        start = self.dmp.transients[self.transient]
+        phi, r = self.canonical.state(times, start.phi0, start.r0)
+        travel = 0.0 if self.dmp.sweep is None else travel_input(
+            self.dmp.sweep, times * self.canonical.tempo, None, self.dmp.canonical.omega, self.dmp.alpha_z)
+        anchor = self.anchor + travel
+        if offsets is not None:
+            anchor = anchor + blend_shift(times, np.array([self.blend_length]), offsets[0][None], offsets[1][None],
+                                          self.omega, self.dmp.alpha_z)[0]
+        if self.stop is None:
+            forcing = self.dmp.basis.forcing(phi, r, weights)
+        else:
+            tau = (times - self.stop.exit_time) * self.canonical.tempo
+            forcing = self.dmp.ending.forcing(self.dmp.basis, phi, r, tau, self.stop.rotation, weights,
+                                              self.dmp.ending.weights)
+            away = self.stop.goal[0] - self.anchor - travel
+            anchor = anchor + self.dmp.ending.anchor_blend(tau)[:, None] * away
+        return self.dmp.alpha_z * self.system.beta_z * anchor + self.dmp.amplitude * forcing
 
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        """Current ``(y [d], yd [d])`` (copies)."""
-        return self.y.copy(), self.z * self.omega
+        """Current ``(y [d], yd [d])`` (copies). Within a hand-over: ``y_before + s delta`` and its velocity
+        ``yd_before + s delta_dot + s_dot delta`` (see :meth:`change_weights`)."""
+        y, yd = self._y.copy(), self._z * self.omega
+        change = self._change
+        if change is None:
+            return y, yd
+        ramp = handover_ramp(self.time, change.start, change.width)
+        rate = handover_ramp_rate(self.time, change.start, change.width)
+        return y + ramp * change.y, yd + ramp * self.omega * change.z + rate * change.y
+
+    @property
+    def y(self) -> np.ndarray:
+        """Current position ``[d]`` (a copy; see :attr:`state`)."""
+        return self.state[0]
+
+    @property
+    def handover_window(self) -> tuple[float, float] | None:
+        """``(start, end)`` (s since the start) of the scheduled or running hand-over of :meth:`change_weights`;
+        ``None`` when there is none."""
+        change = self._change
+        return None if change is None else (change.start, change.start + change.width)
 
     def request_stop(self, exit_phase: float | None = None, goal: np.ndarray | None = None) -> float:
         """End the movement: leave the cycle at the next demonstrated exit phase (or ``exit_phase``, rad) from
@@ -691,22 +764,87 @@ class DMPStepper:
         start = self.dmp.transients[self.transient]
         self.stop = self.dmp._stop_plan(StopRequest(self.time, exit_phase, goal), start, self.canonical.tempo,
                                         self.anchor[None], self.dmp.amplitude[None])
-        self._block_index = -1      # the open-loop input from now on includes the stop
+        self._drive.reset()      # the open-loop input from now on includes the stop
+        if self._change is not None:
+            self._change.drive.reset()
         return self.stop.exit_time
+
+    def change_weights(self, weights: np.ndarray, at: float | None = None, handover: float = DEFAULT_HANDOVER
+                       ) -> float:
+        """Hand the movement over to the forcing weights ``weights [d, D]`` (the layout of
+        :attr:`RhythmicDMP.weights`: periodic first, then each transient's) within ``handover`` periods, as
+        :func:`~rdmp_gym.dmp.cycles.rollout_cycles` hands one cycle over to the next.
+
+        The hand-over starts at the next cycle start at or after :attr:`time`
+        (:func:`~rdmp_gym.dmp.cycles.next_cycle_start`; a request just after a crossing is served at the next one),
+        or at ``at`` (s since the start, not in the past). Up to then the path is unchanged; from the end of the
+        window on the stepper is the new weights' own integrator (:attr:`dmp` has them). Weights equal to the
+        current ones change nothing. One change at a time: a request while one is scheduled or running
+        (:attr:`handover_window`) is refused. A stop (:meth:`request_stop`) may be requested before or after.
+        Returns the hand-over's start (s since the start).
+        """
+        if self._change is not None:
+            start, end = self.handover_window
+            raise ValueError(f"change_weights: a change is already scheduled (hand-over from {start:g} s to {end:g} s);"
+                             " request the next one once it has ended")
+        dmp = self.dmp.with_weights(weights)
+        width = handover_width(self.dmp, handover)
+        start = self._handover_start(at)
+        if not np.array_equal(dmp.weights, self.dmp.weights):
+            self._change = self._catch_up(dmp, start, width)
+        return start
+
+    def _handover_start(self, at: float | None) -> float:
+        """The start (s) of a hand-over requested now for ``at`` (``None``: the next cycle start)."""
+        if at is None:
+            return next_cycle_start(self.dmp, self.time, self.transient, self.canonical.tempo)
+        at = float(as_finite_array(at, "at", ndim=0))
+        if at < self.time:
+            raise ValueError(f"at: expected a time (s) not before the stepper's time {self.time:g} s, got {at!r}")
+        return at
+
+    def _catch_up(self, dmp: RhythmicDMP, start: float, width: float) -> _Change:
+        """The change to ``dmp``'s weights, its response to the difference of the inputs integrated from rest at the
+        movement's start up to now (the same first-order-hold discretisation as the steps)."""
+        offsets = None if self.start_offsets is None else dmp._blend_offsets(self.transient, *self._start,
+                                                                             self.canonical.tempo, self.anchor)
+        drive = _Blocks(lambda times: self._open_loop(times, dmp.weights, offsets)
+                        - self._open_loop(times, self.dmp.weights, self.start_offsets), self.dt, self.BLOCK)
+        zeros = np.zeros(self.dmp.n_dims)
+        y, z = self.system.rollout(self.omega * drive.compute(np.arange(self.steps + 1) * self.dt), zeros, zeros)
+        return _Change(dmp, offsets, start, width, drive, y[-1], z[-1])
+
+    def _advance(self, y: np.ndarray, z: np.ndarray, drive: _Blocks, c: np.ndarray | float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """``(y, z) [d]`` one step on, driven by ``drive`` plus the coupling ``c`` held over the step."""
+        u_now = self.omega * (drive(self.steps) + c)
+        u_next = self.omega * (drive(self.steps + 1) + c)
+        return self.system.step(y, z, u_now, u_next)
 
     def step(self, coupling: np.ndarray | object | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Advance by ``dt``; returns the new ``(y [d], yd [d])``.
 
         ``coupling``: ``c [d]`` in the units of the forcing term, or an object with a method
         ``acceleration(y, yd) -> [d]`` (m/s^2, e.g. :class:`rdmp_gym.dmp.coupling.ObstacleAvoidance`), applied as
-        ``c = acceleration / Omega^2`` at the current state."""
+        ``c = acceleration / Omega^2`` at the current state. Within a hand-over it acts on the stepper's own
+        state, not on the response to the change."""
         if hasattr(coupling, "acceleration"):
             coupling = coupling.acceleration(*self.state) / self.omega**2
         c = np.zeros(self.dmp.n_dims) if coupling is None else as_finite_array(coupling, "coupling", ndim=1)
         if c.size != self.dmp.n_dims:
             raise ValueError(f"coupling: expected {self.dmp.n_dims} values, got {c.size}")
-        u_now = self.omega * (self._drive(self.steps) + c)
-        u_next = self.omega * (self._drive(self.steps + 1) + c)
-        self.y, self.z = self.system.step(self.y, self.z, u_now, u_next)
+        self._y, self._z = self._advance(self._y, self._z, self._drive, c)
+        change = self._change
+        if change is not None:
+            change.y, change.z = self._advance(change.y, change.z, change.drive, 0.0)
         self.steps += 1
+        if change is not None and handover_ramp(self.time, change.start, change.width) >= 1.0:
+            self._finish_change()
         return self.state
+
+    def _finish_change(self) -> None:
+        """End the hand-over: the response to the change joins the stepper's own state, the new weights drive it."""
+        change, self._change = self._change, None
+        self._y, self._z = self._y + change.y, self._z + change.z
+        self.dmp, self.start_offsets = change.dmp, change.offsets
+        self._drive.reset()
