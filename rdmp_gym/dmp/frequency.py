@@ -24,9 +24,18 @@ with ``Omega`` the fitted frequency and ``Omega_bar`` the oscillator's frequency
 move together along the fitted canonical path, so the start transient and the stop
 (:mod:`rdmp_gym.dmp.stopping`, exit and rest in ``s``) keep their shape in space, and the transformation
 system (4) is integrated in ``s`` (exact first-order hold, variable step ``ds``): ``dy/dt = (ds/dt) dy/ds``.
+
+The canonical time does not depend on what drives the transformation system (the forcing weights, the amplitude,
+the ending's weights and goal): :class:`CanonicalSchedule` records a run's canonical time once, and the
+transformation system of other parameters follows it, bit for bit as the stepper would, at the cost of the drive
+and one 2x2 update per step.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -34,7 +43,12 @@ from ..validation import as_finite_array, check_positive
 from .ending import StopPlan, StopRequest
 from .start import blend_shift
 
-__all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "follow_rhythm"]
+__all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "CanonicalSchedule", "follow_rhythm"]
+
+
+#: the 2x2 identity (read-only)
+_IDENTITY = np.eye(2)
+_IDENTITY.flags.writeable = False
 
 
 def _wrap(angle: float) -> float:
@@ -49,7 +63,7 @@ def _first_order_hold(omega: float, h: float, alpha_z: float) -> tuple[np.ndarra
     ``B1 = h phi2 b`` with ``phi1(x) = (e^x - 1)/x`` and ``phi2(x) = (e^x - 1 - x)/x^2`` (the same step as
     :class:`rdmp_gym.dmp.transformation.TransformationSystem`, without a matrix exponential per step)."""
     lam = -0.5 * alpha_z * omega
-    n = (omega * np.array([[0.0, 1.0], [-alpha_z**2 / 4.0, -alpha_z]]) - lam * np.eye(2)) * h
+    n = (omega * np.array([[0.0, 1.0], [-alpha_z**2 / 4.0, -alpha_z]]) - lam * _IDENTITY) * h
     x = lam * h
     if abs(x) < 1e-3:        # Taylor series where the closed forms cancel
         p1, dp1 = 1.0 + x / 2.0 + x**2 / 6.0, 0.5 + x / 3.0 + x**2 / 8.0
@@ -58,9 +72,23 @@ def _first_order_hold(omega: float, h: float, alpha_z: float) -> tuple[np.ndarra
         ex, em1 = np.exp(x), np.expm1(x)
         p1, dp1 = em1 / x, (x * ex - em1) / x**2
         p2, dp2 = (em1 - x) / x**2, (em1 * x - 2.0 * (em1 - x)) / x**3
-    phi = np.exp(x) * (np.eye(2) + n)
-    b1 = h * (p2 * np.eye(2) + dp2 * n)[:, 1]
-    return phi, h * ((p1 - p2) * np.eye(2) + (dp1 - dp2) * n)[:, 1], b1
+    phi = np.exp(x) * (_IDENTITY + n)
+    b1 = h * (p2 * _IDENTITY + dp2 * n)[:, 1]
+    return phi, h * ((p1 - p2) * _IDENTITY + (dp1 - dp2) * n)[:, 1], b1
+
+
+def _hold_inputs(b0: np.ndarray, b1: np.ndarray, u_now: np.ndarray, u_next: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The input terms ``(B0 u_now, B1 u_next)`` ``[..., 2, d]`` of steps whose first-order holds have ``B0``, ``B1``
+    ``[..., 2]`` (:func:`_first_order_hold`), driven by ``u_now``, ``u_next`` ``[..., d]`` (the drive times Omega at
+    the steps' starts and ends)."""
+    return b0[..., :, None] * u_now[..., None, :], b1[..., :, None] * u_next[..., None, :]
+
+
+def _hold_update(phi: np.ndarray, state: np.ndarray, inputs: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """One step of the transformation system (4): the state ``[y, z]`` ``[2, d]`` after a step of hold matrix
+    ``phi [2, 2]`` and input terms ``inputs`` (:func:`_hold_inputs`, ``[2, d]`` each)."""
+    return phi @ state + inputs[0] + inputs[1]
 
 
 class AdaptiveOscillator:
@@ -86,19 +114,34 @@ class AdaptiveOscillator:
         self.frequency_coupling = (self.coupling if frequency_coupling is None
                                    else check_positive(frequency_coupling, "frequency_coupling"))
         self.dt = check_positive(dt, "dt")
-        self._history: list[np.ndarray] = []
         self._capacity = 4 * round(2.0 * np.pi / self.omega / self.dt) + 1
+        #: the inputs seen, oldest first, in rows ``[:_used]`` of a buffer of twice the capacity (the last
+        #: ``_capacity`` rows are the history; the buffer is allocated at the first input)
+        self._history, self._used = np.empty((0, 0)), 0
+
+    def _store(self, u: np.ndarray) -> int:
+        """Append ``u [k]`` to the history; returns how many inputs the history holds (at most the capacity)."""
+        if not len(self._history):                         # the first input
+            self._history = np.empty((2 * self._capacity, u.size))
+        if u.shape != self._history.shape[1:]:
+            raise ValueError(f"u: expected {self._history.shape[1]} values, as in the earlier inputs, got {u.size}")
+        if self._used == len(self._history):              # keep the newest capacity - 1 rows, at the front
+            keep = self._capacity - 1
+            self._history[:keep] = self._history[self._used - keep: self._used]
+            self._used = keep
+        self._history[self._used] = u
+        self._used += 1
+        return min(self._used, self._capacity)
 
     def normalised(self, u: np.ndarray) -> float:
         """The input's normalised sum ``sum_i F_i`` (0 until one period has been seen), after storing ``u [k]``."""
-        self._history.append(u)
-        if len(self._history) > self._capacity:
-            del self._history[: len(self._history) - self._capacity]
+        held = self._store(u)
         window = max(round(2.0 * np.pi / self.omega / self.dt), 2)
-        if len(self._history) < window:
+        if held < window:
             return 0.0
-        recent = np.array(self._history[-window:])
-        mean, deviation = recent.mean(axis=0), recent.std(axis=0)
+        recent = self._history[self._used - window: self._used]
+        mean = recent.sum(axis=0) / window
+        deviation = np.sqrt(np.square(recent - mean).sum(axis=0) / window)     # recent.std(axis=0), leaner
         live = deviation > 1e-12 * (1.0 + np.abs(mean))
         return float(np.sum((u[live] - mean[live]) / (np.sqrt(2.0) * deviation[live])))
 
@@ -146,7 +189,7 @@ class AdaptiveFrequencyStepper:
                                                                                          "frequency_time")
         self.smoothed_frequency = initial
         self.s, self.time, self.rate = 0.0, 0.0, 1.0
-        self._block_index, self._block = -1, np.empty((0, dmp.n_dims))
+        self._blocks: dict[int, np.ndarray] = {}
         self.y = self.start_state.start.copy()
         self.z = self.start_state.start_velocity / self.omega_fit
         self.stop: StopPlan | None = None
@@ -181,49 +224,166 @@ class AdaptiveFrequencyStepper:
                                            self.start_offsets[1][None], self.omega_fit, dmp.alpha_z)[0]
         return dmp.alpha_z * dmp.alpha_z / 4.0 * anchor + dmp.amplitude * forcing
 
-    def _drive(self, s: float) -> np.ndarray:
-        """The drive at canonical time ``s`` ``[d]``, interpolated linearly on the grid (spacing dt)."""
+    def _drive(self, s: np.ndarray) -> np.ndarray:
+        """The drive at canonical times ``s [N]`` ``[N, d]``, interpolated linearly on the grid (spacing dt) of the
+        blocks of :meth:`_drive_block` (each computed once, and again after a stop request)."""
         position = s / self.dt
-        index = min(int(position // self.BLOCK), int(position) // self.BLOCK)
-        if index != self._block_index:
-            self._block, self._block_index = self._drive_block(index), index
+        index = np.minimum(position // self.BLOCK, np.trunc(position) // self.BLOCK).astype(int)
         offset = position - index * self.BLOCK
-        low = min(int(offset), self.BLOCK - 1)
+        low = np.minimum(offset.astype(int), self.BLOCK - 1)
         weight = offset - low
-        return (1.0 - weight) * self._block[low] + weight * self._block[low + 1]
+        drive = np.empty((s.size, self.dmp.n_dims))
+        for block_index in np.unique(index).tolist():
+            block = self._blocks.get(block_index)
+            if block is None:
+                block = self._blocks[block_index] = self._drive_block(block_index)
+            rows = np.flatnonzero(index == block_index)
+            share = weight[rows, None]                      # of the grid sample after s
+            drive[rows] = (1.0 - share) * block[low[rows]] + share * block[low[rows] + 1]
+        return drive
+
+    def _set_stop(self, s: float, exit_phase: float | None = None, goal: np.ndarray | None = None) -> None:
+        """Plan the stop requested at canonical time ``s``; the drive from now on includes it."""
+        self.stop = self.dmp._stop_plan(StopRequest(s, exit_phase, goal), self.start_state, 1.0,
+                                        self.dmp.anchor[None], self.dmp.amplitude[None])
+        self._blocks.clear()
 
     def request_stop(self, exit_phase: float | None = None, goal: np.ndarray | None = None) -> float:
         """As :meth:`rdmp_gym.DMPStepper.request_stop`, in canonical time; returns the exit's canonical time ``s``."""
         if self.stop is not None:
             raise ValueError("request_stop: a stop has already been requested")
-        plan = self.dmp._stop_plan(StopRequest(self.s, exit_phase, goal), self.start_state, 1.0, self.dmp.anchor[None],
-                                   self.dmp.amplitude[None])
-        self.stop = plan
-        self._block_index = -1
-        return plan.exit_time
+        self._set_stop(self.s, exit_phase, goal)
+        return self.stop.exit_time
+
+    def _advance_canonical(self, u: np.ndarray) -> float:
+        """Advance the canonical time, the oscillator (reading the input sample ``u [k]``) and the smoothed frequency
+        by ``dt``; returns the step ``ds`` of the canonical time (>= 0). The transformation system plays no part."""
+        phase_error = _wrap(self.oscillator.phase - self.phase)
+        self.rate = max(self.smoothed_frequency + self.phase_gain * phase_error, 0.0) / self.omega_fit
+        ds = self.rate * self.dt
+        self.s += ds
+        _, omega_a = self.oscillator.step(u)
+        self.smoothed_frequency += min(self.dt / self.frequency_time, 1.0) * (omega_a - self.smoothed_frequency)
+        self.time += self.dt
+        return ds
 
     def step(self, u: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Advance by ``dt`` reading the input sample ``u`` (a number or ``[k]``); returns ``(y [d], yd [d])``."""
         u = np.atleast_1d(as_finite_array(u, "u", ndim=(0, 1)))
-        phase_error = _wrap(self.oscillator.phase - self.phase)
-        self.rate = max(self.smoothed_frequency + self.phase_gain * phase_error, 0.0) / self.omega_fit
-        ds = self.rate * self.dt
+        s = self.s
+        ds = self._advance_canonical(u)
         if ds > 0.0:
+            u_now, u_next = self.omega_fit * self._drive(np.array([s, s + ds]))
             phi, b0, b1 = _first_order_hold(self.omega_fit, ds, self.dmp.alpha_z)
-            u_now = self.omega_fit * self._drive(self.s)
-            u_next = self.omega_fit * self._drive(self.s + ds)
-            state = phi @ np.stack([self.y, self.z]) + b0[:, None] * u_now + b1[:, None] * u_next
-            self.y, self.z = state[0], state[1]
-            self.s += ds
-        _, omega_a = self.oscillator.step(u)
-        self.smoothed_frequency += min(self.dt / self.frequency_time, 1.0) * (omega_a - self.smoothed_frequency)
-        self.time += self.dt
+            self.y, self.z = _hold_update(phi, np.stack([self.y, self.z]), _hold_inputs(b0, b1, u_now, u_next))
         return self.state
 
     @property
     def frequency(self) -> float:
         """The oscillator's adapted frequency Omega_A (rad/s)."""
         return self.oscillator.omega
+
+
+def _canonical_key(dmp, transient: int) -> tuple[float, float, float, float]:
+    """What a schedule takes from the DMP: ``(Omega, period, alpha_z, phi0)`` (its canonical system, damping and
+    transient ``transient``'s start phase)."""
+    return (float(dmp.canonical.omega), float(dmp.period), float(dmp.alpha_z),
+            float(dmp.transients[dmp._check_transient(transient)].phi0))
+
+
+@dataclass(frozen=True, eq=False)
+class CanonicalSchedule:
+    """The canonical time of one run of an :class:`AdaptiveFrequencyStepper` over an input recording, for the
+    transformation system of other parameters to follow.
+
+    The canonical time (the oscillator, the rate, each step ``ds`` and the canonical time of a stop request)
+    depends on the input, the stepper's settings and the DMP's canonical system, damping and start phase, not on
+    what drives the transformation system: the forcing weights, the amplitude, the ending's weights and goal.
+    Given it, the transformation system is linear. :meth:`record` runs the canonical system alone;
+    :meth:`rollout` integrates the transformation system of a DMP along it with the stepper's own operations, so
+    its path equals the stepper's bit for bit; :meth:`matches` says whether a run would record this schedule.
+
+    Attributes:
+        u: ``[T, k]`` the input samples (read-only).
+        dt: the sample period (s).
+        stop_step: the step before which the stop is requested (``None``: no stop).
+        settings: the stepper's keywords.
+        canonical: what the schedule takes from the DMP (:func:`_canonical_key`).
+        s: ``[T + 1]`` the canonical time before each step and after the last.
+        ds: ``[T]`` each step's advance of the canonical time (0: the DMP stands still over the step).
+        hold: each step's first-order hold (:func:`_first_order_hold`): ``Phi [T, 2, 2]``, ``B0 [T, 2]``,
+            ``B1 [T, 2]`` (zeros where ``ds = 0``).
+    """
+
+    u: np.ndarray
+    dt: float
+    stop_step: int | None
+    settings: Mapping[str, Any]
+    canonical: tuple[float, float, float, float]
+    s: np.ndarray
+    ds: np.ndarray
+    hold: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+    @classmethod
+    def record(cls, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any
+               ) -> CanonicalSchedule:
+        """The schedule of ``AdaptiveFrequencyStepper(dmp, dt, **settings)`` stepped over the samples ``u`` (``[T]``
+        or ``[T, k]``), its stop requested before step ``stop_step`` (in ``[0, T)``; ``None``: no stop)."""
+        samples = as_finite_array(u, "u", ndim=(1, 2))
+        samples = samples.reshape(len(samples), -1)
+        n = len(samples)
+        if stop_step is not None and not (isinstance(stop_step, (int, np.integer)) and 0 <= stop_step < n):
+            raise ValueError(f"stop_step: expected a step in [0, {n}) or None, got {stop_step!r}")
+        stepper = AdaptiveFrequencyStepper(dmp, dt, **settings)
+        s, ds = np.empty(n + 1), np.zeros(n)
+        phi, b0, b1 = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
+        for k in range(n):
+            s[k] = stepper.s
+            step = stepper._advance_canonical(samples[k])
+            if step > 0.0:
+                ds[k] = step
+                phi[k], b0[k], b1[k] = _first_order_hold(stepper.omega_fit, step, dmp.alpha_z)
+        s[n] = stepper.s
+        arrays = (samples.copy(), s, ds, phi, b0, b1)
+        for array in arrays:
+            array.flags.writeable = False
+        return cls(arrays[0], stepper.dt, None if stop_step is None else int(stop_step), dict(settings),
+                   _canonical_key(dmp, stepper.transient), s, ds, (phi, b0, b1))
+
+    def matches(self, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any) -> bool:
+        """Whether :meth:`record` with these arguments would record this schedule (the same input, sample period,
+        stop step, settings and canonical system; ``dmp``'s weights, amplitude and ending may differ)."""
+        samples = np.asarray(u, dtype=np.float64)
+        return (float(dt) == self.dt and stop_step == self.stop_step and dict(settings) == self.settings
+                and samples.size == self.u.size and np.array_equal(samples.reshape(self.u.shape), self.u)
+                and _canonical_key(dmp, settings.get("transient", 0)) == self.canonical)
+
+    def rollout(self, dmp) -> np.ndarray:
+        """The positions ``y [T + 1, d]`` before each step and after the last of
+        ``AdaptiveFrequencyStepper(dmp, dt, **settings)`` stepped along this schedule, bit for bit; ``dmp`` shares
+        the recorded DMP's canonical system, damping and start phase (its weights, amplitude and ending may differ).
+        The drive and the input terms are computed for all steps at once, then the 2x2 updates run."""
+        stepper = AdaptiveFrequencyStepper(dmp, self.dt, **self.settings)
+        if _canonical_key(dmp, stepper.transient) != self.canonical:
+            raise ValueError("dmp: its canonical system, damping or start phase differs from the recorded DMP's")
+        n = self.ds.size
+        cut = n if self.stop_step is None else self.stop_step
+        ends = np.empty((2, n, dmp.n_dims))                 # the drive times Omega at each step's start and end
+        before = stepper.omega_fit * stepper._drive(self.s[: cut + 1])
+        ends[0, :cut], ends[1, :cut] = before[:-1], before[1:]
+        if cut < n:                                         # the stop's steps
+            stepper._set_stop(self.s[cut])
+            after = stepper.omega_fit * stepper._drive(self.s[cut:])
+            ends[0, cut:], ends[1, cut:] = after[:-1], after[1:]
+        phi, b0, b1 = self.hold
+        now, following = _hold_inputs(b0, b1, ends[0], ends[1])
+        y = np.empty((n + 1, dmp.n_dims))
+        y[0], state = stepper.y, np.stack([stepper.y, stepper.z])
+        for k, moving in enumerate((self.ds > 0.0).tolist()):
+            if moving:
+                state = _hold_update(phi[k], state, (now[k], following[k]))
+            y[k + 1] = state[0]
+        return y
 
 
 def follow_rhythm(dmp, u: np.ndarray, dt: float, *, stop_at: float | None = None, **stepper_kwargs

@@ -30,7 +30,7 @@ import mujoco
 import numpy as np
 
 from rdmp_gym import RhythmicDMP
-from rdmp_gym.dmp.frequency import AdaptiveFrequencyStepper
+from rdmp_gym.dmp.frequency import CanonicalSchedule
 from rdmp_gym.dmp.stopping import fit_ending
 from rdmp_gym.validation import SettingTypeError, check_number, check_pair
 
@@ -97,6 +97,7 @@ class DrumTask(TaskDescription):
         self.max_jerk_ratio = check_number(max_jerk_ratio, "max_jerk_ratio", low=1.0, strict_low=False,
                                            what=" (the path's integrated squared jerk over the imitation's)")
         self.rest_speed = check_number(rest_speed, "rest_speed", low=0.0, what=" (m/s)")
+        self._last_schedule: CanonicalSchedule | None = None
         spec, last_beat = self.context_spec, self.duration - _STOP_RESERVE
         latest = spec.latest_change(last_beat, spec.tempo[0])
         if spec.change_window[1] > latest:
@@ -189,19 +190,26 @@ class DrumTask(TaskDescription):
         metronome = self.metronome(context)
         beats, counted = self.beats(metronome)
         dt = float(times[1] - times[0])
-        stepper = AdaptiveFrequencyStepper(params, dt, coupling=2.0 * 4.0**coupling, phase_gain=2.0 * 4.0**phase_gain,
-                                           frequency=metronome.omega)
+        settings = {"coupling": 2.0 * 4.0**coupling, "phase_gain": 2.0 * 4.0**phase_gain, "frequency": metronome.omega}
         signal = metronome.signal(times, shift=shift)
         stop_at = self.stop_request(metronome, beats[-1]) if beats.size else times[-1]
-        path = np.empty((len(times), 3))
-        for k, t in enumerate(times):
-            if t >= stop_at and stepper.stop is None:
-                stepper.request_stop()
-            path[k] = stepper.y
-            stepper.step(signal[k])
+        stopping = np.flatnonzero(times >= stop_at)
+        schedule = self._schedule(params, signal, dt, int(stopping[0]) if stopping.size else None, settings)
+        path = schedule.rollout(params)[:-1]
         origin, rotation = self.frame(context, table_origin)
         return TaskPlan(path, origin, rotation, {"beats": beats, "counted": counted, "stop_at": stop_at,
                                                  "change_time": metronome.change_time})
+
+    def _schedule(self, dmp: RhythmicDMP, signal: np.ndarray, dt: float, stop_step: int | None,
+                  settings: Mapping[str, float]) -> CanonicalSchedule:
+        """The canonical schedule of the plan's stepper (:class:`~rdmp_gym.dmp.frequency.CanonicalSchedule`) over
+        the beat signal ``signal [T]``, its stop requested before step ``stop_step``: the last one recorded where it
+        matches (a plan of other weights, amplitude or stop weights in the same context with the same extras), else
+        a new recording."""
+        schedule = self._last_schedule
+        if schedule is None or not schedule.matches(dmp, signal, dt, stop_step, **settings):
+            schedule = self._last_schedule = CanonicalSchedule.record(dmp, signal, dt, stop_step, **settings)
+        return schedule
 
     # ------------------------------------------------------------------ the cycle-level face
     def cycle_state_bounds(self) -> tuple[np.ndarray, np.ndarray]:
