@@ -22,10 +22,12 @@ ridge baseline ``b`` of the context (the first cycle's observation: it depends o
 ``η`` set so that ``KL(P || uniform) = epsilon`` (the update's trust region). The shared draws move every cycle's map
 alike: by the weighted ridge fit of the draws on the context's regressors less the same fit with uniform weights
 (PI²'s reweighted noise, with gains on the context). Cycle ``c``'s own draws move its map alone, by the same fit on
-``x(o_c)``; its gains on the task's state (the feedback) are that update's alone, pulled towards zero at each
-update, not accumulated. Measured on ``ArmarWipe-v3``: with every cycle fitted by its own credit (shared draws
-included) the cycles' maps drifted apart, each difference a hand-over, and the policy lost the imitation's
-smoothness within 400 episodes. The exploration decays geometrically, ``sigma <- max(min_sigma, decay sigma)``.
+``x(o_c)``; its gains on the task's state (the feedback) keep a share ``feedback_keep`` of their value before the
+update's change is added (0 by default: each update's own, not accumulated). With ``pooled`` the cycles after the
+first share one map, fitted to all their own draws. Measured on ``ArmarWipe-v3``: with every cycle fitted by its own
+credit (shared draws included) the cycles' maps drifted apart, each difference a hand-over, and the policy lost the
+imitation's smoothness within 400 episodes. The exploration decays geometrically,
+``sigma <- max(min_sigma, decay sigma)``.
 """
 
 from __future__ import annotations
@@ -64,6 +66,8 @@ class CycleSearchConfig(Settings):
         pooled: the cycles after the first share one map, fitted to the own draws of all of them (each judged by its
             own cycle's credit), instead of one map per cycle: the cycles then differ only where what they observe
             differs, and every cycle's samples inform the one map.
+        feedback_keep: the share of the gains on the task's state (the feedback) that an update keeps before it adds
+            its own change (0: each update's gains are its own; 1: they accumulate as the other gains do).
     """
 
     sigma: float = 0.3
@@ -75,6 +79,7 @@ class CycleSearchConfig(Settings):
     decay: float = 0.96
     min_sigma: float = 0.03
     pooled: bool = False
+    feedback_keep: float = 0.0
 
     def __post_init__(self) -> None:
         check_range(self.sigma, "sigma", 0.0, 1.0, low_open=True)
@@ -85,6 +90,7 @@ class CycleSearchConfig(Settings):
         check_range(self.gain_prior, "gain_prior", 0.0, None, low_open=True)
         check_range(self.decay, "decay", 0.0, 1.0, low_open=True)
         check_range(self.min_sigma, "min_sigma", 0.0, self.sigma)
+        check_range(self.feedback_keep, "feedback_keep", 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -212,7 +218,8 @@ class CycleSearch:
             change = common + self._own_change(group, observations, own, to_go, contexts)
             for cycle in group:
                 updated = self.maps[cycle] + change
-                updated[:, 1 + self.context_size:] = change[:, 1 + self.context_size:]  # feedback: this update's
+                feedback = slice(1 + self.context_size, None)
+                updated[:, feedback] = self.config.feedback_keep * self.maps[cycle][:, feedback] + change[:, feedback]
                 self.maps[cycle] = np.where(self.active[cycle][:, None], updated, self.maps[cycle])
         self.sigma = max(self.config.min_sigma, self.config.decay * self.sigma)
         self.updates += 1
