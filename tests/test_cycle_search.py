@@ -116,3 +116,32 @@ def test_bad_inputs_are_refused_by_name():
     with pytest.raises(ValueError, match="costs"):
         CycleBatch(np.zeros((2, 3, 2)), np.array([0.0, np.nan]), np.zeros((2, 3)), np.zeros((2, 4)),
                    np.zeros((2, 3, 4)))
+
+
+def _configured(**changes) -> CycleSearch:
+    config = CycleSearchConfig(sigma=0.3, length=0.0, reuse=2, decay=0.95, **changes)
+    return CycleSearch(ACTIONS, 1, np.ones((CYCLES, ACTIONS), dtype=bool), np.zeros(2), np.array([0.6, 0.3]),
+                       [(slice(0, ACTIONS), None)], config, np.random.default_rng(3))
+
+
+def test_pooled_cycles_share_one_map_and_the_first_keeps_its_own():
+    search, rng = _configured(pooled=True, shared=0.0), np.random.default_rng(4)
+    for _ in range(3):
+        search.update(_batch(search, rng, 16))
+    assert np.array_equal(search.maps[1], search.maps[2])
+    assert not np.allclose(search.maps[0], search.maps[1])
+
+
+def test_feedback_keep_decides_whether_the_feedback_gains_accumulate():
+    kept, fresh = _configured(feedback_keep=1.0), _configured(feedback_keep=0.0)
+    rng_kept, rng_fresh = np.random.default_rng(5), np.random.default_rng(5)
+    for _ in range(2):
+        first = _batch(kept, rng_kept, 16)
+        fresh_batch = _batch(fresh, rng_fresh, 16)
+        before = kept.maps[:, :, 2:].copy()
+        kept.update(first)
+        fresh.update(fresh_batch)
+    change = fresh.maps[:, :, 2:]                    # the last update's own feedback change
+    assert np.allclose(kept.maps[:, :, 2:], before + change)
+    with pytest.raises(ValueError, match="feedback_keep"):
+        CycleSearchConfig(feedback_keep=1.5)
