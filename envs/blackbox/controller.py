@@ -11,6 +11,9 @@ wrapper clips its result to the env's action box. :func:`make_controller` builds
 - ``"pd"``: ``Kp (q_des - q) + Kd (qd_des - qd)``, for envs whose action is a joint torque (or motor command);
 - ``"position"``: ``q_des``, for envs whose action is a joint position target;
 - ``"velocity"``: ``qd_des + Kp (q_des - q)`` (``Kp`` = 0 by default: ``qd_des`` itself), for joint velocity targets.
+
+With the wrapper's setting ``feedback="linear"`` a :class:`LinearFeedback` adds ``K z`` to the controller's command:
+``z`` the env's observation standardised on a reference gait, ``K`` gains the policy learns.
 """
 
 from __future__ import annotations
@@ -20,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CONTROLLERS", "JointReader", "MujocoJoints", "PDController", "PositionController", "TrackingController",
-           "VelocityController", "check_gains", "make_controller"]
+__all__ = ["CONTROLLERS", "JointReader", "LinearFeedback", "MujocoJoints", "PDController", "PositionController",
+           "TrackingController", "VelocityController", "check_gains", "make_controller"]
 
 #: ``reader(env) -> (q [d], qd [d])``
 JointReader = Callable[[Any], tuple[np.ndarray, np.ndarray]]
@@ -29,6 +32,12 @@ JointReader = Callable[[Any], tuple[np.ndarray, np.ndarray]]
 TrackingController = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 CONTROLLERS = ("pd", "position", "velocity")
+
+#: the standardised observation is clipped to +- this many standard deviations of the reference gait
+FEEDBACK_CLIP = 5.0
+#: a feature's standard deviation is floored at this fraction of the median one (1 where the median is 0): a feature
+#: that is constant on the reference gait would otherwise turn any deviation into the clip
+FEEDBACK_STD_FLOOR = 0.01
 
 
 class MujocoJoints:
@@ -163,3 +172,39 @@ def make_controller(controller: str | TrackingController, n_joints: int, n_actio
             raise ValueError("p_gains: the 'position' controller passes the desired positions through; it has no gains")
         return PositionController()
     return VelocityController(check_gains(0.0 if p_gains is None else p_gains, n_joints, "p_gains"))
+
+
+class LinearFeedback:
+    """The reacting term ``K z`` added to the tracking controller's command: ``z = clip((o - mean) / std, +-5)``.
+
+    ``mean`` and ``std`` ``[m]`` are the flattened observation's statistics over a reference rollout (the wrapper's
+    ``a = 0`` gait), fixed when the wrapper is built, so ``z`` measures how far the body is from its nominal gait in
+    that gait's own standard deviations.
+
+    Args:
+        observations: ``[N, m]`` the reference rollout's flattened observations.
+    """
+
+    def __init__(self, observations: np.ndarray) -> None:
+        values = np.asarray(observations, dtype=np.float64)
+        if values.ndim != 2 or values.shape[0] == 0 or not np.all(np.isfinite(values)):
+            raise ValueError(f"feedback: expected [N, m] finite reference observations, got shape {values.shape}")
+        self.mean = values.mean(axis=0)
+        spread = values.std(axis=0)
+        median = float(np.median(spread))
+        self.std = np.maximum(spread, FEEDBACK_STD_FLOOR * median if median > 0.0 else 1.0)
+
+    @property
+    def n_features(self) -> int:
+        """m, the observation features."""
+        return int(self.mean.size)
+
+    def features(self, observation: np.ndarray) -> np.ndarray:
+        """``z [m]`` of a flattened observation ``[m]`` (non-finite entries count as 0)."""
+        z = (np.asarray(observation, dtype=np.float64) - self.mean) / self.std
+        return np.clip(np.nan_to_num(z, nan=0.0, posinf=FEEDBACK_CLIP, neginf=-FEEDBACK_CLIP),
+                       -FEEDBACK_CLIP, FEEDBACK_CLIP)
+
+    def __call__(self, gains: np.ndarray, observation: np.ndarray) -> np.ndarray:
+        """``K z [n]`` for gains ``K [n, m]`` (action units per standard deviation) and an observation ``[m]``."""
+        return gains @ self.features(observation)

@@ -30,9 +30,13 @@ __all__ = ["BLACKBOX_SCALES", "ENV_DEFAULTS", "MIN_START", "MODEL_RULES", "Model
 #: phase and of r0 for the radius; ``amplitude``: the factor on the pattern about the anchor, so ``a = +-1`` scales
 #: it by 1.5 / 0.5; ``anchor``: the fraction of each joint's peak-to-peak motion in the initial DMP's cycle
 #: (floored at a quarter of the largest joint's), so the unit-free value suits hinges (rad) and slides (m) alike;
-#: ``tempo``: the change of the speed factor at ``a = +-1`` (0.5: 1.5x faster / half speed).
+#: ``tempo``: the change of the speed factor at ``a = +-1`` (0.5: 1.5x faster / half speed); ``feedback`` (the
+#: setting ``feedback="linear"``): a gain from observation feature j to action i of ``a`` times ``scale h_i /
+#: sqrt(m)`` action units per standard deviation (``h_i`` half the action box's width, ``m`` the features), so a row
+#: of unit gains against deviations of one standard deviation, uncorrelated, commands about ``scale`` of the
+#: half-width (RMS).
 BLACKBOX_SCALES: dict[str, float] = {"periodic": 0.5, "transient": 0.5, "initial": 0.1, "amplitude": 0.5,
-                                     "anchor": 0.5, "tempo": 0.5}
+                                     "anchor": 0.5, "tempo": 0.5, "feedback": 0.25}
 
 #: the shortest start of the default pattern (periods): the shortest transient a rhythmic DMP is fitted to
 MIN_START = MIN_TRANSIENT

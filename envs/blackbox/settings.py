@@ -22,10 +22,13 @@ from rdmp_gym import Demonstration, RhythmicDMP
 from .controller import CONTROLLERS, JointReader, TrackingController
 from .defaults import check_start
 
-__all__ = ["DEFAULT_GROUPS", "BlackBoxSettings"]
+__all__ = ["DEFAULT_GROUPS", "FEEDBACKS", "BlackBoxSettings"]
 
 #: the parameter groups in the action by default: the cycle's shape, its amplitude and the posture it is centred on
 DEFAULT_GROUPS = ("periodic", "amplitude", "anchor")
+
+#: the reacting policies the setting ``feedback`` names (None: the open-loop DMP alone)
+FEEDBACKS = ("linear",)
 
 Numbers = float | tuple[float, ...]
 
@@ -95,6 +98,10 @@ class BlackBoxSettings:
         dt: seconds per env step; None: ``env.unwrapped.dt``.
         scales: ``{group: frac}`` action scales over :data:`~rdmp_gym.envs.blackbox.defaults.BLACKBOX_SCALES`.
         fit_kwargs: settings of :meth:`RhythmicDMP.fit <rdmp_gym.RhythmicDMP.fit>` (``period``, ``alpha_z``, ...).
+        feedback: None (the open-loop DMP: the policy never sees the body) or ``"linear"``: the controller's command
+            gains ``K z``, ``K [n actions, m observation features]`` the last group of the action (``feedback``, zero
+            at ``a = 0``), ``z [m]`` the env's flattened observation standardised on the ``a = 0`` gait
+            (:class:`~rdmp_gym.envs.blackbox.controller.LinearFeedback`).
     """
 
     groups: tuple[str, ...] = DEFAULT_GROUPS
@@ -116,6 +123,7 @@ class BlackBoxSettings:
     dt: float | None = None
     scales: Mapping[str, float] = field(default_factory=dict)
     fit_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    feedback: str | None = None
 
     def __post_init__(self) -> None:
         put = object.__setattr__
@@ -156,6 +164,8 @@ class BlackBoxSettings:
             put(self, "dt", _positive(self.dt, "dt"))
         put(self, "scales", self._mapping(self.scales, "scales"))
         put(self, "fit_kwargs", self._mapping(self.fit_kwargs, "fit_kwargs"))
+        if self.feedback is not None and (not isinstance(self.feedback, str) or self.feedback not in FEEDBACKS):
+            raise ValueError(f"feedback: expected None (open loop) or one of {FEEDBACKS}, got {self.feedback!r}")
 
     @staticmethod
     def _groups(groups: Any) -> tuple[str, ...]:

@@ -15,6 +15,10 @@ One ``step(a)``:
    (the reset observation under ``context_mask``) and ``info`` (the executed and desired trajectories, the tracking
    error, ``env_steps``, the per-step rewards and ``cost_trace``, the per-step cost zero-padded to ``T``).
 
+With the setting ``feedback="linear"`` the policy reacts to the body: the controller's command gains ``K z``, the
+env's observation ``z`` standardised on the ``a = 0`` gait (:class:`~rdmp_gym.envs.blackbox.controller.LinearFeedback`)
+and the gains ``K`` the action's last group ``feedback`` (zero at ``a = 0``, which stays the open-loop gait).
+
 The settings are one :class:`~rdmp_gym.envs.blackbox.settings.BlackBoxSettings`; on a MuJoCo env every setting has a
 default derived from the model (:func:`~rdmp_gym.envs.blackbox.defaults.model_defaults`). The wrapper declares its
 task contract (:meth:`RhythmicBlackBoxWrapper.task_contract`, :meth:`~RhythmicBlackBoxWrapper.executed_path`) and
@@ -43,7 +47,7 @@ from rdmp_gym import RhythmicDMP
 from ..action import checked_action
 from ..contract import Metric, TaskContract
 from ..specs import find_spec
-from .controller import JointReader, MujocoJoints, TrackingController, check_gains, make_controller
+from .controller import JointReader, LinearFeedback, MujocoJoints, TrackingController, check_gains, make_controller
 from .defaults import ModelDefaults, default_demonstration, env_defaults, model_defaults
 from .params import JointParameterMap
 from .settings import DEFAULT_GROUPS, BlackBoxSettings
@@ -52,6 +56,8 @@ __all__ = ["DEFAULT_GROUPS", "WRAPPER_SETTINGS", "RhythmicBlackBoxWrapper", "mak
 
 #: the most frames per second of :meth:`RhythmicBlackBoxWrapper.record_episode` (it keeps every k-th env step)
 VIDEO_FPS = 30.0
+#: the reset seed of the ``a = 0`` episode whose observations standardise the feedback's features
+FEEDBACK_REFERENCE_SEED = 0
 
 
 class RhythmicBlackBoxWrapper(gym.Env):
@@ -72,6 +78,8 @@ class RhythmicBlackBoxWrapper(gym.Env):
     Attributes:
         settings: the settings as given. model_defaults: what the MuJoCo model suggests (None without one).
         has_success: whether the env reports ``info["is_success"]`` (told by one env step when it is built).
+        feedback: the :class:`~rdmp_gym.envs.blackbox.controller.LinearFeedback` (its statistics from one ``a = 0``
+            episode at reset seed :data:`FEEDBACK_REFERENCE_SEED`, run when the wrapper is built), None in open loop.
 
     Raises:
         ValueError: naming the argument, for an env it cannot drive (a discrete action space, no joint state to
@@ -106,10 +114,11 @@ class RhythmicBlackBoxWrapper(gym.Env):
         self.controller = self._controller(chosen, int(space.shape[0]))
         self.dmp = self._initial_dmp(chosen)
         self.groups = self.settings.groups
-        self.param_map = JointParameterMap(self.dmp, self.groups, self.settings.scales, self._cycle_motion())
+        self._flat_space = gym.spaces.flatten_space(env.observation_space)
+        self.param_map = JointParameterMap(self.dmp, self.groups, self.settings.scales, self._cycle_motion(),
+                                           self._feedback_units())
         self.theta0 = self.param_map.theta0.copy()
         self.action_space = gym.spaces.Box(-1.0, 1.0, (self.param_map.size,), np.float32)
-        self._flat_space = gym.spaces.flatten_space(env.observation_space)
         self.context_mask = self._mask(self.settings.context_mask)
         self.observation_space = gym.spaces.Box(self._flat_space.low[self.context_mask].astype(np.float32),
                                                 self._flat_space.high[self.context_mask].astype(np.float32),
@@ -121,6 +130,10 @@ class RhythmicBlackBoxWrapper(gym.Env):
         self._context = np.zeros(int(self.context_mask.sum()), dtype=np.float32)
         self._frames: list[np.ndarray] | None = None
         self._frame_stride = 1
+        self._reset_observation: np.ndarray | None = None
+        self.feedback: LinearFeedback | None = None
+        if self.settings.feedback is not None:
+            self.feedback = self._reference_feedback()
 
     # ------------------------------------------------------------------ construction
     def _given(self) -> dict[str, Any]:
@@ -250,6 +263,26 @@ class RhythmicBlackBoxWrapper(gym.Env):
                              f"observation), got {mask.size}")
         return mask
 
+    def _feedback_units(self) -> np.ndarray | None:
+        """``[n, m]`` each feedback gain's unit (action units per standard deviation): ``h_i / sqrt(m)``, ``h_i`` half
+        the env's action box (1 where it is unbounded); None in open loop."""
+        if self.settings.feedback is None:
+            return None
+        low = np.asarray(self.env_action_space.low, dtype=np.float64)
+        high = np.asarray(self.env_action_space.high, dtype=np.float64)
+        half = np.where(np.isfinite(high - low) & (high > low), (high - low) / 2.0, 1.0)
+        m = int(self._flat_space.shape[0])
+        return np.repeat(half[:, None] / np.sqrt(m), m, axis=1)
+
+    def _reference_feedback(self) -> LinearFeedback:
+        """The feedback standardised on the observations of one ``a = 0`` episode from reset seed
+        :data:`FEEDBACK_REFERENCE_SEED` (the reset observation and every step's)."""
+        observation, _ = self.env.reset(seed=FEEDBACK_REFERENCE_SEED)
+        start = self._joint_state()
+        q_des, qd_des = self.desired_trajectory(self.theta0, *start)
+        run = self._track(start, q_des, qd_des, observation=self._flatten(observation))
+        return LinearFeedback(run["observations"])
+
     def _reports_success(self) -> bool:
         """Whether the env reports ``is_success``: in the info of a reset (unseeded) or of one env step after it
         (the action box's point nearest 0). The next episode needs a reset anyway."""
@@ -279,10 +312,13 @@ class RhythmicBlackBoxWrapper(gym.Env):
             else np.zeros((self.n_steps, 0))
         if self.param_map.has_tempo:
             weights = np.hstack([weights, np.ones((self.n_steps, 1))])
+        if self.param_map.feedback_shape is not None:
+            weights = np.hstack([weights, np.ones((self.n_steps, int(np.prod(self.param_map.feedback_shape))))])
         return weights
 
     def action_slices(self) -> dict[str, slice]:
-        """``{group: slice}`` of the action (the DMP's groups in its order, then ``tempo`` where selected)."""
+        """``{group: slice}`` of the action (the DMP's groups in its order, then ``tempo`` where selected, then
+        ``feedback`` with the setting ``feedback="linear"``)."""
         return dict(self.param_map.slices)
 
     def param_slices(self) -> dict[str, slice]:
@@ -371,11 +407,16 @@ class RhythmicBlackBoxWrapper(gym.Env):
         observation, info = self.env.reset(seed=seed, options=options)
         self._start = self._joint_state()
         self._context = self._observe(observation)
+        if self.feedback is not None:
+            self._reset_observation = self._flatten(observation)
         return self._context.copy(), info
 
+    def _flatten(self, observation: Any) -> np.ndarray:
+        """``[m]`` (float64) the env's observation flattened."""
+        return np.asarray(gym.spaces.flatten(self.env.observation_space, observation), dtype=np.float64)
+
     def _observe(self, observation: Any) -> np.ndarray:
-        flat = np.asarray(gym.spaces.flatten(self.env.observation_space, observation), dtype=np.float64)
-        return flat[self.context_mask].astype(np.float32)
+        return self._flatten(observation)[self.context_mask].astype(np.float32)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One whole episode with the DMP of ``action``; ``terminated`` is always True (the env's own flags are in
@@ -386,13 +427,20 @@ class RhythmicBlackBoxWrapper(gym.Env):
         theta = self.param_map.to_params(np.clip(a, -1.0, 1.0))
         start, self._start = self._start, None
         q_des, qd_des = self.desired_trajectory(theta, *start)
-        run = self._track(start, q_des, qd_des)
+        gains = self.param_map.feedback_gains(theta)
+        run = self._track(start, q_des, qd_des, gains, self._reset_observation if gains is not None else None)
         return self._context.copy(), float(run["step_rewards"].sum()), True, False, self._info(theta, q_des, qd_des,
                                                                                                run)
 
-    def _track(self, start: tuple[np.ndarray, np.ndarray], q_des: np.ndarray, qd_des: np.ndarray) -> dict[str, Any]:
+    def _track(self, start: tuple[np.ndarray, np.ndarray], q_des: np.ndarray, qd_des: np.ndarray,
+               gains: np.ndarray | None = None, observation: np.ndarray | None = None) -> dict[str, Any]:
         """Run the env from the joint state ``start`` along the desired states ``[T + 1, d]`` with the controller
-        until the episode's end or the env's; the executed states, the env's actions and rewards, its last step."""
+        until the episode's end or the env's; the executed states, the env's actions and rewards, its last step.
+
+        ``gains [n, m]`` add :attr:`feedback` of the last flattened observation to each command (from
+        ``observation [m]``, the reset's, which it then needs); with ``observation`` the run also keeps every
+        flattened observation (``"observations" [used + 1, m]``) and the feedback's part of the commands
+        (``"feedback_actions" [used, n]``, zero without gains)."""
         low, high = self.env_action_space.low, self.env_action_space.high
         n, d = self.n_steps, self.n_joints
         positions, velocities = np.empty((n + 1, d)), np.empty((n + 1, d))
@@ -401,10 +449,15 @@ class RhythmicBlackBoxWrapper(gym.Env):
         commands = np.empty((n, *self.env_action_space.shape), dtype=self.env_action_space.dtype)
         clipped = used = 0
         terminated = truncated = False
+        seen = None if observation is None else [observation]
+        pushes = None if observation is None else np.zeros((n, *self.env_action_space.shape))
         observation, step_info = None, {}
         for k in range(n):
             raw = np.asarray(self.controller(q_des[k + 1], qd_des[k + 1], positions[k], velocities[k]),
                              dtype=np.float64)
+            if gains is not None:
+                pushes[k] = self.feedback(gains, seen[-1])
+                raw = raw + pushes[k]
             if raw.shape != self.env_action_space.shape or not np.all(np.isfinite(raw)):
                 raise ValueError(f"controller: returned {raw.shape} values (finite: {bool(np.all(np.isfinite(raw)))}); "
                                  f"expected {self.env_action_space.shape} finite values")
@@ -415,13 +468,18 @@ class RhythmicBlackBoxWrapper(gym.Env):
             rewards[k] = float(reward)
             used = k + 1
             positions[used], velocities[used] = self._joint_state()
+            if seen is not None:
+                seen.append(self._flatten(observation))
             if self._frames is not None and used % self._frame_stride == 0:
                 self._frames.append(self._frame())
             if terminated or truncated:
                 break
-        return {"positions": positions[:used + 1], "velocities": velocities[:used + 1], "env_actions": commands[:used],
-                "clipped": clipped, "step_rewards": rewards[:used].copy(), "env_terminated": bool(terminated),
-                "env_truncated": bool(truncated), "last_observation": observation, "env_info": step_info}
+        run = {"positions": positions[:used + 1], "velocities": velocities[:used + 1], "env_actions": commands[:used],
+               "clipped": clipped, "step_rewards": rewards[:used].copy(), "env_terminated": bool(terminated),
+               "env_truncated": bool(truncated), "last_observation": observation, "env_info": step_info}
+        if seen is not None:
+            run.update(observations=np.asarray(seen), feedback_actions=pushes[:used])
+        return run
 
     def _info(self, theta: np.ndarray, q_des: np.ndarray, qd_des: np.ndarray, run: dict[str, Any]) -> dict[str, Any]:
         """The episode's ``info`` (see the docs' table)."""
@@ -439,6 +497,8 @@ class RhythmicBlackBoxWrapper(gym.Env):
                 "env_info": run["env_info"], "valid": True}
         if "is_success" in run["env_info"]:
             info["is_success"] = bool(run["env_info"]["is_success"])
+        if "feedback_actions" in run:
+            info["feedback_actions"] = run["feedback_actions"]
         return info
 
     # ------------------------------------------------------------------ rendering
