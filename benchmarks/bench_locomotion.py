@@ -26,6 +26,14 @@ and how many do). The published anchors (:data:`ANCHORS`, each with its source) 
     # the table from the runs so far, without training; the figures (learning curves, Swimmer filmstrip):
     python benchmarks/bench_locomotion.py --summary-only --save
     python benchmarks/bench_locomotion.py --figures --save
+
+``--feedback``: the reacting policy against the open-loop one, ``cmaes`` with the wrapper's default settings against
+``cmaes_feedback`` (the same with ``feedback="linear"``), seed by seed alternating between the envs, no SAC, runs in
+``runs/locomotion_feedback/``; ``locomotion_feedback.json`` has PPO and SAC from ``locomotion.json`` (they run on the
+raw env, so the wrapper's defaults do not touch them), the open-loop oscillator from ``open_loop_oscillator.json`` and
+the default pattern's ``a = 0`` return on the test contexts beside them:
+
+    python benchmarks/bench_locomotion.py --feedback --seeds 10 --save
 """
 
 from __future__ import annotations
@@ -43,7 +51,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import gymnasium as gym
 import numpy as np
-from output import add_save_argument, results_dir
+from output import COMMITTED, add_save_argument, results_dir
 from rdmp_gym.agents.pool import Evaluator
 from rdmp_gym.agents.protocol import context_observations, final_test_seeds, interval, validation_seeds
 from rdmp_gym.agents.report import trained_actions
@@ -61,7 +69,12 @@ LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     # Raffin et al.'s oscillator, which the default range, at most 1.5 x 0.5 rad, cannot reach); opt-in
     "cmaes_wide": ("cmaes", {}, {"scales": {"amplitude": 1.0}}),
     "plain_prior_wide": ("cpi2", {"gain_prior": 10}, {"scales": {"amplitude": 1.0}}),
+    # the reacting policy: the controller's command gains K z (z the observation standardised on the a = 0 gait,
+    # K the action's last group, zero at a = 0); opt-in
+    "cmaes_feedback": ("cmaes", {}, {"feedback": "linear"}),
 }
+#: the learners of --feedback
+FEEDBACK_LEARNERS = ("cmaes", "cmaes_feedback")
 #: the learners run when --learners is not given
 MAIN_LEARNERS = ("cmaes", "bbrl", "plain_prior", "random", "ppo")
 SB3_ALGOS = ("ppo", "sac")
@@ -136,8 +149,9 @@ ANCHORS: list[dict[str, Any]] = [
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--envs", nargs="+", default=list(ENVS), choices=ENVS)
-    parser.add_argument("--learners", nargs="+", default=list(MAIN_LEARNERS), choices=[*LEARNERS, *SB3_ALGOS],
-                        help="the learners of the main jobs (SAC runs after them, see --sac-seeds)")
+    parser.add_argument("--learners", nargs="+", default=None, choices=[*LEARNERS, *SB3_ALGOS],
+                        help="the learners of the main jobs (SAC runs after them, see --sac-seeds; default: "
+                             f"{' '.join(MAIN_LEARNERS)}, with --feedback {' '.join(FEEDBACK_LEARNERS)})")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 of every main learner")
     parser.add_argument("--updates", type=int, default=10, help="rhythmic learners: updates per run")
     parser.add_argument("--rollouts", type=int, default=10, help="rhythmic learners: episodes per update")
@@ -146,12 +160,22 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--sac-steps", type=int, default=None, help="SAC env steps (default: the rhythmic budget)")
     parser.add_argument("--eval-episodes", type=int, default=3, help="validation contexts per evaluation")
     parser.add_argument("--test-episodes", type=int, default=10, help="test contexts for the final policy")
-    parser.add_argument("--run-dir", default=str(ROOT / "runs" / "locomotion"), help="where the runs live")
+    parser.add_argument("--run-dir", default=None,
+                        help="where the runs live (default: runs/locomotion, with --feedback runs/locomotion_feedback)")
+    parser.add_argument("--feedback", action="store_true",
+                        help="the feedback study: cmaes open loop vs with feedback='linear', no SAC, written to "
+                             "locomotion_feedback.json")
     parser.add_argument("--summary-only", action="store_true", help="gather the finished runs; train nothing")
     parser.add_argument("--figures", action="store_true",
                         help="draw locomotion.png (from locomotion.json) and the Swimmer filmstrip; train nothing")
     add_save_argument(parser)
     args = parser.parse_args()
+    if args.learners is None:
+        args.learners = list(FEEDBACK_LEARNERS if args.feedback else MAIN_LEARNERS)
+    if args.run_dir is None:
+        args.run_dir = str(ROOT / "runs" / ("locomotion_feedback" if args.feedback else "locomotion"))
+    if args.feedback:
+        args.sac_seeds = 0
     budget = args.updates * args.rollouts * EPISODE_STEPS
     args.ppo_steps = budget if args.ppo_steps is None else args.ppo_steps
     args.sac_steps = budget if args.sac_steps is None else args.sac_steps
@@ -299,6 +323,8 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
 def _jobs(args: argparse.Namespace) -> list[tuple[str, str, int]]:
     """(env, learner, seed) in the order they run: per env the main learners seed by seed, then SAC seed by seed,
     alternating between the envs (so that an interrupted study has SAC seeds on both)."""
+    if args.feedback:    # seed by seed, alternating between the envs, so that a cut-short study has both
+        return [(env_id, label, seed) for seed in range(args.seeds) for env_id in args.envs for label in args.learners]
     jobs = [(env_id, label, seed) for env_id in args.envs for seed in range(args.seeds) for label in args.learners]
     jobs += [(env_id, "sac", seed) for seed in range(args.sac_seeds) for env_id in args.envs
              if "sac" not in args.learners]
@@ -379,10 +405,12 @@ def markdown(rows: list[dict[str, Any]], reference: list[dict[str, Any]]) -> str
     lines += ["", "| env | anchor | return | training env steps | source |", "|---|---|---|---|---|"]
     for a in reference:
         value = "-" if a.get("return") is None else f"{a['return']:.1f}" + (f" +- {a['std']:.1f}" if "std" in a else "")
+        if "interval" in a:
+            value = f"{a['return']:.1f} [{a['interval'][0]:.1f}, {a['interval'][1]:.1f}] ({a['n']} seeds)"
         if "episodes_to_threshold" in a:
             value = "episodes to " + f"{a['threshold']:g}: " + ", ".join(
                 f"{k} {v}" for k, v in a["episodes_to_threshold"].items())
-        steps = "-" if a.get("env_steps") is None else f"{a['env_steps'] / 1e6:g}M"
+        steps = "-" if a.get("env_steps") is None else f"{a['env_steps'] / 1e6:g}M" if a["env_steps"] else "0"
         if a.get("return") is None and "episodes_to_threshold" not in a:
             value = "not read here (see the JSON's note)"
         lines.append(f"| {a['env']} | {a['method']} | {value} | {steps} | {a.get('cite', a['source'])} |")
@@ -416,10 +444,57 @@ def oscillator_anchor(seeds: np.ndarray) -> dict[str, Any]:
             "cite": "Raffin et al. 2024's slides, run here"}
 
 
+def zero_action_reference(env_id: str, seeds: np.ndarray) -> dict[str, Any]:
+    """The wrapper's default pattern (``a = 0``, the same gait with or without feedback) on ``seeds``."""
+    from rdmp_gym.envs.blackbox import make_blackbox
+
+    env = make_blackbox(env_id)
+    returns = []
+    for seed in seeds:
+        env.reset(seed=int(seed))
+        returns.append(float(env.step(np.zeros(env.action_space.shape, dtype=np.float32))[1]))
+    env.close()
+    return {"env": env_id, "method": "default pattern, a = 0 (no training)", "return": float(np.mean(returns)),
+            "std": float(np.std(returns)), "env_steps": 0, "note": f"{len(returns)} test contexts, mean +- std",
+            "source": "make_blackbox(env_id) with its default settings, run by this script", "cite": "run here"}
+
+
+def feedback_references(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Beside the feedback study: PPO/SAC at the same budget from ``locomotion.json``, the open-loop oscillator's
+    CMA-ES runs from ``open_loop_oscillator.json`` and the default pattern's ``a = 0`` return (each where found)."""
+    rows = []
+    budget = args.updates * args.rollouts * EPISODE_STEPS
+    study = COMMITTED / "locomotion.json"
+    if study.is_file():
+        for row in json.loads(study.read_text())["summary"]:
+            if row["learner"] in SB3_ALGOS and row["env"] in args.envs and row["env_steps"] == [budget]:
+                f = row["final_return"]
+                rows.append({"env": row["env"], "method": f"{row['learner'].upper()} (raw env, RL Zoo settings)",
+                             "return": f["estimate"], "interval": [f["low"], f["high"]], "n": f["n"],
+                             "env_steps": budget, "source": "benchmarks/results/locomotion.json (IQM of the final "
+                             "test return, 95 % CI)", "cite": "locomotion.json"})
+    oscillator = COMMITTED / "open_loop_oscillator.json"
+    if oscillator.is_file():
+        for row in json.loads(oscillator.read_text())["rows"]:
+            if row["env"] not in args.envs:
+                continue
+            label = "swing/stance split" if row["split"] else "one frequency"
+            for key, what in (("final", "final mean"), ("best_test", "best candidate")):
+                f = row[key]
+                rows.append({"env": row["env"], "method": f"open-loop oscillator + CMA-ES ({label}), {what}",
+                             "return": f["estimate"], "interval": [f["low"], f["high"]], "n": f["n"],
+                             "env_steps": row["env_steps"], "source": "benchmarks/results/open_loop_oscillator.json "
+                             "(IQM over seeds, 95 % CI)", "cite": "open_loop_oscillator.json"})
+    seeds = final_test_seeds(args.test_episodes)
+    rows += [zero_action_reference(env_id, seeds) for env_id in args.envs]
+    return rows
+
+
 def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
     runs = [json.loads(p.read_text()) for env_id in ENVS for p in sorted((root / env_id).glob("*.json"))
             if (root / env_id).is_dir()]
-    anchors = [*ANCHORS, oscillator_anchor(final_test_seeds(args.test_episodes))]
+    anchors = feedback_references(args) if args.feedback else \
+        [*ANCHORS, oscillator_anchor(final_test_seeds(args.test_episodes))]
     settings = {key: value for key, value in vars(args).items() if key not in ("summary_only", "figures", "save")}
     settings.update({"thresholds": {k: list(v) for k, v in THRESHOLDS.items()}, "zoo": ZOO,
                      "zoo_source": {a: _ZOO.format(a) for a in SB3_ALGOS}, "cpus": os.cpu_count(),
@@ -538,6 +613,7 @@ def main() -> None:
         strip = docs / "swimmer_gait.png" if args.save else out / "swimmer_gait.png"
         print(f"filmstrip: {filmstrip(document, root, strip)} -> {strip}")
         return
+    name = "locomotion_feedback.json" if args.feedback else "locomotion.json"
     if not args.summary_only:
         for env_id, label, seed in _jobs(args):
             path = _result_path(root, env_id, label, seed)
@@ -548,11 +624,11 @@ def main() -> None:
             print(f"{env_id} {label} seed {seed}: final return {record['final_return']:.1f} "
                   f"({time.perf_counter() - began:.0f} s)", flush=True)
             document = gather(args, root)
-            (out / "locomotion.json").write_text(json.dumps(document, indent=1) + "\n")
+            (out / name).write_text(json.dumps(document, indent=1) + "\n")
     document = gather(args, root)
-    (out / "locomotion.json").write_text(json.dumps(document, indent=1) + "\n")
+    (out / name).write_text(json.dumps(document, indent=1) + "\n")
     print(markdown(document["summary"], document["anchors"]))
-    print(f"wrote {out / 'locomotion.json'}")
+    print(f"wrote {out / name}")
 
 
 if __name__ == "__main__":
