@@ -210,7 +210,6 @@ class CycleSearch:
         own = np.concatenate([b.own for b in self._history])                                 # [N, C, n]
         to_go = np.concatenate([b.costs[:, None] - b.spent for b in self._history])          # [N, C]
         contexts = np.stack([self.features(o) for o in observations[:, 0]])
-        contexts[:, 1 + self.context_size:] = 0.0        # the shared map's gains: on the context alone
         baseline = ridge_hat(contexts, self.config.gain_prior * len(contexts))   # shrinks as that many samples
         common = self._reweighted(contexts, shared, to_go[:, 0] - baseline @ to_go[:, 0])     # [n, F + 1]
         groups = [[0], list(range(1, self.n_cycles))] if self.config.pooled else [[c] for c in range(self.n_cycles)]
