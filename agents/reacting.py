@@ -24,12 +24,15 @@ from typing import Any
 import numpy as np
 from rdmp_gym.envs.registration import cycle_id
 
-from .cycle_training import CycleRun, train_cycle_search
+from .cycle_training import CycleRun, failure_counts, train_cycle_search
 from .learners import policy_from_state
 from .learners.cycle_search import CycleSearchConfig
-from .training import TrainConfig, train
+from .pool import Evaluator
+from .protocol import context_observations, evaluate_actions, final_test_seeds
+from .runs import RunDirectory
+from .training import TrainConfig, load_run_config, train
 
-__all__ = ["OPEN_LOOP_OPTIONS", "RESIDUAL", "open_loop_curve", "train_reacting"]
+__all__ = ["OPEN_LOOP_OPTIONS", "RESIDUAL", "open_loop_curve", "score_open_loop", "train_reacting"]
 
 #: the open-loop stage's learner settings: ``bbrl`` without task structure, its linear part in closed form
 OPEN_LOOP_OPTIONS: dict[str, Any] = {"linear": True, "linear_fit": "ridge", "epsilon": 1.0}
@@ -82,3 +85,21 @@ def open_loop_curve(log: list[dict[str, Any]]) -> list[dict[str, float]]:
     return [{"episodes": int(row["episodes"]), "validation_success": float(row["eval_success"]),
              "validation_return": float(row["eval_return_mean"]), "stage": "open loop"}
             for row in log if row.get("eval_success") is not None]
+
+
+def score_open_loop(stage: str | Path, test: int = 50, workers: int = 2) -> dict[str, Any]:
+    """The open-loop stage's final policy (run directory ``stage``) alone on the ``test`` test contexts: what the
+    reacting stage started from. Returns the success rate, the per-context success, the mean jerk ratio, the task's
+    metrics' means and the failure causes."""
+    run = RunDirectory(stage)
+    config = load_run_config(run)
+    state = run.load_checkpoint()["agent"]["learner"]
+    seeds = final_test_seeds(test)
+    with Evaluator(config.task, workers) as evaluator:
+        observations = context_observations(evaluator.env, seeds, config.task.options())
+        scores = evaluate_actions(evaluator, policy_from_state(state, observations), seeds)
+    success = np.asarray(scores.success, dtype=bool)
+    return {"success_rate": float(success.mean()), "success": success.tolist(),
+            "jerk_ratio": float(np.nanmean(scores.jerk_ratio)),
+            "metrics": {key: float(np.nanmean(values)) for key, values in scores.metrics.items()},
+            "failures": failure_counts([] if scores.failures is None else [str(f) for f in scores.failures])}

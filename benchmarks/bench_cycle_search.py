@@ -26,6 +26,7 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.cycle_training import CycleRun, failure_counts, summarise, train_cycle_search
 from rdmp_gym.agents.learners.cycle_search import CycleSearchConfig
@@ -86,11 +87,19 @@ def _gather(run_dir: Path, out: Path) -> None:
     if not runs:
         raise SystemExit(f"--gather: no seed_*.json in {run_dir}")
     table = summarise(runs)
+    stages = {run.seed: run_dir / f"seed_{run.seed}" / "open_loop" for run in runs}
+    if all(stage.is_dir() for stage in stages.values()):            # the reacting learner: its start, paired
+        from rdmp_gym.agents.reacting import score_open_loop
+
+        table["open_loop_test"] = {seed: score_open_loop(stage, len(runs[0].test["seeds"]))
+                                   for seed, stage in stages.items()}
     causes = failure_counts([entry for run in runs for entry in run.test["failures"]])
     table.update({"env": runs[0].env_id, "seeds": [run.seed for run in runs], "failure_causes": causes,
                   "config": runs[0].config, "wall_seconds": [run.wall_seconds for run in runs],
                   "curves": {run.seed: run.curve for run in runs},
-                  "test_success_per_seed": [run.test["success_rate"] for run in runs]})
+                  "test_success_per_seed": [run.test["success_rate"] for run in runs],
+                  "test_metrics": {key: float(np.mean([np.nanmean(run.test["metrics"][key]) for run in runs]))
+                                   for key in runs[0].test["metrics"]}})
     success = table["test_success"]
     print(f"{table['env']}: {len(runs)} seeds, test success IQM {success['estimate']:.3f} "
           f"[{success['low']:.3f}, {success['high']:.3f}], jerk ratio {table['jerk_ratio']:.2f}, "
