@@ -490,6 +490,21 @@ def feedback_references(args: argparse.Namespace) -> list[dict[str, Any]]:
     return rows
 
 
+def paired_differences(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per env: the final test return of ``cmaes_feedback`` less ``cmaes``'s on the same seed, the IQM of those
+    differences with its 95 % interval and how many seeds gain."""
+    rows = []
+    for env_id in dict.fromkeys(r["env"] for r in runs):
+        by = {(r["learner"], r["seed"]): r["final_return"] for r in runs if r["env"] == env_id}
+        seeds = sorted(seed for (label, seed) in by if label == "cmaes_feedback" and ("cmaes", seed) in by)
+        if not seeds:
+            continue
+        gains = np.array([by["cmaes_feedback", seed] - by["cmaes", seed] for seed in seeds])
+        rows.append({"env": env_id, "seeds": seeds, "differences": gains.tolist(),
+                     "iqm_difference": interval(gains).to_dict(), "seeds_gaining": int(np.sum(gains > 0))})
+    return rows
+
+
 def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
     runs = [json.loads(p.read_text()) for env_id in ENVS for p in sorted((root / env_id).glob("*.json"))
             if (root / env_id).is_dir()]
@@ -505,7 +520,10 @@ def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
             marks, values = _curve_marks([r for r in runs if r["env"] == env_id and r["learner"] == label])
             curves[f"{env_id}/{label}"] = [{"env_steps": int(m), **interval(values[:, i]).to_dict()}
                                           for i, m in enumerate(marks)]
-    return {"settings": settings, "summary": summarise(runs), "curves": curves, "anchors": anchors, "runs": runs}
+    document = {"settings": settings, "summary": summarise(runs), "curves": curves, "anchors": anchors}
+    if args.feedback:
+        document["paired"] = paired_differences(runs)
+    return {**document, "runs": runs}
 
 
 # ---------------------------------------------------------------------------------------------------- figures
