@@ -25,6 +25,7 @@ from rdmp_gym.envs.registration import TRACKING_ID
 
 FAST = {"n_periodic": 10, "n_transient": 10, "n_periods": 2, "control_rate": 50}
 TRACKING = {"n_periodic": 10, "n_transient": 10, "duration": 4.0}
+pytestmark = pytest.mark.usefixtures("no_learning_curve_figure")      # these tests read no learning curve
 
 
 def _without_time(records):

@@ -22,6 +22,8 @@ from rdmp_gym.agents.callbacks import (
 from rdmp_gym.agents.training import TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID
 
+pytestmark = pytest.mark.usefixtures("no_learning_curve_figure")      # these tests read no learning curve
+
 
 def _config(updates=4, **changes):
     values = {"agent": "pi2", "updates": updates, "rollouts": 4, "seed": 1, "env_id": TRACKING_ID,

@@ -65,7 +65,8 @@ def trained(tmp_path_factory, context):
     return run_of
 
 
-@pytest.mark.parametrize("agent", ["pi2", "cmaes"])
+# cmaes in the slow set: the default set trains it on the tracking task (test_agents_runs.py's exact resume)
+@pytest.mark.parametrize("agent", ["pi2", pytest.param("cmaes", marks=pytest.mark.slow)])
 def test_learners_improve_the_wipe_from_a_shrunk_start(trained, agent):
     records = trained(agent).read_log()
     start, best = records[0], max(records[1:], key=lambda r: r["eval_return_mean"])
@@ -101,11 +102,12 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     tiny = ["--updates", "2", "--rollouts", "4", "--workers", "1", "--env-option", "n_periodic", "10",
             "n_transient", "10", "--env-option", "n_periods", "2", "control_rate", "25", "frame_stride", "25", "width",
             "64", "height", "64"]
-    assert main(["main", "--out", str(out), "--episodes", "2", "--video", *tiny]) == 0
+    assert main(["main", "--out", str(out), "--episodes", "2", "--eval-episodes", "1", "--video", *tiny]) == 0
     assert "trained fails on: " in capsys.readouterr().out
     for name in ("fit.png", "summary.json", "train/log.jsonl", "train/learning_curve.png", "train/evaluation.png",
                  "train/best_episode.mp4", "train/best_params.json"):
         assert (out / name).exists(), name
+    assert (out / "train" / "best_episode.mp4").stat().st_size > 0
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["evaluation"]) == {"imitation", "trained"}
     config = json.loads((out / "train" / "config.json").read_text())        # the main job's own defaults
@@ -113,17 +115,26 @@ def test_cli_main_fit_evaluate_and_errors(tmp_path, capsys):
     assert main(["fit", "--style", "3", "--plot", "--out", str(tmp_path / "fit")]) == 0
     assert (tmp_path / "fit" / "fit.png").exists() and (tmp_path / "fit" / "dmp.json").exists()
     assert main(["evaluate", str(out / "train"), "--episodes", "1", "--workers", "1"]) == 0
+    capsys.readouterr()
+    assert main(["train", "--out", str(tmp_path / "bad"), "--options.sigmaa", "0.2"]) == 2     # tyro names it
+    assert main(["train", "--out", str(tmp_path / "bad"), "--env-option", "n_periodics", "3"]) == 2
+    assert "n_periodics" in capsys.readouterr().err
+    assert main(["train", "--out", str(out / "train"), "--resume", "--seed", "4"]) == 2
+    assert "seed" in capsys.readouterr().err                     # a resumed run keeps its configuration
+
+
+@pytest.mark.slow
+def test_cli_train_films_the_best_episode_and_resumes(tmp_path):
+    """``train --video`` and ``--resume`` from the command line on this env (the default set checks the video of
+    ``main``'s training and the CLI's resume on the tracking env, ``test_cli_every_env.py``)."""
+    tiny = ["--updates", "2", "--rollouts", "4", "--workers", "1", "--env-option", "n_periodic", "10",
+            "n_transient", "10", "--env-option", "n_periods", "2", "control_rate", "25", "frame_stride", "25", "width",
+            "64", "height", "64"]
     assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--video", *tiny]) == 0
     assert (tmp_path / "cmaes" / "best_episode.mp4").stat().st_size > 0
     assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--resume", "--updates", "3",
                  *tiny[2:]]) == 0
     assert len((tmp_path / "cmaes" / "log.jsonl").read_text().splitlines()) == 4
-    capsys.readouterr()
-    assert main(["train", "--out", str(tmp_path / "bad"), "--options.sigmaa", "0.2"]) == 2     # tyro names it
-    assert main(["train", "--out", str(tmp_path / "bad"), "--env-option", "n_periodics", "3"]) == 2
-    assert "n_periodics" in capsys.readouterr().err
-    assert main(["train", "--agent", "cmaes", "--out", str(tmp_path / "cmaes"), "--resume", "--seed", "4"]) == 2
-    assert "seed" in capsys.readouterr().err                     # a resumed run keeps its configuration
 
 
 def test_ppo_reports_a_diverged_policy_clearly(context):

@@ -15,6 +15,9 @@ from rdmp_gym.envs.registration import TRACKING_ID
 LOG_KEYS = {"update", "episodes", "eval_episodes", "exploration", "eval_return_mean", "eval_return_best",
             "eval_success", "eval_rms_error", "eval_valid", "best_eval_return", "time_s"}
 
+# train without drawing learning_curve.png, for the tests that read no figure (the run directory test reads it)
+NO_CURVE = pytest.mark.usefixtures("no_learning_curve_figure")
+
 
 def _config(agent="pi2", updates=3, **changes):
     values = {"agent": agent, "updates": updates, "rollouts": 6, "seed": 3, "env_id": TRACKING_ID,
@@ -47,6 +50,7 @@ def test_run_directory_holds_config_log_checkpoint_best_and_curve(tmp_path):
     assert TrainConfig.from_dict(run.read_config()) == _config()
 
 
+@NO_CURVE
 @pytest.mark.parametrize("agent", ["pi2", "cmaes"])
 def test_resume_gives_exactly_the_uninterrupted_run(tmp_path, agent):
     straight = train(_config(agent, updates=4), tmp_path / "straight")
@@ -59,6 +63,7 @@ def test_resume_gives_exactly_the_uninterrupted_run(tmp_path, agent):
     np.testing.assert_array_equal(straight.load_best(), resumed.load_best())
 
 
+@NO_CURVE
 def test_resume_after_a_kill_between_log_and_checkpoint_redoes_the_update(tmp_path):
     straight = train(_config(updates=3), tmp_path / "straight")
     run = train(_config(updates=2), tmp_path / "killed")
@@ -70,6 +75,7 @@ def test_resume_after_a_kill_between_log_and_checkpoint_redoes_the_update(tmp_pa
     assert _without_time(resumed.read_log()) == _without_time(straight.read_log())
 
 
+@NO_CURVE
 def test_a_new_run_never_overwrites_and_resume_checks_the_config(tmp_path):
     train(_config(updates=1), tmp_path / "run")
     with pytest.raises(FileExistsError, match="resume"):
@@ -91,6 +97,7 @@ def test_parallel_evaluation_gives_the_serial_numbers():
     assert len(set(a.returns.tolist())) == 5          # different contexts and actions
 
 
+@NO_CURVE
 def test_bad_configs_fail_clearly(tmp_path):
     with pytest.raises(ValueError, match="agent"):
         _config(agent="td3")
@@ -114,6 +121,7 @@ def test_bad_configs_fail_clearly(tmp_path):
     assert not (tmp_path / "bad").exists()          # nothing written for a run that cannot start
 
 
+@NO_CURVE
 def test_a_user_demonstration_file_is_the_imitation_start(tmp_path):
     from rdmp_gym import wiping_demonstration
 

@@ -23,6 +23,7 @@ from rdmp_gym.agents.training import NoValidEpisodesError, TrainConfig, train
 from rdmp_gym.envs.registration import TRACKING_ID
 
 ENV = {"n_periodic": 8, "n_transient": 8, "duration": 3.0}
+pytestmark = pytest.mark.usefixtures("no_learning_curve_figure")      # these tests read no learning curve
 
 
 def _config(agent="pi2", updates=2, **changes):

@@ -1,5 +1,6 @@
 """The field report of the learner benchmark: episodes to each validation target, the best learner, the ceiling."""
 
+import copy
 import sys
 from pathlib import Path
 
@@ -7,6 +8,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+import field_report
 from field_report import episodes_to, failure_counts, field_summary, hardest_contexts, write
 
 
@@ -26,8 +28,8 @@ def _document():
 
 @pytest.fixture(scope="module")
 def summary_of_document():
-    """``field_summary(_document())`` (its bootstrap intervals cost ~2 CPU s), computed once for the tests that read
-    it; ``write`` computes its own."""
+    """``field_summary(_document())`` (its bootstrap intervals cost ~2 CPU s, seeded), computed once for the tests that
+    read it, ``write``'s included."""
     return field_summary(_document())
 
 
@@ -37,7 +39,13 @@ def test_episodes_to_a_target_is_the_first_evaluation_that_reaches_it():
     assert episodes_to(curve, 0.5) == 50 and episodes_to(curve, 0.9) == 150 and episodes_to(curve, 0.99) is None
 
 
-def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_target(tmp_path, summary_of_document):
+def test_field_summary_ranks_the_learners_and_counts_the_seeds_that_reach_each_target(tmp_path, summary_of_document,
+                                                                                     monkeypatch):
+    def computed(document):                    # write's summary of the document is the module's one
+        assert document == _document()
+        return copy.deepcopy(summary_of_document)
+
+    monkeypatch.setattr(field_report, "field_summary", computed)
     summary = write(_document(), tmp_path, "bench", "title")
     good, weak = summary["agents"]["good"], summary["agents"]["weak"]
     assert summary["best"] == "good" and summary["ceiling"] is None

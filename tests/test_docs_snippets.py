@@ -5,6 +5,10 @@ in a fresh working directory per page. A block whose first line starts with ``SK
 reader sees the mark and its reason: a run of minutes); such blocks are counted and must stay few.
 Command lines ``rdmp-gym ...`` in ```bash blocks are parsed by the command's own parser (not run), so a
 renamed or removed flag in the documentation fails here.
+
+The blocks of a page from the one that :data:`SLOW_FROM` names on run in the slow set only (``make test-all``):
+training on the full wiping task, the joint fit of 20-period sessions, a filmed episode (10-20 CPU s each, whose
+code the default set's unit tests run on smaller cases).
 """
 
 from __future__ import annotations
@@ -38,10 +42,26 @@ def code_blocks(page: Path, language: str) -> list[tuple[int, str]]:
 
 PYTHON_BLOCKS = [(page, line, code) for page in PAGES for line, code in code_blocks(page, "python")]
 RUN_BLOCKS = [block for block in PYTHON_BLOCKS if not block[2].lstrip().startswith(SKIP_MARK)]
+SLOW_FROM = {"docs/agents.md": 'run = train(config, "runs/cpi2-tiny")',
+             "docs/fitting.md": "joint = fit_joint(demo)",
+             "docs/your-own-env.md": "filmed.record_episode("}
+"""Per page, a line of its first block that runs in the slow set only; that block and the page's later ones do."""
 
 
 def _block_id(block: tuple[Path, int, str]) -> str:
     return f"{block[0].relative_to(ROOT)}:{block[1]}"
+
+
+def _first_slow_line(page: Path) -> float:
+    """The line of ``page``'s first block in the slow set (:data:`SLOW_FROM`), inf where it has none."""
+    marker = SLOW_FROM.get(str(page.relative_to(ROOT)))
+    lines = [line for block_page, line, code in RUN_BLOCKS if block_page == page and marker and marker in code]
+    return min(lines, default=float("inf"))
+
+
+def _with_marks(block: tuple[Path, int, str]):
+    slow = block[1] >= _first_slow_line(block[0])
+    return pytest.param(block, id=_block_id(block), marks=[pytest.mark.slow] if slow else [])
 
 
 class _PageSession:
@@ -65,7 +85,7 @@ def page_sessions(tmp_path_factory):
     return {}
 
 
-@pytest.mark.parametrize("block", RUN_BLOCKS, ids=_block_id)
+@pytest.mark.parametrize("block", [_with_marks(block) for block in RUN_BLOCKS])
 def test_python_snippet_runs(block, page_sessions, tmp_path_factory, monkeypatch):
     page, line, _ = block
     if page not in page_sessions:
@@ -84,6 +104,8 @@ def test_snippets_found_and_few_skipped():
     assert len(skipped) <= MAX_SKIPPED, [_block_id(block) for block in skipped]
     for _, _, code in skipped:
         assert len(code.lstrip().splitlines()[0]) > len(SKIP_MARK) + 10, "a skip mark needs its reason"
+    for page in SLOW_FROM:                                              # each names a block that runs
+        assert _first_slow_line(ROOT / page) < float("inf"), f"{page}: no block holds {SLOW_FROM[page]!r}"
 
 
 def _command_lines() -> list[tuple[str, str]]:

@@ -41,7 +41,7 @@ def test_without_an_input_rhythm_it_is_the_plain_rollout(wiping):
     np.testing.assert_allclose(out["frequency"], wiping.canonical.omega)
 
 
-@pytest.mark.parametrize("factor", [1.3, 0.7])
+@pytest.mark.parametrize("factor", [1.3, pytest.param(0.7, marks=pytest.mark.slow)])   # 0.7: in the slow set
 def test_locks_onto_a_frequency_step_where_the_fixed_dmp_drifts(wiping, factor):
     step_at = 6.0
     t, omega, psi, u = partner(wiping, 22.0, factor, step_at)

@@ -14,19 +14,22 @@ from rdmp_gym.synthetic.sessions import multi_session_recording
 
 
 @pytest.fixture(scope="module")
-def alike():
-    """Three kitchen sessions at the same mean period (0.9 s), each at its own working place; 12 periods of rhythm
-    each (the kind's 20 cost 1.4x the session search, here and in the CLI's fit, for nothing these tests read;
-    docs/fitting.md's joint-fit snippet runs the 20. With 8 the CLI's fit, which despikes after resampling, strays
-    0.55 mm from this one at a session's entry, beyond the 0.5 mm that test allows; with 12, 0.14 mm)."""
+def alike(tmp_path_factory, fit_command_demonstration):
+    """Three kitchen sessions at the same mean period (0.9 s), each at its own working place, 12 periods of rhythm
+    each (the kind's 20 cost 1.4x the session search for nothing these tests read; docs/fitting.md's joint-fit
+    snippet runs the 20): the recording, its CSV and the demonstration that ``rdmp-gym fit --demo`` reads from it."""
     recording = multi_session_recording(3, "kitchen", rng=np.random.default_rng(1), periods=[0.9, 0.9, 0.9],
                                         n_periods=12)
-    return recording, to_demonstration(recording.recording.t, recording.recording.Y)
+    path = tmp_path_factory.mktemp("alike") / "alike.csv"
+    recording.recording.to_csv(path)
+    return recording, fit_command_demonstration(path), path
 
 
 @pytest.fixture(scope="module")
-def joint(alike):
-    return fit_joint(alike[1])
+def joint(alike, sharing_session_search):
+    """The joint fit of the CLI's samples, searched once for it and for the CLI test (the shared session search)."""
+    with sharing_session_search():
+        return fit_joint(alike[1])
 
 
 def test_each_session_is_reproduced_within_its_variation(alike, joint) -> None:
@@ -68,9 +71,8 @@ def test_bad_input_names_the_argument(alike, joint) -> None:
         joint.at_session(3)
 
 
-def test_cli_writes_one_dmp_with_each_anchor(alike, joint, tmp_path) -> None:
-    path = tmp_path / "alike.csv"
-    alike[0].recording.to_csv(path)
+def test_cli_writes_one_dmp_with_each_anchor(alike, joint, tmp_path, shared_session_search) -> None:
+    path = alike[2]
     out = tmp_path / "fit"
     assert cli_main(["fit", "--demo", str(path), "--sessions", "joint", "--out", str(out)]) == 0
     report = json.loads((out / "report.json").read_text())
@@ -81,7 +83,8 @@ def test_cli_writes_one_dmp_with_each_anchor(alike, joint, tmp_path) -> None:
         t = np.arange(0.0, 6.0, 0.01)
         started = dmp.rollout(t, transient=row["transient"], anchor=np.array(row["anchor"]), y0=np.array(row["y0"]),
                               tempo=row["tempo"])
-        # the same fit but for the CSV's rounding: session k from its entry, not the first session moved
+        # the same fit of the same samples (but for the report's rounding): session k from its entry, not the first
+        # session moved
         np.testing.assert_allclose(started, joint.reproduce(k, t + joint.entries[k]), atol=5e-4)
         assert np.linalg.norm(started[-300:].mean(axis=0) - joint.anchors[k]) < 0.01
     hinted = ["fit", "--demo", str(path), "--sessions", "joint", "--period", "0.9", "--out", str(tmp_path / "no")]

@@ -112,7 +112,7 @@ def test_save_and_load_keep_the_orientation(wiping, tmp_path):
     assert isinstance(load_dmp(path), RhythmicDMP)
 
 
-def test_the_command_fits_a_pose_csv_and_names_bad_columns(tmp_path, capsys):
+def test_the_command_fits_a_pose_csv_and_names_bad_columns(tmp_path, capsys, shared_session_search):
     recording = realistic_pose_recording("wiping", rng=np.random.default_rng(1))
     path = tmp_path / "rec.csv"
     recording.to_csv(path)
@@ -149,7 +149,9 @@ def test_a_constant_orientation_fits_as_the_anchor_and_the_report_says_so(wiping
     assert "cycle_variation" in position and all(report[key] == varied[key] for key in position)
 
 
-def test_the_command_fits_a_pose_csv_with_a_constant_orientation(tmp_path, capsys):
+def test_the_command_fits_a_pose_csv_with_a_constant_orientation(tmp_path, capsys, shared_session_search):
+    """The previous test's recording with the tool held level: its positions (exact in both CSVs) share that test's
+    session search."""
     recording = realistic_pose_recording("wiping", rng=np.random.default_rng(1))
     path = tmp_path / "held.csv"
     np.savetxt(path, np.column_stack([recording.t, recording.Y, np.tile([1.0, 0.0, 0.0, 0.0], (recording.t.size, 1))]),

@@ -20,15 +20,20 @@ from rdmp_gym.synthetic.sessions import multi_session_pose_recording, multi_sess
 
 
 @pytest.fixture(scope="module")
-def three():
-    """A recording of three wiping sessions of periods 1.45, 1.7 and 1.95 s, and its demonstration."""
+def three(tmp_path_factory, fit_command_demonstration):
+    """A recording of three wiping sessions of periods 1.45, 1.7 and 1.95 s, its CSV and the demonstration that
+    ``rdmp-gym fit --demo`` reads from it."""
     recording = multi_session_recording(3, "wiping", rng=np.random.default_rng(1))
-    return recording, to_demonstration(recording.recording.t, recording.recording.Y)
+    path = tmp_path_factory.mktemp("three") / "three.csv"
+    recording.recording.to_csv(path)
+    return recording, fit_command_demonstration(path), path
 
 
 @pytest.fixture(scope="module")
-def fits(three):
-    return fit_sessions(three[1])
+def fits(three, sharing_session_search):
+    """The sessions' fits, searched once for them and for the CLI test (the shared session search)."""
+    with sharing_session_search():
+        return fit_sessions(three[1])
 
 
 def test_generator_is_seeded_and_continuous(three) -> None:
@@ -102,10 +107,8 @@ def test_bad_input_names_the_argument(three) -> None:
         find_sessions(Demonstration(np.arange(1500) * 0.01, noise))
 
 
-def test_cli_writes_one_dmp_per_session(three, tmp_path) -> None:
-    path = tmp_path / "three.csv"
-    three[0].recording.to_csv(path)
-    assert cli_main(["fit", "--demo", str(path), "--out", str(tmp_path / "fit")]) == 0
+def test_cli_writes_one_dmp_per_session(three, fits, tmp_path, shared_session_search) -> None:
+    assert cli_main(["fit", "--demo", str(three[2]), "--out", str(tmp_path / "fit")]) == 0
     report = json.loads((tmp_path / "fit" / "report.json").read_text())
     assert [row["dmp"] for row in report["sessions"]] == ["dmp-1.json", "dmp-2.json", "dmp-3.json"]
     assert all((tmp_path / "fit" / f"dmp-{k}.json").exists() for k in (1, 2, 3))
@@ -159,7 +162,7 @@ def _wobbling_approach(share: float) -> tuple[Demonstration, float]:
     return to_demonstration(t, Y), onset
 
 
-@pytest.mark.parametrize("share", [0.4, 0.5])
+@pytest.mark.parametrize("share", [pytest.param(0.4, marks=pytest.mark.slow), 0.5])   # 0.4: in the slow set
 def test_a_small_slow_wobble_of_the_approach_is_no_session(share: float) -> None:
     demo, onset = _wobbling_approach(share)     # the wobble repeats, at about 0.35-0.45 of the rhythm's size
     sessions = find_sessions(demo)

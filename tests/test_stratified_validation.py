@@ -53,7 +53,9 @@ def test_an_env_without_kinds_gets_the_plain_validation_seeds():
 @pytest.mark.parametrize("env_id", ["rdmp_gym/ArmarWipe-v3", "rdmp_gym/PandaWipe-v3"])
 def test_the_wiping_validation_holds_every_kind_of_context_evenly(env_id):
     env = gym.make(env_id)
-    seeds = stratified_validation_seeds(env, 8)
+    # the first 50 seeds of the pool hold the first two of every kind (the last of them the 44th), so the choice is
+    # the default pool's (400), at an eighth of the resets
+    seeds = stratified_validation_seeds(env, 8, pool=50)
     kind_of = contract_of(env).context_kind
     kinds = Counter(kind_of(env.reset(seed=int(s))[0]) for s in seeds)
     assert kinds == dict.fromkeys(CONTEXT_KINDS, 2)
