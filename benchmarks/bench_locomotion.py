@@ -72,12 +72,23 @@ LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     # the reacting policy: the controller's command gains K z (z the observation standardised on the a = 0 gait,
     # K the action's last group, zero at a = 0); opt-in
     "cmaes_feedback": ("cmaes", {}, {"feedback": "linear"}),
+    # CMA-ES's first step a third of its default (0.2 instead of 0.6 action units), so that the search stays near the
+    # default pattern it starts from; opt-in, open loop and with the feedback
+    "cmaes_near": ("cmaes", {"sigma": 0.2}, {}),
+    "cmaes_feedback_near": ("cmaes", {"sigma": 0.2}, {"feedback": "linear"}),
 }
 #: the learners of --feedback
 FEEDBACK_LEARNERS = ("cmaes", "cmaes_feedback")
+#: (learner, baseline) pairs compared seed by seed in the --feedback study, where both ran
+PAIRS = (("cmaes_feedback", "cmaes"), ("cmaes_feedback_near", "cmaes_near"), ("cmaes_near", "cmaes"),
+         ("cmaes_feedback_near", "cmaes_feedback"))
 #: the learners run when --learners is not given
 MAIN_LEARNERS = ("cmaes", "bbrl", "plain_prior", "random", "ppo")
 SB3_ALGOS = ("ppo", "sac")
+#: step-based learners on the DMP's residual env (:mod:`rdmp_gym.envs.blackbox.residual`, the default pattern at
+#: ``a = 0``, a residual of RESIDUAL_SCALE x half the action range) -> their algorithm, with its RL Zoo settings
+RESIDUAL_LEARNERS = {"sac_residual": "sac", "ppo_residual": "ppo"}
+RESIDUAL_SCALE = 0.3
 EPISODE_STEPS = 1000   # both envs: 1000 env steps per episode, no early termination
 
 #: Return thresholds: Mania et al. 2018 (Simple random search provides a competitive approach to reinforcement
@@ -149,9 +160,10 @@ ANCHORS: list[dict[str, Any]] = [
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--envs", nargs="+", default=list(ENVS), choices=ENVS)
-    parser.add_argument("--learners", nargs="+", default=None, choices=[*LEARNERS, *SB3_ALGOS],
+    parser.add_argument("--learners", nargs="+", default=None, choices=[*LEARNERS, *SB3_ALGOS, *RESIDUAL_LEARNERS],
                         help="the learners of the main jobs (SAC runs after them, see --sac-seeds; default: "
-                             f"{' '.join(MAIN_LEARNERS)}, with --feedback {' '.join(FEEDBACK_LEARNERS)})")
+                             f"{' '.join(MAIN_LEARNERS)}, with --feedback {' '.join(FEEDBACK_LEARNERS)}, "
+                             "with --residual sac_residual)")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..n-1 of every main learner")
     parser.add_argument("--updates", type=int, default=10, help="rhythmic learners: updates per run")
     parser.add_argument("--rollouts", type=int, default=10, help="rhythmic learners: episodes per update")
@@ -161,20 +173,27 @@ def _parse() -> argparse.Namespace:
     parser.add_argument("--eval-episodes", type=int, default=3, help="validation contexts per evaluation")
     parser.add_argument("--test-episodes", type=int, default=10, help="test contexts for the final policy")
     parser.add_argument("--run-dir", default=None,
-                        help="where the runs live (default: runs/locomotion, with --feedback runs/locomotion_feedback)")
-    parser.add_argument("--feedback", action="store_true",
-                        help="the feedback study: cmaes open loop vs with feedback='linear', no SAC, written to "
-                             "locomotion_feedback.json")
+                        help="where the runs live (default: runs/locomotion, runs/locomotion_feedback with "
+                             "--feedback, runs/locomotion_residual with --residual)")
+    study = parser.add_mutually_exclusive_group()
+    study.add_argument("--feedback", action="store_true",
+                       help="the feedback study: cmaes open loop vs with feedback='linear', no SAC, written to "
+                            "locomotion_feedback.json")
+    study.add_argument("--residual", action="store_true",
+                       help="the residual study: SAC on the DMP's residual env, no plain SAC, written to "
+                            "locomotion_residual.json")
     parser.add_argument("--summary-only", action="store_true", help="gather the finished runs; train nothing")
     parser.add_argument("--figures", action="store_true",
                         help="draw locomotion.png (from locomotion.json) and the Swimmer filmstrip; train nothing")
     add_save_argument(parser)
     args = parser.parse_args()
+    args.study = "feedback" if args.feedback else "residual" if args.residual else "main"
     if args.learners is None:
-        args.learners = list(FEEDBACK_LEARNERS if args.feedback else MAIN_LEARNERS)
+        args.learners = list({"feedback": FEEDBACK_LEARNERS, "residual": ("sac_residual",)}.get(args.study,
+                                                                                               MAIN_LEARNERS))
     if args.run_dir is None:
-        args.run_dir = str(ROOT / "runs" / ("locomotion_feedback" if args.feedback else "locomotion"))
-    if args.feedback:
+        args.run_dir = str(ROOT / "runs" / {"main": "locomotion"}.get(args.study, f"locomotion_{args.study}"))
+    if args.study != "main":
         args.sac_seeds = 0
     budget = args.updates * args.rollouts * EPISODE_STEPS
     args.ppo_steps = budget if args.ppo_steps is None else args.ppo_steps
@@ -244,9 +263,20 @@ def evaluate_sb3(model: Any, normalizer: Any, env: gym.Env, seeds: np.ndarray) -
     return returns
 
 
-def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namespace, folder: Path
+def _sb3_env(env_id: str, label: str) -> tuple[str, dict[str, Any]]:
+    """(the id to make, its keywords) of a PPO/SAC learner: the raw env, or for :data:`RESIDUAL_LEARNERS` the
+    DMP's residual env on it."""
+    if label not in RESIDUAL_LEARNERS:
+        return env_id, {}
+    from rdmp_gym.envs.blackbox import RESIDUAL_ID
+
+    return RESIDUAL_ID, {"env_id": env_id, "scale": RESIDUAL_SCALE}
+
+
+def run_sb3(env_id: str, label: str, seed: int, total: int, args: argparse.Namespace, folder: Path
             ) -> dict[str, Any]:
-    """One PPO/SAC run on the raw env, evaluated at the env-step marks; checkpointed at every mark."""
+    """One PPO/SAC run (on the raw env, or on the residual env for :data:`RESIDUAL_LEARNERS`), evaluated at the
+    env-step marks; checkpointed at every mark."""
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -255,11 +285,13 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
 
     torch.set_num_threads(1)
     began = time.perf_counter()
+    algo = RESIDUAL_LEARNERS.get(label, label)
     kind = {"ppo": PPO, "sac": SAC}[algo]
     keywords, normalize, n_envs = _sb3_kwargs(algo, env_id)
-    partial = folder / f"{algo}-{seed}.partial"
+    partial = folder / f"{label}-{seed}.partial"
     state_path = partial / "state.json"
-    venv = make_vec_env(env_id, n_envs=n_envs, seed=seed)
+    make_id, make_kwargs = _sb3_env(env_id, label)
+    venv = make_vec_env(make_id, n_envs=n_envs, seed=seed, env_kwargs=make_kwargs)
     resumed = state_path.is_file()
     if resumed:
         state = json.loads(state_path.read_text())
@@ -274,7 +306,7 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
             venv = VecNormalize(venv, gamma=keywords["gamma"])
         model = kind("MlpPolicy", venv, seed=seed, device="cpu", verbose=0, **keywords)
     normalizer = venv if normalize else None
-    eval_env = gym.make(env_id)
+    eval_env = gym.make(make_id, **make_kwargs)
     marks = [m for m in _marks(total) if m > (state["curve"][-1]["env_steps"] if state["curve"] else -1)]
     val_seeds, test_seeds = validation_seeds(args.eval_episodes), final_test_seeds(args.test_episodes)
     result: dict[str, Any] = {}
@@ -314,6 +346,7 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
         raise RuntimeError(f"{algo}: the run ended at {model.num_timesteps} env steps without reaching {total}")
     shutil.rmtree(partial, ignore_errors=True)         # finished: its JSON holds everything
     return {"curve": state["curve"], "test_returns": result["test_returns"], "resumed": resumed,
+            "made": {"id": make_id, **make_kwargs},
             "hyperparameters": ZOO[algo][env_id], "hyperparameter_source": _ZOO.format(algo),
             "seconds": round(state["seconds"] + time.perf_counter() - clock[0], 1),
             "wall_seconds_this_session": round(time.perf_counter() - began, 1)}
@@ -323,7 +356,7 @@ def run_sb3(env_id: str, algo: str, seed: int, total: int, args: argparse.Namesp
 def _jobs(args: argparse.Namespace) -> list[tuple[str, str, int]]:
     """(env, learner, seed) in the order they run: per env the main learners seed by seed, then SAC seed by seed,
     alternating between the envs (so that an interrupted study has SAC seeds on both)."""
-    if args.feedback:    # seed by seed, alternating between the envs, so that a cut-short study has both
+    if args.study != "main":    # seed by seed, alternating between the envs, so that a cut-short study has both
         return [(env_id, label, seed) for seed in range(args.seeds) for env_id in args.envs for label in args.learners]
     jobs = [(env_id, label, seed) for env_id in args.envs for seed in range(args.seeds) for label in args.learners]
     jobs += [(env_id, "sac", seed) for seed in range(args.sac_seeds) for env_id in args.envs
@@ -342,7 +375,7 @@ def run_job(env_id: str, label: str, seed: int, args: argparse.Namespace, root: 
         body = run_rhythmic(env_id, label, seed, args, folder)
         budget = args.updates * args.rollouts * EPISODE_STEPS
     else:
-        budget = args.ppo_steps if label == "ppo" else args.sac_steps
+        budget = args.ppo_steps if RESIDUAL_LEARNERS.get(label, label) == "ppo" else args.sac_steps
         body = run_sb3(env_id, label, seed, budget, args, folder)
     record = {"env": env_id, "learner": label, "seed": seed, "env_steps": budget,
               "final_return": float(np.mean(body["test_returns"])), **body,
@@ -459,9 +492,10 @@ def zero_action_reference(env_id: str, seeds: np.ndarray) -> dict[str, Any]:
             "source": "make_blackbox(env_id) with its default settings, run by this script", "cite": "run here"}
 
 
-def feedback_references(args: argparse.Namespace) -> list[dict[str, Any]]:
-    """Beside the feedback study: PPO/SAC at the same budget from ``locomotion.json``, the open-loop oscillator's
-    CMA-ES runs from ``open_loop_oscillator.json`` and the default pattern's ``a = 0`` return (each where found)."""
+def study_references(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Beside the feedback and the residual study: PPO/SAC at the same budget from ``locomotion.json``, the open-loop
+    oscillator's CMA-ES runs from ``open_loop_oscillator.json`` and the default pattern's ``a = 0`` return (each where
+    found)."""
     rows = []
     budget = args.updates * args.rollouts * EPISODE_STEPS
     study = COMMITTED / "locomotion.json"
@@ -491,24 +525,26 @@ def feedback_references(args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 def paired_differences(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per env: the final test return of ``cmaes_feedback`` less ``cmaes``'s on the same seed, the IQM of those
-    differences with its 95 % interval and how many seeds gain."""
+    """Per env and pair of :data:`PAIRS`: the learner's final test return less the baseline's on the same seed, the
+    IQM of those differences with its 95 % interval and how many seeds gain."""
     rows = []
     for env_id in dict.fromkeys(r["env"] for r in runs):
         by = {(r["learner"], r["seed"]): r["final_return"] for r in runs if r["env"] == env_id}
-        seeds = sorted(seed for (label, seed) in by if label == "cmaes_feedback" and ("cmaes", seed) in by)
-        if not seeds:
-            continue
-        gains = np.array([by["cmaes_feedback", seed] - by["cmaes", seed] for seed in seeds])
-        rows.append({"env": env_id, "seeds": seeds, "differences": gains.tolist(),
-                     "iqm_difference": interval(gains).to_dict(), "seeds_gaining": int(np.sum(gains > 0))})
+        for learner, baseline in PAIRS:
+            seeds = sorted(seed for (label, seed) in by if label == learner and (baseline, seed) in by)
+            if not seeds:
+                continue
+            gains = np.array([by[learner, seed] - by[baseline, seed] for seed in seeds])
+            rows.append({"env": env_id, "learner": learner, "baseline": baseline, "seeds": seeds,
+                         "differences": gains.tolist(), "iqm_difference": interval(gains).to_dict(),
+                         "seeds_gaining": int(np.sum(gains > 0))})
     return rows
 
 
 def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
     runs = [json.loads(p.read_text()) for env_id in ENVS for p in sorted((root / env_id).glob("*.json"))
             if (root / env_id).is_dir()]
-    anchors = feedback_references(args) if args.feedback else \
+    anchors = study_references(args) if args.study != "main" else \
         [*ANCHORS, oscillator_anchor(final_test_seeds(args.test_episodes))]
     settings = {key: value for key, value in vars(args).items() if key not in ("summary_only", "figures", "save")}
     settings.update({"thresholds": {k: list(v) for k, v in THRESHOLDS.items()}, "zoo": ZOO,
@@ -631,7 +667,7 @@ def main() -> None:
         strip = docs / "swimmer_gait.png" if args.save else out / "swimmer_gait.png"
         print(f"filmstrip: {filmstrip(document, root, strip)} -> {strip}")
         return
-    name = "locomotion_feedback.json" if args.feedback else "locomotion.json"
+    name = {"main": "locomotion.json"}.get(args.study, f"locomotion_{args.study}.json")
     if not args.summary_only:
         for env_id, label, seed in _jobs(args):
             path = _result_path(root, env_id, label, seed)

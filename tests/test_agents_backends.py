@@ -32,6 +32,7 @@ def _without_time(records):
     return [{k: v for k, v in r.items() if k != "time_s"} for r in records]
 
 
+@pytest.mark.slow          # starts a Ray cluster (~25 s); the default set checks the backend's errors
 def test_ray_backend_gives_the_numbers_of_the_local_pool(tmp_path):
     ray = pytest.importorskip("ray")
     context = gym.make(WIPE_ID, disable_env_checker=True, **FAST).reset(seed=3)[1]["context"]
@@ -90,6 +91,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow          # a CLI run in its own interpreter; the default set checks a dead worker's error
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_exit_when_a_training_run_is_killed(tmp_path):
     command = [sys.executable, "-m", "rdmp_gym.agents.cli", "train", "--out", str(tmp_path / "run"),
@@ -125,6 +127,7 @@ def test_a_dead_worker_is_a_clear_error():
             evaluator.run(actions, np.arange(4))
 
 
+@pytest.mark.slow          # two PPO agents; the default set checks the parallel evaluation against the serial one
 def test_ppo_numbers_do_not_depend_on_the_worker_count():
     pytest.importorskip("stable_baselines3")
     from rdmp_gym.agents.sb3 import PPOAgent

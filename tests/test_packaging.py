@@ -92,6 +92,7 @@ def _core_only(*commands, cwd):
             for command, (code, out, err) in zip(commands, json.loads(result.stdout), strict=True)]
 
 
+@pytest.mark.slow          # CI's wheel check (.ci/wheel-check.sh) runs the same commands on the installed wheel
 def test_core_install_runs_help_and_fit_and_names_the_extra_for_train(tmp_path):
     demo = wiping_demonstration(1, rng=0)
     np.savetxt(tmp_path / "rec.csv", np.column_stack([demo.t, demo.Y]), delimiter=",", header="t,x,y,z", comments="")

@@ -3,7 +3,8 @@
 :class:`RhythmicBlackBoxWrapper` makes one ``step`` one whole episode: the action is the parameters of a rhythmic
 DMP in the env's joint space, which a tracking controller follows on the env's own actions. See the docs' page "Your
 own env". Importing this package registers ``rdmp_gym/RhythmicBlackBox-v0`` (:func:`make_blackbox`, keyword
-``env_id``)::
+``env_id``) and ``rdmp_gym/RhythmicResidual-v0`` (:func:`make_residual`: a step-based learner's residual on the DMP's
+command, :mod:`~rdmp_gym.envs.blackbox.residual`)::
 
     import gymnasium as gym
     from rdmp_gym.envs.blackbox import RhythmicBlackBoxWrapper
@@ -31,6 +32,7 @@ from .defaults import (
     model_defaults,
 )
 from .params import JointParameterMap
+from .residual import RESIDUAL_ID, RhythmicResidualEnv, make_residual
 from .settings import DEFAULT_GROUPS, BlackBoxSettings
 from .wrapper import WRAPPER_SETTINGS, RhythmicBlackBoxWrapper, make_blackbox, split_settings
 
@@ -41,6 +43,7 @@ __all__ = [
     "DEFAULT_GROUPS",
     "ENV_DEFAULTS",
     "MODEL_RULES",
+    "RESIDUAL_ID",
     "WRAPPER_SETTINGS",
     "BlackBoxSettings",
     "JointParameterMap",
@@ -49,11 +52,13 @@ __all__ = [
     "PDController",
     "PositionController",
     "RhythmicBlackBoxWrapper",
+    "RhythmicResidualEnv",
     "VelocityController",
     "default_demonstration",
     "env_defaults",
     "make_blackbox",
     "make_controller",
+    "make_residual",
     "model_defaults",
     "split_settings",
 ]
@@ -63,3 +68,5 @@ BLACKBOX_ID = "rdmp_gym/RhythmicBlackBox-v0"
 
 if BLACKBOX_ID not in gym.registry:
     gym.register(BLACKBOX_ID, entry_point="rdmp_gym.envs.blackbox.wrapper:make_blackbox")
+if RESIDUAL_ID not in gym.registry:
+    gym.register(RESIDUAL_ID, entry_point="rdmp_gym.envs.blackbox.residual:make_residual")
