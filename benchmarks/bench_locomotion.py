@@ -184,7 +184,9 @@ def _parse() -> argparse.Namespace:
                             "locomotion_residual.json")
     parser.add_argument("--summary-only", action="store_true", help="gather the finished runs; train nothing")
     parser.add_argument("--figures", action="store_true",
-                        help="draw locomotion.png (from locomotion.json) and the Swimmer filmstrip; train nothing")
+                        help="draw the study's curves (locomotion.png from locomotion.json, with --feedback "
+                             "locomotion_feedback.png, ...) and per env a filmstrip and a video of its best run's "
+                             "final policy; train nothing")
     add_save_argument(parser)
     args = parser.parse_args()
     args.study = "feedback" if args.feedback else "residual" if args.residual else "main"
@@ -344,7 +346,10 @@ def run_sb3(env_id: str, label: str, seed: int, total: int, args: argparse.Names
     venv.close()
     if "test_returns" not in result:
         raise RuntimeError(f"{algo}: the run ended at {model.num_timesteps} env steps without reaching {total}")
-    shutil.rmtree(partial, ignore_errors=True)         # finished: its JSON holds everything
+    model.save(str(folder / f"{label}-{seed}.zip"))     # the final policy (for the figures), without its buffer
+    if normalize:
+        normalizer.save(str(folder / f"{label}-{seed}.vecnormalize.pkl"))
+    shutil.rmtree(partial, ignore_errors=True)         # finished: its JSON and the final policy hold everything
     return {"curve": state["curve"], "test_returns": result["test_returns"], "resumed": resumed,
             "made": {"id": make_id, **make_kwargs},
             "hyperparameters": ZOO[algo][env_id], "hyperparameter_source": _ZOO.format(algo),
@@ -595,59 +600,134 @@ def plot_curves(document: dict[str, Any], path: Path) -> None:
     plt.close(figure)
 
 
-def filmstrip(document: dict[str, Any], root: Path, path: Path, frames: int = 6) -> dict[str, Any]:
-    """``frames`` frames over the last cycle of one Swimmer episode (tracking camera) of the best rhythmic run's final
-    policy (the learner with the highest IQM, its seed with the highest final return), on the first test context."""
+#: the cameras of the films: both models' tracking camera
+CAMERAS: dict[str, dict[str, Any]] = {env_id: {"camera_name": "track"} for env_id in ENVS}
+FILM_SECONDS = 5.0        # the video: the episode's last 5 simulated seconds, in real time
+
+
+class _FrameGrabber(gym.Wrapper):
+    """Keeps ``(step, frame)`` after each env step whose index is in ``steps``."""
+
+    def __init__(self, env: gym.Env, steps: set[int]) -> None:
+        super().__init__(env)
+        self.steps, self.count, self.frames = steps, 0, []
+
+    def step(self, action: Any) -> Any:
+        result = self.env.step(action)
+        if self.count in self.steps:
+            self.frames.append((self.count, self.env.render()))
+        self.count += 1
+        return result
+
+
+def _best_run(document: dict[str, Any], env_id: str) -> dict[str, Any]:
+    """The final policy to film: the learner with the highest IQM (not the random control), its best seed."""
+    rows = [r for r in document["summary"] if r["env"] == env_id and r["learner"] != "random"
+            and (r["learner"] in LEARNERS or r["learner"] in RESIDUAL_LEARNERS)]
+    best = max(rows, key=lambda r: r["final_return"]["estimate"])
+    return max((r for r in document["runs"] if r["env"] == env_id and r["learner"] == best["learner"]),
+               key=lambda r: r["final_return"])
+
+
+def _rhythmic_film(document: dict[str, Any], root: Path, run: dict[str, Any], seed: int
+                   ) -> tuple[list[tuple[int, np.ndarray]], float, float, float]:
+    """(frames of the last :data:`FILM_SECONDS` s, return, dt, period) of a rhythmic run's final policy."""
+    from rdmp_gym.agents.runs import RunDirectory
+    from rdmp_gym.envs.blackbox import make_blackbox
+
+    env_id, label = run["env"], run["learner"]
+    config = _rhythmic_config(env_id, label, run["seed"], argparse.Namespace(
+        **{k: document["settings"][k] for k in ("updates", "rollouts", "eval_episodes")}))
+    env = make_blackbox(env_id, render_mode="rgb_array", env_kwargs={"width": 320, "height": 240, **CAMERAS[env_id]},
+                        **LEARNERS[label][2])
+    observation, _ = env.reset(seed=seed)
+    action = trained_actions(RunDirectory(root / env_id / f"{label}-{run['seed']}"), config, "last",
+                             observation[None], env.action_space.shape[0])[0]
+    window = round(FILM_SECONDS / env.dt)
+    grabber = env.env = _FrameGrabber(env.env, set(range(env.n_steps - window, env.n_steps)))
+    env.reset(seed=seed)
+    _, episode_return, _, _, _ = env.step(np.asarray(action, dtype=np.float32))
+    env.close()
+    return grabber.frames, float(episode_return), env.dt, env.dmp.period
+
+
+def _residual_film(document: dict[str, Any], root: Path, run: dict[str, Any], seed: int
+                   ) -> tuple[list[tuple[int, np.ndarray]], float, float, float]:
+    """(frames of the last :data:`FILM_SECONDS` s, return, dt, period) of a residual run's final deterministic
+    policy."""
+    from rdmp_gym.envs.blackbox import RESIDUAL_ID
+    from stable_baselines3 import PPO, SAC
+
+    env_id, label = run["env"], run["learner"]
+    kind = {"ppo": PPO, "sac": SAC}[RESIDUAL_LEARNERS[label]]
+    model = kind.load(str(root / env_id / f"{label}-{run['seed']}.zip"), device="cpu")
+    env = gym.make(RESIDUAL_ID, env_id=env_id, scale=RESIDUAL_SCALE, render_mode="rgb_array",
+                   env_kwargs={"width": 320, "height": 240, **CAMERAS[env_id]})
+    box = env.unwrapped.blackbox
+    window = round(FILM_SECONDS / box.dt)
+    observation, _ = env.reset(seed=seed)
+    frames, total, done, k = [], 0.0, False, 0
+    while not done:
+        action, _ = model.predict(observation, deterministic=True)
+        observation, reward, terminated, truncated, _ = env.step(action)
+        total, done = total + float(reward), terminated or truncated
+        if k >= box.n_steps - window:
+            frames.append((k, env.render()))
+        k += 1
+    env.close()
+    return frames, total, box.dt, box.dmp.period
+
+
+def gait_film(document: dict[str, Any], root: Path, env_id: str, strip: Path, video: Path, frames: int = 6
+              ) -> dict[str, Any]:
+    """The best run's final policy on the first test context: ``frames`` frames over the last cycle, or the last
+    ``frames`` steps where a cycle is shorter (``strip``, a PNG), and the last :data:`FILM_SECONDS` s in real time
+    (``video``, an MP4)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from rdmp_gym.envs.recording import write_video
 
-    rows = [r for r in document["summary"] if r["env"] == "Swimmer-v5" and r["learner"] in LEARNERS
-            and r["learner"] != "random"]
-    best = max(rows, key=lambda r: r["final_return"]["estimate"])
-    run = max((r for r in document["runs"] if r["env"] == "Swimmer-v5" and r["learner"] == best["learner"]),
-              key=lambda r: r["final_return"])
-    config = _rhythmic_config("Swimmer-v5", best["learner"], run["seed"], argparse.Namespace(
-        **{k: document["settings"][k] for k in ("updates", "rollouts", "eval_episodes")}))
-    from rdmp_gym.agents.runs import RunDirectory
-    from rdmp_gym.envs.blackbox import make_blackbox
-
-    seed = int(final_test_seeds(1)[0])
-    env = make_blackbox("Swimmer-v5", render_mode="rgb_array",
-                        env_kwargs={"width": 320, "height": 240, "camera_name": "track"})
-    observation, _ = env.reset(seed=seed)
-    action = trained_actions(RunDirectory(root / "Swimmer-v5" / f"{best['learner']}-{run['seed']}"), config, "last",
-                             observation[None], env.action_space.shape[0])[0]
-    cycle = round(env.dmp.period / env.dt)                   # the last whole cycle of the episode
-    picks = set(np.linspace(env.n_steps - 1 - cycle, env.n_steps - 1, frames, endpoint=False).astype(int).tolist())
-    images: list[tuple[int, np.ndarray]] = []
-
-    class Grab(gym.Wrapper):
-        count = 0
-
-        def step(self, command):
-            result = self.env.step(command)
-            if Grab.count in picks:
-                images.append((Grab.count, self.env.render()))
-            Grab.count += 1
-            return result
-
-    env.env = Grab(env.env)
-    env.reset(seed=seed)
-    _, episode_return, _, _, _ = env.step(np.asarray(action, dtype=np.float32))
-    env.close()
-    figure, axes = plt.subplots(1, len(images), figsize=(2.6 * len(images), 2.3))
-    for axis, (step, image) in zip(np.atleast_1d(axes), images, strict=True):
+    run = _best_run(document, env_id)
+    film = _residual_film if run["learner"] in RESIDUAL_LEARNERS else _rhythmic_film
+    shots, episode_return, dt, period = film(document, root, run, int(final_test_seeds(1)[0]))
+    write_video([image for _, image in shots], video, fps=1.0 / dt)
+    cycle = shots[-max(round(period / dt), frames):]          # the last cycle (at least ``frames`` steps)
+    picks = np.linspace(0, len(cycle), frames, endpoint=False).astype(int)
+    figure, axes = plt.subplots(1, frames, figsize=(2.6 * frames, 2.3))
+    for axis, pick in zip(np.atleast_1d(axes), picks, strict=True):
+        step, image = cycle[pick]
         axis.imshow(image)
-        axis.set_title(f"t = {(step + 1) * env.dt:.1f} s", fontsize=8)
+        axis.set_title(f"t = {(step + 1) * dt:.2f} s", fontsize=8)
         axis.set_axis_off()
-    figure.suptitle(f"Swimmer-v5, {best['learner']} seed {run['seed']}: final policy, return {episode_return:.0f} "
+    figure.suptitle(f"{env_id}, {run['learner']} seed {run['seed']}: final policy, return {episode_return:.0f} "
                     f"(test context 0)", fontsize=9)
     figure.tight_layout()
-    figure.savefig(path, dpi=100)
+    figure.savefig(strip, dpi=100)
     plt.close(figure)
-    return {"learner": best["learner"], "seed": run["seed"], "return": episode_return}
+    return {"env": env_id, "learner": run["learner"], "seed": run["seed"], "return": episode_return,
+            "strip": strip.name, "video": video.name}
+
+
+def draw_figures(args: argparse.Namespace, root: Path, out: Path) -> None:
+    """The study's learning curves and, per env, the film of its best run (under docs/assets with ``--save``)."""
+    stem = {"main": "locomotion"}.get(args.study, f"locomotion_{args.study}")
+    document = json.loads((out / f"{stem}.json").read_text())
+    plot_curves(document, out / f"{stem}.png")
+    assets = ROOT / "docs" / "assets" if args.save else out
+    if args.save:
+        (assets / f"{stem}.png").write_bytes((out / f"{stem}.png").read_bytes())
+    suffix = "" if args.study == "main" else f"_{args.study}"
+    for env_id in dict.fromkeys(r["env"] for r in document["runs"]):
+        name = env_id.split("-")[0].lower()
+        try:
+            made = gait_film(document, root, env_id, assets / f"{name}_gait{suffix}.png",
+                             assets / f"{name}_gait{suffix}.mp4")
+        except FileNotFoundError as error:        # the runs' folders are not committed: train (or copy) them first
+            print(f"{env_id}: no film ({error})")
+            continue
+        print(f"film: {made}")
 
 
 # ---------------------------------------------------------------------------------------------------- main
@@ -659,13 +739,7 @@ def main() -> None:
     root = Path(args.run_dir)
     out = results_dir(args.save)
     if args.figures:
-        document = json.loads((out / "locomotion.json").read_text())
-        plot_curves(document, out / "locomotion.png")
-        docs = ROOT / "docs" / "assets"
-        if args.save:
-            (docs / "locomotion.png").write_bytes((out / "locomotion.png").read_bytes())
-        strip = docs / "swimmer_gait.png" if args.save else out / "swimmer_gait.png"
-        print(f"filmstrip: {filmstrip(document, root, strip)} -> {strip}")
+        draw_figures(args, root, out)
         return
     name = {"main": "locomotion.json"}.get(args.study, f"locomotion_{args.study}.json")
     if not args.summary_only:
