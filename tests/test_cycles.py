@@ -41,6 +41,30 @@ def test_cycle_starts_are_one_period_apart_after_the_transient(dmp, times):
     np.testing.assert_allclose(np.diff(faster[1:]), 0.5 * dmp.period, rtol=1e-9)
 
 
+@pytest.mark.parametrize("tempo", [0.6, 1.0, 1.7])
+def test_at_any_tempo_the_cycles_start_at_the_phase_crossings_right_after_the_transient(dmp, tempo):
+    duration = dmp.transients[0].length + 6.0 * dmp.period
+    starts = cycle_starts(dmp, duration, tempo=tempo)
+    period, transient_end = dmp.period / tempo, dmp.transients[0].length / tempo
+    turns = starts[1:] / period                                   # the canonical phase's turns since the start
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-9)
+    assert transient_end <= starts[1] < transient_end + period   # the first crossing after the transient, none skipped
+    np.testing.assert_allclose(np.diff(starts[1:]), period, rtol=1e-9)
+    assert starts[-1] <= duration - 0.5 * period < starts[-1] + period
+
+
+def test_the_hand_over_window_is_a_share_of_the_period_at_the_rollouts_tempo(dmp):
+    t = np.arange(0.0, 2.0 * (dmp.transients[0].length + 4.2 * dmp.period), DT)
+    starts = cycle_starts(dmp, float(t[-1]), tempo=0.5)[:3]
+    thetas = _changed(dmp, len(starts), 1, 0.05, seed=4)
+    path = rollout_cycles(dmp, thetas, t, starts, handover=0.5, tempo=0.5)
+    after = dmp.rollout_batch(thetas[1:2], t, tempo=0.5)[0]
+    own = t >= starts[1] + 0.5 * dmp.period / 0.5                 # half a period at half speed: one unit period
+    assert np.array_equal(path[own], after[own])
+    inside = (t > starts[1] + 0.5 * dmp.period) & (t < starts[1] + 0.9 * dmp.period)
+    assert not np.allclose(path[inside], after[inside], atol=1e-6)   # still handing over there
+
+
 @given(st.floats(-2.0, 5.0), st.floats(0.01, 2.0))
 @settings(max_examples=50, deadline=None)
 def test_the_ramp_runs_from_zero_to_one_monotonically(start, width):

@@ -71,6 +71,20 @@ def test_the_stepper_follows_a_three_cycle_schedule(dmp):
     np.testing.assert_allclose(yd[window], velocity[window], rtol=0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("tempo", [0.7, 1.6])
+def test_at_another_tempo_the_stepper_follows_the_schedule_of_that_tempo(dmp, tempo):
+    t = np.arange(0.0, (dmp.transients[0].length + 3.2 * dmp.period) / tempo, DT)
+    starts = cycle_starts(dmp, float(t[-1]), tempo=tempo)[:2]
+    changed = _changed(dmp, 0.05, seed=3)
+    stepper = dmp.start(DT, tempo=tempo)
+    assert stepper.change_weights(changed) == pytest.approx(starts[1], abs=1e-9)
+    start, end = stepper.handover_window
+    assert end - start == pytest.approx(0.5 * dmp.period / tempo, rel=1e-12)
+    y = np.array([stepper.state[0]] + [stepper.step()[0] for _ in range(t.size - 1)])
+    thetas = np.stack([dmp.get_params(), dmp.with_weights(changed).get_params()])
+    np.testing.assert_allclose(y, rollout_cycles(dmp, thetas, t, starts, tempo=tempo), rtol=0.0, atol=1e-9)
+
+
 def test_a_change_to_the_same_weights_changes_nothing_bit_for_bit(dmp):
     n = int(4.5 / DT)
     plain = _run(dmp, n)

@@ -61,11 +61,11 @@ def _ramp_argument(t: np.ndarray, start: float, width: float) -> np.ndarray:
     return np.clip((np.asarray(t, dtype=np.float64) - start) / width, 0.0, 1.0)
 
 
-def handover_width(dmp: RhythmicDMP, handover: float) -> float:
-    """The hand-over window (s) of ``handover`` periods of ``dmp``."""
+def handover_width(dmp: RhythmicDMP, handover: float, tempo: float | None = None) -> float:
+    """The hand-over window (s) of ``handover`` periods of ``dmp`` at its tempo (or at ``tempo``)."""
     if not (np.isfinite(handover) and handover > 0):
         raise ValueError(f"handover: expected a finite number > 0 (periods), got {handover!r}")
-    return handover * dmp.period
+    return handover * _period(dmp, tempo)
 
 
 def blend_from(before: np.ndarray, after: np.ndarray, t: np.ndarray, start: float, width: float) -> np.ndarray:
@@ -90,23 +90,29 @@ def cycle_starts(dmp: RhythmicDMP, duration: float, transient: int = 0, tempo: f
         raise ValueError(f"duration: expected a finite number > 0 (s), got {duration!r}")
     start = dmp.transients[dmp._check_transient(transient)]
     period = _period(dmp, tempo)
-    first = np.ceil(start.length / period - 1e-9)
+    first = np.ceil(start.length / dmp.period - 1e-9)       # the transient's length in cycles, the same at any tempo
     crossings = period * np.arange(max(first, 1.0), np.floor(duration / period - 1e-9) + 1.0)
     return np.r_[0.0, crossings[crossings <= duration - 0.5 * period]]
 
 
-def _period(dmp: RhythmicDMP, tempo: float | None) -> float:
-    """The period (s) of ``dmp`` at ``tempo`` (``None``: its own)."""
+def _speed(dmp: RhythmicDMP, tempo: float | None) -> float:
+    """The speed factor of a rollout at ``tempo`` (``None``: the canonical system's own)."""
     speed = dmp.canonical.tempo if tempo is None else float(tempo)
     if not (np.isfinite(speed) and speed > 0):
         raise ValueError(f"tempo: expected a finite number > 0, got {tempo!r}")
-    return dmp.period * dmp.canonical.tempo / speed
+    return speed
+
+
+def _period(dmp: RhythmicDMP, tempo: float | None) -> float:
+    """The period (s) of ``dmp`` at ``tempo`` (``None``: its own): its unit-tempo period over the speed factor."""
+    return dmp.period / _speed(dmp, tempo)
 
 
 def next_cycle_start(dmp: RhythmicDMP, time: float, transient: int = 0, tempo: float | None = None) -> float:
     """The first cycle start after the transient (an entry of :func:`cycle_starts` other than 0) at or after
     ``time`` (s since the start)."""
-    horizon = max(time, dmp.transients[dmp._check_transient(transient)].length) + 2.0 * _period(dmp, tempo)
+    length = dmp.transients[dmp._check_transient(transient)].length / _speed(dmp, tempo)
+    horizon = max(time, length) + 2.0 * _period(dmp, tempo)
     crossings = cycle_starts(dmp, horizon, transient, tempo)[1:]
     return float(crossings[crossings >= time][0])
 
@@ -116,13 +122,13 @@ def rollout_cycles(dmp: RhythmicDMP, thetas: np.ndarray, t: np.ndarray, starts: 
     """The path ``[T, d]`` of a cycle schedule: cycle ``k`` (starting at ``starts[k]``, s from ``t[0]``) runs the
     parameters ``thetas[k]`` (``[K, P]``, the groups of ``rollout["groups"]``), handed over within ``handover``
     periods (see the module docstring). ``rollout``: the keywords of :meth:`RhythmicDMP.rollout_batch`, the same
-    for every cycle. Equal consecutive rows change nothing: with all rows equal the path is
-    ``rollout_batch(thetas[:1], t, ...)[0]`` bit for bit."""
+    for every cycle; the window is ``handover`` periods at its ``tempo``. Equal consecutive rows change nothing: with
+    all rows equal the path is ``rollout_batch(thetas[:1], t, ...)[0]`` bit for bit."""
     thetas = as_finite_array(thetas, "thetas", ndim=2)
     starts = as_finite_array(starts, "starts", ndim=1)
     if len(starts) != len(thetas) or np.any(np.diff(starts) <= 0):
         raise ValueError(f"starts: expected {len(thetas)} increasing times (one per row of thetas), got {starts}")
-    width = handover_width(dmp, handover)
+    width = handover_width(dmp, handover, rollout.get("tempo"))
     t = np.asarray(t, dtype=np.float64)
     path = dmp.rollout_batch(thetas[:1], t, **rollout)[0]
     for k in range(1, len(thetas)):

@@ -788,7 +788,7 @@ class DMPStepper:
             raise ValueError(f"change_weights: a change is already scheduled (hand-over from {start:g} s to {end:g} s);"
                              " request the next one once it has ended")
         dmp = self.dmp.with_weights(weights)
-        width = handover_width(self.dmp, handover)
+        width = handover_width(self.dmp, handover, self.canonical.tempo)
         start = self._handover_start(at)
         if not np.array_equal(dmp.weights, self.dmp.weights):
             self._change = self._catch_up(dmp, start, width)
