@@ -52,7 +52,7 @@ class Command(NamedTuple):
 
 COMMANDS: dict[str, Command] = {
     "train": Command("run_commands", "command_train", "Train an agent: bbrl with the main job's settings on the "
-                     "current task unless --agent / --env say otherwise.", True, "parse_train"),
+                     "current task, cmaes on a step-based env.", True, "parse_train"),
     "evaluate": Command("run_commands", "command_evaluate",
                         "Evaluate a run's final policy against the imitation on the test contexts.", True,
                         "parse_evaluate"),

@@ -52,7 +52,7 @@ from .plots import logged_metrics, plot_fit
 from .protocol import interval
 from .report import compared_quantities, evaluate_run, record_best_episode
 from .runs import RunDirectory
-from .tasks import TaskSpec, failure_contexts, main_env_kwargs, main_options
+from .tasks import TaskSpec, failure_contexts, main_agent, main_env_kwargs, main_options
 from .train_config import TrainConfig
 from .training import MUTABLE_ON_RESUME, load_run_config, train
 
@@ -153,7 +153,7 @@ class _CommandFlags:
 
 @dataclass
 class TrainCommand(_CommandFlags, _run_flags("TrainRun", workers=_WORKERS)):
-    """Train an agent: bbrl with the main job's settings on the current task unless --agent / --env say otherwise."""
+    """Train an agent: bbrl with the main job's settings on the current task, cmaes on a step-based env."""
 
     out: str = ""
     """run directory (required)"""
@@ -231,8 +231,10 @@ def train_config(command: RunCommand, options: Settings | None = None) -> TrainC
     return TrainConfig(**values, options=options)
 
 
-def _default_options(agent: str, env_id: str, env_kwargs: dict[str, Any]) -> Settings:
-    """The learner's settings of a new run: the task's defaults for the agent (the main job's for its learner)."""
+def _default_options(agent: str | None, env_id: str, env_kwargs: dict[str, Any]) -> Settings:
+    """The learner's settings of a new run: the task's defaults for the agent (None: the env's default learner; the
+    main job's for its learner)."""
+    agent = agent or main_agent(env_id)
     return TrainConfig(agent=agent, env_id=env_id, env_kwargs=env_kwargs, options=main_options(agent, env_id)).options
 
 

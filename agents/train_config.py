@@ -20,7 +20,7 @@ from . import sb3_config  # noqa: F401  (declares PPO and SAC)
 from .config import Settings
 from .learners import CONTEXTUAL, EpisodeBatch
 from .registry import REGISTRY, agent_spec
-from .tasks import MAIN_AGENT, MAIN_ENV, TaskSpec, main_env_kwargs, main_options, task_options
+from .tasks import MAIN_ENV, TaskSpec, main_agent, main_env_kwargs, main_options, task_options
 
 __all__ = ["AGENTS", "START_MODES", "Agent", "AgentName", "StartMode", "TrainConfig"]
 
@@ -44,9 +44,10 @@ class TrainConfig:
     (:mod:`rdmp_gym.agents.run_commands`).
 
     Attributes:
-        agent: the learner. One of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``,
-            ``pi2``, ``cmaes``, the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; default the
-            main learner (:data:`~rdmp_gym.agents.tasks.MAIN_AGENT`).
+        agent: the learner (None: the env's default, bbrl on an episodic env and cmaes on a step-based one). One
+            of ``rdmp_gym.agents.learners.LEARNERS`` (``bbrl``, ``creps``, ``cpibb``, ``cpi2``, ``pi2``, ``cmaes``,
+            the baselines ``amplitude`` and ``random``), ``ppo`` or ``sac``; the defaults are
+            :func:`~rdmp_gym.agents.tasks.main_agent`'s.
         updates: number of updates.
         rollouts: training episodes per update.
         seed: run seed.
@@ -86,7 +87,7 @@ class TrainConfig:
             cup beside the patch, largest patch, no cup.
     """
 
-    agent: AgentName = MAIN_AGENT
+    agent: AgentName | None = None
     updates: int = 30
     rollouts: int = 10
     seed: int = 0
@@ -104,6 +105,8 @@ class TrainConfig:
     eval_every: int = 1
 
     def __post_init__(self) -> None:
+        if self.agent is None:
+            object.__setattr__(self, "agent", main_agent(self.env_id))
         check_choice(self.agent, "agent", AGENTS)
         check_range(self.updates, "updates", 1, None)
         check_range(self.rollouts, "rollouts", 2, None)
@@ -154,7 +157,7 @@ class TrainConfig:
             if name in values and (isinstance(values[name], bool) or not isinstance(values[name], int)):
                 raise TypeError(f"config.{name}: expected an integer, got {values[name]!r}")
         if isinstance(values.get("options", {}), Mapping):
-            spec = agent_spec(values.get("agent", cls.agent))
+            spec = agent_spec(values.get("agent") or main_agent(values.get("env_id", MAIN_ENV)))
             values["options"] = spec.config.from_dict(values.get("options"), spec.name)
         return cls(**values)
 

@@ -8,7 +8,16 @@ import dataclasses
 import gymnasium as gym
 import pytest
 from rdmp_gym.agents.run_commands import parse_main, parse_train, train_config
-from rdmp_gym.agents.tasks import MAIN_AGENT, MAIN_ENV, MAIN_ENV_KWARGS, MAIN_OPTIONS, TaskSpec
+from rdmp_gym.agents.tasks import (
+    MAIN_AGENT,
+    MAIN_ENV,
+    MAIN_ENV_KWARGS,
+    MAIN_OPTIONS,
+    STEP_AGENT,
+    STEP_OPTIONS,
+    TaskSpec,
+    main_agent,
+)
 from rdmp_gym.agents.training import TrainConfig
 from rdmp_gym.envs import LATEST_ENV_ID
 from rdmp_gym.envs.registration import env_settings
@@ -44,6 +53,24 @@ def test_main_keywords_and_options_only_apply_to_the_main_env_and_learner():
     cmaes = TrainConfig(agent="cmaes")
     assert dict(cmaes.env_kwargs) == MAIN_ENV_KWARGS
     assert dict(TrainConfig(env_kwargs={}).env_kwargs) == {}                 # given keywords are used as given
+
+
+def test_a_step_based_env_gets_the_step_learner_in_every_layer(tmp_path):
+    step_env = "InvertedPendulum-v5"
+    assert (main_agent(step_env), main_agent(MAIN_ENV), main_agent("rdmp_gym/PandaDrum-v1")) == \
+        (STEP_AGENT, MAIN_AGENT, MAIN_AGENT) == ("cmaes", "bbrl", "bbrl")
+    library = TrainConfig(env_id=step_env)
+    assert library.agent == "cmaes" and library.options.sigma == STEP_OPTIONS["sigma"] == 0.2
+    assert TrainConfig.from_dict({"env_id": step_env}).agent == "cmaes"
+    assert TrainConfig(env_id=step_env, agent="cmaes", options={"sigma": 0.6}).options.sigma == 0.6
+    assert TrainConfig(env_id=MAIN_ENV, agent="cmaes").options.sigma == 0.6        # CMA-ES's own on a task
+    command = train_config(parse_train(["--env", step_env, "--out", str(tmp_path / "a")]))
+    assert _task_fields(command) == _task_fields(library)
+    parsed = parse_train(["--env", step_env, "--options.sigma", "0.4", "--out", str(tmp_path / "b")])
+    wider = train_config(parsed, parsed.options)
+    assert (wider.agent, wider.options.sigma) == ("cmaes", 0.4)
+    assert train_config(parse_train(["--env", step_env, "--agent", "bbrl", "--out", str(tmp_path / "c")])).agent \
+        == "bbrl"
 
 
 def test_the_wiping_env_defaults_to_the_current_version():
