@@ -86,9 +86,9 @@ PAIRS = (("cmaes_feedback", "cmaes"), ("cmaes_feedback_near", "cmaes_near"), ("c
 MAIN_LEARNERS = ("cmaes", "bbrl", "plain_prior", "random", "ppo")
 SB3_ALGOS = ("ppo", "sac")
 #: step-based learners on the DMP's residual env (:mod:`rdmp_gym.envs.blackbox.residual`, the default pattern at
-#: ``a = 0``, a residual of RESIDUAL_SCALE x half the action range) -> their algorithm, with its RL Zoo settings
-RESIDUAL_LEARNERS = {"sac_residual": "sac", "ppo_residual": "ppo"}
-RESIDUAL_SCALE = 0.3
+#: ``a = 0``) -> (their algorithm with its RL Zoo settings, the residual's scale: a = +-1 adds that share of half the
+#: action range; 1.0 lets the residual command the whole range)
+RESIDUAL_LEARNERS = {"sac_residual": ("sac", 0.3), "sac_residual_full": ("sac", 1.0), "ppo_residual": ("ppo", 0.3)}
 EPISODE_STEPS = 1000   # both envs: 1000 env steps per episode, no early termination
 
 #: Return thresholds: Mania et al. 2018 (Simple random search provides a competitive approach to reinforcement
@@ -272,7 +272,7 @@ def _sb3_env(env_id: str, label: str) -> tuple[str, dict[str, Any]]:
         return env_id, {}
     from rdmp_gym.envs.blackbox import RESIDUAL_ID
 
-    return RESIDUAL_ID, {"env_id": env_id, "scale": RESIDUAL_SCALE}
+    return RESIDUAL_ID, {"env_id": env_id, "scale": RESIDUAL_LEARNERS[label][1]}
 
 
 def run_sb3(env_id: str, label: str, seed: int, total: int, args: argparse.Namespace, folder: Path
@@ -287,7 +287,7 @@ def run_sb3(env_id: str, label: str, seed: int, total: int, args: argparse.Names
 
     torch.set_num_threads(1)
     began = time.perf_counter()
-    algo = RESIDUAL_LEARNERS.get(label, label)
+    algo = RESIDUAL_LEARNERS[label][0] if label in RESIDUAL_LEARNERS else label
     kind = {"ppo": PPO, "sac": SAC}[algo]
     keywords, normalize, n_envs = _sb3_kwargs(algo, env_id)
     partial = folder / f"{label}-{seed}.partial"
@@ -380,7 +380,8 @@ def run_job(env_id: str, label: str, seed: int, args: argparse.Namespace, root: 
         body = run_rhythmic(env_id, label, seed, args, folder)
         budget = args.updates * args.rollouts * EPISODE_STEPS
     else:
-        budget = args.ppo_steps if RESIDUAL_LEARNERS.get(label, label) == "ppo" else args.sac_steps
+        algo = RESIDUAL_LEARNERS[label][0] if label in RESIDUAL_LEARNERS else label
+        budget = args.ppo_steps if algo == "ppo" else args.sac_steps
         body = run_sb3(env_id, label, seed, budget, args, folder)
     record = {"env": env_id, "learner": label, "seed": seed, "env_steps": budget,
               "final_return": float(np.mean(body["test_returns"])), **body,
@@ -659,9 +660,10 @@ def _residual_film(document: dict[str, Any], root: Path, run: dict[str, Any], se
     from stable_baselines3 import PPO, SAC
 
     env_id, label = run["env"], run["learner"]
-    kind = {"ppo": PPO, "sac": SAC}[RESIDUAL_LEARNERS[label]]
+    algo, scale = RESIDUAL_LEARNERS[label]
+    kind = {"ppo": PPO, "sac": SAC}[algo]
     model = kind.load(str(root / env_id / f"{label}-{run['seed']}.zip"), device="cpu")
-    env = gym.make(RESIDUAL_ID, env_id=env_id, scale=RESIDUAL_SCALE, render_mode="rgb_array",
+    env = gym.make(RESIDUAL_ID, env_id=env_id, scale=scale, render_mode="rgb_array",
                    env_kwargs={"width": 320, "height": 240, **CAMERAS[env_id]})
     box = env.unwrapped.blackbox
     window = round(FILM_SECONDS / box.dt)
