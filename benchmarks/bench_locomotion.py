@@ -265,6 +265,11 @@ def evaluate_sb3(model: Any, normalizer: Any, env: gym.Env, seeds: np.ndarray) -
     return returns
 
 
+def _algorithm(label: str) -> str:
+    """``ppo`` or ``sac``: the algorithm of a step learner (a raw-env one or one of :data:`RESIDUAL_LEARNERS`)."""
+    return RESIDUAL_LEARNERS[label][0] if label in RESIDUAL_LEARNERS else label
+
+
 def _sb3_env(env_id: str, label: str) -> tuple[str, dict[str, Any]]:
     """(the id to make, its keywords) of a PPO/SAC learner: the raw env, or for :data:`RESIDUAL_LEARNERS` the
     DMP's residual env on it."""
@@ -287,7 +292,7 @@ def run_sb3(env_id: str, label: str, seed: int, total: int, args: argparse.Names
 
     torch.set_num_threads(1)
     began = time.perf_counter()
-    algo = RESIDUAL_LEARNERS[label][0] if label in RESIDUAL_LEARNERS else label
+    algo = _algorithm(label)
     kind = {"ppo": PPO, "sac": SAC}[algo]
     keywords, normalize, n_envs = _sb3_kwargs(algo, env_id)
     partial = folder / f"{label}-{seed}.partial"
@@ -380,8 +385,7 @@ def run_job(env_id: str, label: str, seed: int, args: argparse.Namespace, root: 
         body = run_rhythmic(env_id, label, seed, args, folder)
         budget = args.updates * args.rollouts * EPISODE_STEPS
     else:
-        algo = RESIDUAL_LEARNERS[label][0] if label in RESIDUAL_LEARNERS else label
-        budget = args.ppo_steps if algo == "ppo" else args.sac_steps
+        budget = args.ppo_steps if _algorithm(label) == "ppo" else args.sac_steps
         body = run_sb3(env_id, label, seed, budget, args, folder)
     record = {"env": env_id, "learner": label, "seed": seed, "env_steps": budget,
               "final_return": float(np.mean(body["test_returns"])), **body,

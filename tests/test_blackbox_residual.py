@@ -93,3 +93,13 @@ def test_gym_make_builds_it_and_the_env_checkers_pass():
         check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
     env.close()
+
+
+def test_a_controller_that_gives_no_finite_command_is_refused_before_the_env_steps():
+    box = make_blackbox("Swimmer-v5", **SHORT)
+    env = RhythmicResidualEnv(box)
+    env.reset(seed=0)
+    box.controller = lambda *state: np.array([np.nan, 0.0])
+    with pytest.raises(ValueError, match="controller"):
+        env.step(np.zeros(2, np.float32))
+    env.close()

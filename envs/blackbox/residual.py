@@ -99,8 +99,7 @@ class RhythmicResidualEnv(gym.Env):
         k = self._step
         raw = np.asarray(self.blackbox.controller(q_des[k + 1], qd_des[k + 1], *self._state), dtype=np.float64)
         raw = raw + self.scale * self._half_range * np.clip(a, -1.0, 1.0)
-        space = self.blackbox.env_action_space
-        command = np.clip(raw, space.low, space.high).astype(space.dtype)
+        command = self.blackbox._clipped_command(raw).astype(self.blackbox.env_action_space.dtype)
         observation, reward, terminated, truncated, info = self.blackbox.env.step(command)
         self._state = self.blackbox._joint_state()
         self._step = k + 1

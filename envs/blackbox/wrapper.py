@@ -441,7 +441,6 @@ class RhythmicBlackBoxWrapper(gym.Env):
         ``observation [m]``, the reset's, which it then needs); with ``observation`` the run also keeps every
         flattened observation (``"observations" [used + 1, m]``) and the feedback's part of the commands
         (``"feedback_actions" [used, n]``, zero without gains)."""
-        low, high = self.env_action_space.low, self.env_action_space.high
         n, d = self.n_steps, self.n_joints
         positions, velocities = np.empty((n + 1, d)), np.empty((n + 1, d))
         positions[0], velocities[0] = start
@@ -458,10 +457,7 @@ class RhythmicBlackBoxWrapper(gym.Env):
             if gains is not None:
                 pushes[k] = self.feedback(gains, seen[-1])
                 raw = raw + pushes[k]
-            if raw.shape != self.env_action_space.shape or not np.all(np.isfinite(raw)):
-                raise ValueError(f"controller: returned {raw.shape} values (finite: {bool(np.all(np.isfinite(raw)))}); "
-                                 f"expected {self.env_action_space.shape} finite values")
-            command = np.clip(raw, low, high)
+            command = self._clipped_command(raw)
             clipped += int(np.count_nonzero(command != raw))
             commands[k] = command
             observation, reward, terminated, truncated, step_info = self.env.step(commands[k])
@@ -480,6 +476,14 @@ class RhythmicBlackBoxWrapper(gym.Env):
         if seen is not None:
             run.update(observations=np.asarray(seen), feedback_actions=pushes[:used])
         return run
+
+    def _clipped_command(self, raw: np.ndarray) -> np.ndarray:
+        """The env's command ``[n]`` (float64): the controller's ``raw [n]`` (feedback included) clipped to the env's
+        action box; a ValueError where it has the wrong shape or a non-finite value."""
+        if raw.shape != self.env_action_space.shape or not np.all(np.isfinite(raw)):
+            raise ValueError(f"controller: returned {raw.shape} values (finite: {bool(np.all(np.isfinite(raw)))}); "
+                             f"expected {self.env_action_space.shape} finite values")
+        return np.clip(raw, self.env_action_space.low, self.env_action_space.high)
 
     def _info(self, theta: np.ndarray, q_des: np.ndarray, qd_des: np.ndarray, run: dict[str, Any]) -> dict[str, Any]:
         """The episode's ``info`` (see the docs' table)."""
