@@ -13,7 +13,9 @@
 - **the action** of cycle ``k`` has the episodic face's layout: the parameters ``theta_k = theta_imitation + scale a_k``
   and the task's own values, which take over from the movement so far at the cycle's start within half a period
   (:func:`rdmp_gym.dmp.cycles.blend_from`): the path is unchanged before the start, C3 across the hand-over, and
-  the new parameters' own path after it. The first step's action starts the episode as the episodic face's would;
+  the new parameters' own path after it (a task whose plan has a state of its own, the drumming task's rhythm
+  follower, resumes it from the cycle's start: :meth:`~rdmp_gym.envs.tasks.description.TaskDescription.resume_plan`).
+  The first step's action starts the episode as the episodic face's would;
   an action equal to the previous cycle's changes nothing, so the zero action in every cycle is the episodic
   face's action 0, bit for bit. A change the task refuses (its parameter check, reach, joint speed) is not applied:
   ``info["refused"]`` names the reason and the cycle goes on with the previous parameters;
@@ -78,6 +80,8 @@ class RhythmicCycleEnv(gym.Env):
         self._cycle = 0
         self._actions: list[np.ndarray] = []
         self._refused: list[tuple[int, str]] = []
+        #: the plan the running episode last took over (None: the episode's first, the solution's)
+        self._plan: TaskPlan | None = None
         self._worker: threading.Thread | None = None
         self._to_main: queue.Queue = queue.Queue(maxsize=1)
         self._to_worker: queue.Queue = queue.Queue(maxsize=1)
@@ -106,7 +110,7 @@ class RhythmicCycleEnv(gym.Env):
         super().reset(seed=seed)
         self._abort()
         _, info = self.face.reset(seed=seed, options=options)
-        self._cycle, self._actions, self._refused = 0, [], []
+        self._cycle, self._actions, self._refused, self._plan = 0, [], [], None
         self._state = np.clip(self.task.cycle_state(self.face, None, None), *self.task.cycle_state_bounds())
         return self._observation(), info
 
@@ -197,7 +201,11 @@ class RhythmicCycleEnv(gym.Env):
         theta, extras = face._split(action)
         rejection = self.task.check_params(theta)
         if rejection is None:
-            rejection = self._handover(face.plan(theta, extras), self.starts[cycle], self.start_steps[cycle])
+            step = int(self.start_steps[cycle])
+            new = face.resume_plan(theta, extras, self._plan or face.solution.plan, step)
+            rejection = self._handover(new, self.starts[cycle], step)
+            if rejection is None:
+                self._plan = new
         if rejection is not None:
             self._refused.append((cycle, rejection.reason))
             action[:] = self._actions[-1]          # the cycle goes on with the previous parameters

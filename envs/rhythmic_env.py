@@ -279,6 +279,15 @@ class RhythmicTaskEnv(gym.Env):
         return self.task.plan(self.dmp, np.asarray(theta, dtype=np.float64), np.asarray(extras, dtype=np.float64),
                               self.context, self.times, self.scene.table_origin)
 
+    def resume_plan(self, theta: np.ndarray, extras: np.ndarray, live: TaskPlan, step: int) -> TaskPlan:
+        """The task's plan of ``theta [P]`` and ``extras [E]`` taking over from the running plan ``live`` at control
+        step ``step`` (:meth:`~rdmp_gym.envs.tasks.description.TaskDescription.resume_plan`)."""
+        if self.context is None:
+            raise RuntimeError("call reset() before resume_plan()")
+        return self.task.resume_plan(live, int(step), self.dmp, np.asarray(theta, dtype=np.float64),
+                                     np.asarray(extras, dtype=np.float64), self.context, self.times,
+                                     self.scene.table_origin)
+
     def rollout_path(self, theta: np.ndarray) -> np.ndarray:
         """The tool path ``[T, 3]`` (task frame) that the task plans for DMP parameters ``theta [P]`` (its own values
         at 0) in this episode's context."""

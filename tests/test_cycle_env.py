@@ -76,6 +76,24 @@ def test_drumming_cycles_with_the_zero_action_are_the_episodic_action_zero():
     env.close()
 
 
+def test_a_change_of_the_drum_rhythm_resumes_the_follower_where_the_cycle_starts():
+    """A cycle that changes the beat's shift goes on from the follower's state at its start (the canonical time
+    before it is the running one's); a later change of weights alone keeps that schedule."""
+    env = gym.make("rdmp_gym/PandaDrumCycle-v1").unwrapped
+    zero, shifted = np.zeros(env.action_space.shape), np.zeros(env.action_space.shape)
+    shifted[-1] = 0.3
+    reshaped = shifted.copy()
+    reshaped[:5] = 0.05
+    _episode(env, lambda cycle: zero)
+    running = env.face.solution.plan.extras["schedule"]
+    _, info, _ = _episode(env, lambda cycle: zero if cycle < 3 else shifted if cycle < 5 else reshaped)
+    schedule, step = env._plan.extras["schedule"], int(env.start_steps[3])
+    assert schedule.since == step and not info["refused"]
+    np.testing.assert_array_equal(schedule.s[: step + 1], running.s[: step + 1])
+    assert not np.array_equal(schedule.s[step + 50:], running.s[step + 50:])
+    env.close()
+
+
 def test_observations_hold_the_context_the_state_and_the_progress(wipe, zero_run):
     observations = zero_run[2]
     context_size = wipe.task.context_bounds()[0].size

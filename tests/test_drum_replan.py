@@ -87,3 +87,74 @@ def test_a_schedule_refuses_another_canonical_system_and_a_bad_stop_step(drum):
         schedule.rollout(moved)
     with pytest.raises(ValueError, match="stop_step"):
         CanonicalSchedule.record(dmp, signal, 0.01, 50)
+
+
+def recorded(task, dmp, theta, extras, context):
+    """The schedule and settings of a plan of ``extras`` in ``context`` (recorded afresh)."""
+    plan = task.plan(dmp, theta, extras, context, TIMES, ORIGIN)
+    settings, signal = task._rhythm(extras, task.metronome(context), TIMES)
+    return plan, settings, signal
+
+
+@pytest.mark.parametrize("step", [0, 1, 333, TIMES.size])
+def test_resuming_a_schedule_with_its_own_settings_is_the_schedule_bit_for_bit(drum, step):
+    task, dmp, theta, context = drum
+    plan, settings, signal = recorded(task, dmp, theta, np.array([0.3, -0.4, 0.1]), context)
+    schedule = plan.extras["schedule"]
+    resumed = schedule.resume(dmp, step, signal, **settings)
+    for mine, theirs in [(resumed.s, schedule.s), (resumed.ds, schedule.ds), (resumed.states, schedule.states),
+                         *zip(resumed.hold, schedule.hold, strict=True)]:
+        np.testing.assert_array_equal(mine, theirs)
+    assert resumed.since == step
+    assert resumed.matches(dmp, signal, 0.01, schedule.stop_step, **settings) == (step == 0)   # no record's but one
+
+
+def test_resuming_at_the_start_with_other_settings_is_their_record(drum):
+    task, dmp, theta, context = drum
+    plan, _, _ = recorded(task, dmp, theta, np.array([0.3, -0.4, 0.1]), context)
+    other, other_settings, other_signal = recorded(task, dmp, theta, np.array([0.6, 0.0, -0.2]), context)
+    resumed = plan.extras["schedule"].resume(dmp, 0, other_signal, **other_settings)
+    np.testing.assert_array_equal(resumed.states, other.extras["schedule"].states)
+    np.testing.assert_array_equal(resumed.rollout(dmp)[:-1], other.path)
+
+
+@pytest.mark.parametrize("which", [0, 1, 2])
+def test_a_resumed_schedule_keeps_the_past_and_goes_on_from_its_state(drum, which):
+    """Gains or the shift changed at step 400: the canonical time and its rate before it are the running
+    schedule's, the rate goes on from where it was (no jump of the phase), and it differs afterwards."""
+    task, dmp, theta, context = drum
+    extras = np.array([0.3, -0.4, 0.1])
+    plan, _, _ = recorded(task, dmp, theta, extras, context)
+    extras[which] += 0.3
+    live = plan.extras["schedule"]
+    resumed = task.resume_plan(plan, 400, dmp, theta, extras, context, TIMES, ORIGIN).extras["schedule"]
+    np.testing.assert_array_equal(resumed.s[:401], live.s[:401])
+    np.testing.assert_array_equal(resumed.states[:401], live.states[:401])
+    assert not np.array_equal(resumed.s[450:], live.s[450:])
+    replayed = task.plan(dmp, theta, extras, context, TIMES, ORIGIN).extras["schedule"]
+    assert abs(replayed.s[400] - live.s[400]) > 1e-4                 # a replay from the start jumps the phase
+
+
+def test_resume_plan_with_the_running_settings_reuses_the_schedule(drum):
+    task, dmp, theta, context = drum
+    extras = np.array([0.3, -0.4, 0.1])
+    plan = task.plan(dmp, theta, extras, context, TIMES, ORIGIN)
+    changed = theta + 0.05 * np.random.default_rng(4).standard_normal(theta.size)
+    resumed = task.resume_plan(plan, 400, dmp, changed, extras, context, TIMES, ORIGIN)
+    assert resumed.extras["schedule"] is plan.extras["schedule"]
+    np.testing.assert_array_equal(resumed.path, task.plan(dmp, changed, extras, context, TIMES, ORIGIN).path)
+
+
+def test_resume_refuses_bad_input(drum):
+    task, dmp, theta, context = drum
+    plan, settings, signal = recorded(task, dmp, theta, np.zeros(3), context)
+    schedule = plan.extras["schedule"]
+    with pytest.raises(ValueError, match="step"):
+        schedule.resume(dmp, TIMES.size + 1, signal, **settings)
+    with pytest.raises(ValueError, match="u"):
+        schedule.resume(dmp, 10, signal[:-1], **settings)
+    with pytest.raises(ValueError, match="frequency"):
+        schedule.resume(dmp, 10, signal, **{**settings, "frequency": 2.0 * settings["frequency"]})
+    moved = dmp.with_params(dmp.get_params("initial:0") + np.array([0.2, 0.0]), "initial:0")
+    with pytest.raises(ValueError, match="dmp"):
+        schedule.resume(moved, 10, signal, **settings)

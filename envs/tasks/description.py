@@ -265,6 +265,14 @@ class TaskDescription(ABC):
         ``extras [E]`` in ``context``, at the control times ``times [T]``; ``table_origin [3]``: the nominal table
         frame's origin in the world (its axes are the world's)."""
 
+    def resume_plan(self, live: TaskPlan, step: int, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray,
+                    context: Any, times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
+        """The plan of ``theta [P]`` and ``extras [E]`` that takes over from the running plan ``live`` at control step
+        ``step`` (a cycle's change on the cycle-level face). Default: :meth:`plan`, the new parameters' plan from the
+        start, right for a plan that is a function of its parameters alone; a task whose plan has a state of its own
+        (the drumming task's rhythm follower) goes on from that state at ``step`` instead."""
+        return self.plan(dmp, theta, extras, context, times, table_origin)
+
     @abstractmethod
     def evaluate(self, path: ToolPath, context: Any, sensor: Mapping[str, slice]) -> Outcome:
         """The reward terms, cost trace, info and failure causes of an executed episode; ``sensor`` maps the

@@ -291,6 +291,46 @@ def _canonical_key(dmp, transient: int) -> tuple[float, float, float, float]:
             float(dmp.transients[dmp._check_transient(transient)].phi0))
 
 
+#: the canonical system's state that a schedule keeps per step: the stepper's canonical time, time, rate and smoothed
+#: frequency, the oscillator's phase and frequency
+_STATE = ("s", "time", "rate", "smoothed_frequency", "oscillator_phase", "oscillator_omega")
+
+
+def _samples(u: np.ndarray) -> np.ndarray:
+    """The input samples ``u [T]`` or ``[T, k]`` as ``[T, k]`` (finite)."""
+    samples = as_finite_array(u, "u", ndim=(1, 2))
+    return samples.reshape(len(samples), -1)
+
+
+def _check_stop_step(stop_step: int | None, n: int) -> None:
+    if stop_step is not None and not (isinstance(stop_step, (int, np.integer)) and 0 <= stop_step < n):
+        raise ValueError(f"stop_step: expected a step in [0, {n}) or None, got {stop_step!r}")
+
+
+def _state_of(stepper: AdaptiveFrequencyStepper) -> tuple[float, ...]:
+    """The stepper's canonical state (:data:`_STATE`)."""
+    return (stepper.s, stepper.time, stepper.rate, stepper.smoothed_frequency, stepper.oscillator.phase,
+            stepper.oscillator.omega)
+
+
+def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Mapping[str, Any]
+                      ) -> AdaptiveFrequencyStepper:
+    """A stepper of ``dmp`` with ``settings`` in the canonical state that ``schedule`` recorded before step ``step``:
+    its state (:data:`_STATE`) and the oscillator's inputs so far (the last period's window is all it reads)."""
+    stepper = AdaptiveFrequencyStepper(dmp, schedule.dt, **settings)
+    if _canonical_key(dmp, stepper.transient) != schedule.canonical:
+        raise ValueError("dmp: its canonical system, damping or start phase differs from the recorded DMP's")
+    (stepper.s, stepper.time, stepper.rate, stepper.smoothed_frequency, stepper.oscillator.phase,
+     stepper.oscillator.omega) = (float(value) for value in schedule.states[step])
+    oscillator = stepper.oscillator
+    kept = schedule.u[max(0, step - oscillator._capacity): step]
+    if len(kept):
+        oscillator._history = np.empty((2 * oscillator._capacity, schedule.u.shape[1]))
+        oscillator._history[: len(kept)] = kept
+        oscillator._used = len(kept)
+    return stepper
+
+
 @dataclass(frozen=True, eq=False)
 class CanonicalSchedule:
     """The canonical time of one run of an :class:`AdaptiveFrequencyStepper` over an input recording, for the
@@ -301,7 +341,9 @@ class CanonicalSchedule:
     what drives the transformation system: the forcing weights, the amplitude, the ending's weights and goal.
     Given it, the transformation system is linear. :meth:`record` runs the canonical system alone;
     :meth:`rollout` integrates the transformation system of a DMP along it with the stepper's own operations, so
-    its path equals the stepper's bit for bit; :meth:`matches` says whether a run would record this schedule.
+    its path equals the stepper's bit for bit; :meth:`matches` says whether a run would record this schedule;
+    :meth:`resume` continues a schedule from one of its steps with other settings or another input (a change of the
+    rhythm's gains or shift at a cycle's start: the oscillator goes on from where it is, not from the start).
 
     Attributes:
         u: ``[T, k]`` the input samples (read-only).
@@ -313,6 +355,9 @@ class CanonicalSchedule:
         ds: ``[T]`` each step's advance of the canonical time (0: the DMP stands still over the step).
         hold: each step's first-order hold (:func:`_first_order_hold`): ``Phi [T, 2, 2]``, ``B0 [T, 2]``,
             ``B1 [T, 2]`` (zeros where ``ds = 0``).
+        states: ``[T + 1, 6]`` the canonical system's state before each step and after the last
+            (:data:`_STATE`: what :meth:`resume` restores).
+        since: the first step that ran with these settings and input (0, or the step :meth:`resume` went on from).
     """
 
     u: np.ndarray
@@ -323,38 +368,74 @@ class CanonicalSchedule:
     s: np.ndarray
     ds: np.ndarray
     hold: tuple[np.ndarray, np.ndarray, np.ndarray]
+    states: np.ndarray
+    since: int = 0
 
     @classmethod
     def record(cls, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any
                ) -> CanonicalSchedule:
         """The schedule of ``AdaptiveFrequencyStepper(dmp, dt, **settings)`` stepped over the samples ``u`` (``[T]``
         or ``[T, k]``), its stop requested before step ``stop_step`` (in ``[0, T)``; ``None``: no stop)."""
-        samples = as_finite_array(u, "u", ndim=(1, 2))
-        samples = samples.reshape(len(samples), -1)
-        n = len(samples)
-        if stop_step is not None and not (isinstance(stop_step, (int, np.integer)) and 0 <= stop_step < n):
-            raise ValueError(f"stop_step: expected a step in [0, {n}) or None, got {stop_step!r}")
+        samples = _samples(u)
+        _check_stop_step(stop_step, len(samples))
         stepper = AdaptiveFrequencyStepper(dmp, dt, **settings)
+        return cls._run(stepper, samples, 0, None, stop_step, dict(settings), _canonical_key(dmp, stepper.transient))
+
+    def resume(self, dmp, step: int, u: np.ndarray, **settings: Any) -> CanonicalSchedule:
+        """This schedule up to step ``step`` (in ``[0, T]``), then ``AdaptiveFrequencyStepper(dmp, dt, **settings)``
+        going on from the recorded state there over the samples ``u [T]`` or ``[T, k]`` from ``step`` on (those
+        before it are the recorded ones); ``dmp`` shares the recorded canonical system, and ``transient`` and
+        ``frequency`` stay as recorded. With the recorded settings and input it is this schedule, bit for bit."""
+        samples = _samples(u)
+        n = self.ds.size
+        if samples.shape != self.u.shape:
+            raise ValueError(f"u: expected {self.u.shape[0]} samples of {self.u.shape[1]} value(s), as recorded, got "
+                             f"shape {np.shape(u)}")
+        if not (isinstance(step, (int, np.integer)) and 0 <= step <= n):
+            raise ValueError(f"step: expected a step in [0, {n}], got {step!r}")
+        for key in ("transient", "frequency"):
+            if settings.get(key) != self.settings.get(key):
+                raise ValueError(f"settings: {key} is the schedule's start ({self.settings.get(key)!r}); a resumed "
+                                 f"schedule cannot change it (got {settings.get(key)!r})")
+        stepper = _restored_stepper(self, dmp, int(step), settings)
+        joined = np.concatenate([self.u[:step], samples[step:]])
+        return self._run(stepper, joined, int(step), self, self.stop_step, dict(settings), self.canonical)
+
+    @classmethod
+    def _run(cls, stepper: AdaptiveFrequencyStepper, samples: np.ndarray, start: int,
+             before: CanonicalSchedule | None, stop_step: int | None, settings: dict[str, Any],
+             canonical: tuple[float, float, float, float]) -> CanonicalSchedule:
+        """Step ``stepper`` over ``samples [T, k]`` from step ``start`` on, the steps before it copied from
+        ``before``; the schedule."""
+        n = len(samples)
         s, ds = np.empty(n + 1), np.zeros(n)
         phi, b0, b1 = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
-        for k in range(n):
-            s[k] = stepper.s
+        states = np.empty((n + 1, len(_STATE)))
+        if before is not None:
+            s[:start], ds[:start], states[:start] = before.s[:start], before.ds[:start], before.states[:start]
+            for mine, theirs in zip((phi, b0, b1), before.hold, strict=True):
+                mine[:start] = theirs[:start]
+        alpha_z = canonical[2]
+        for k in range(start, n):
+            s[k], states[k] = stepper.s, _state_of(stepper)
             step = stepper._advance_canonical(samples[k])
             if step > 0.0:
                 ds[k] = step
-                phi[k], b0[k], b1[k] = _first_order_hold(stepper.omega_fit, step, dmp.alpha_z)
-        s[n] = stepper.s
-        arrays = (samples.copy(), s, ds, phi, b0, b1)
+                phi[k], b0[k], b1[k] = _first_order_hold(stepper.omega_fit, step, alpha_z)
+        s[n], states[n] = stepper.s, _state_of(stepper)
+        arrays = (samples.copy(), s, ds, phi, b0, b1, states)
         for array in arrays:
             array.flags.writeable = False
-        return cls(arrays[0], stepper.dt, None if stop_step is None else int(stop_step), dict(settings),
-                   _canonical_key(dmp, stepper.transient), s, ds, (phi, b0, b1))
+        return cls(arrays[0], stepper.dt, None if stop_step is None else int(stop_step), settings, canonical, s, ds,
+                   (phi, b0, b1), states, start)
 
     def matches(self, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any) -> bool:
         """Whether :meth:`record` with these arguments would record this schedule (the same input, sample period,
-        stop step, settings and canonical system; ``dmp``'s weights, amplitude and ending may differ)."""
+        stop step, settings and canonical system; ``dmp``'s weights, amplitude and ending may differ); a resumed
+        schedule is no record's."""
         samples = np.asarray(u, dtype=np.float64)
-        return (float(dt) == self.dt and stop_step == self.stop_step and dict(settings) == self.settings
+        return (self.since == 0 and float(dt) == self.dt and stop_step == self.stop_step
+                and dict(settings) == self.settings
                 and samples.size == self.u.size and np.array_equal(samples.reshape(self.u.shape), self.u)
                 and _canonical_key(dmp, settings.get("transient", 0)) == self.canonical)
 

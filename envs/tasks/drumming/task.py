@@ -185,20 +185,40 @@ class DrumTask(TaskDescription):
 
     def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: DrumContext,
              times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
-        coupling, phase_gain, shift = extras
         params = dmp.with_params(theta, self.groups)
         metronome = self.metronome(context)
         beats, counted = self.beats(metronome)
         dt = float(times[1] - times[0])
-        settings = {"coupling": 2.0 * 4.0**coupling, "phase_gain": 2.0 * 4.0**phase_gain, "frequency": metronome.omega}
-        signal = metronome.signal(times, shift=shift)
+        settings, signal = self._rhythm(extras, metronome, times)
         stop_at = self.stop_request(metronome, beats[-1]) if beats.size else times[-1]
         stopping = np.flatnonzero(times >= stop_at)
         schedule = self._schedule(params, signal, dt, int(stopping[0]) if stopping.size else None, settings)
         path = schedule.rollout(params)[:-1]
         origin, rotation = self.frame(context, table_origin)
         return TaskPlan(path, origin, rotation, {"beats": beats, "counted": counted, "stop_at": stop_at,
-                                                 "change_time": metronome.change_time})
+                                                 "change_time": metronome.change_time, "schedule": schedule})
+
+    def resume_plan(self, live: TaskPlan, step: int, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray,
+                    context: DrumContext, times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
+        """The plan of ``theta`` and ``extras`` from control step ``step`` on: the rhythm follower goes on from its
+        state in the running plan ``live`` there with the new gains and beat shift (a change of them retunes the
+        follower; replaying it from the start would jump its phase), the transformation system follows the resumed
+        canonical time. The same gains and shift resume the running schedule itself."""
+        params = dmp.with_params(theta, self.groups)
+        running = live.extras["schedule"]
+        settings, signal = self._rhythm(extras, self.metronome(context), times)
+        same = settings == running.settings and np.array_equal(signal[step:], running.u[step:, 0])
+        schedule = running if same else running.resume(params, step, signal, **settings)
+        return TaskPlan(schedule.rollout(params)[:-1], live.origin, live.rotation, {**live.extras,
+                                                                                    "schedule": schedule})
+
+    @staticmethod
+    def _rhythm(extras: np.ndarray, metronome: Metronome, times: np.ndarray) -> tuple[dict[str, float], np.ndarray]:
+        """The follower's settings of the task's values ``extras`` (coupling, phase gain, shift) and the beat
+        signal ``[T]`` it follows at the control times ``times [T]``."""
+        coupling, phase_gain, shift = extras
+        settings = {"coupling": 2.0 * 4.0**coupling, "phase_gain": 2.0 * 4.0**phase_gain, "frequency": metronome.omega}
+        return settings, metronome.signal(times, shift=shift)
 
     def _schedule(self, dmp: RhythmicDMP, signal: np.ndarray, dt: float, stop_step: int | None,
                   settings: Mapping[str, float]) -> CanonicalSchedule:
