@@ -12,7 +12,10 @@ phase gain ``k_phi``, the beat's phase shift; action units):
 - **reactions by hand** on the cycle-level face, from the best setting: the beat shift corrected in every cycle by
   the last played beat's timing error (proportional, ``shift = best - g e``, and accumulated, ``shift -= g e``), and
   the coupling raised for a cycle after an error above 30 ms; success, timing error and failure causes on the same
-  contexts.
+  contexts;
+- **a retuned follower** (an oracle, and a prototype of a fourth action value the task does not have): at the first
+  cycle that starts ``delay`` beats after the tempo change, the follower's frequency is set to the new tempo's
+  (``CanonicalSchedule.resume(..., retune=)``), the rest as the best setting; how early a reaction must come.
 
 An episodic policy observes the context (the drum's pose, the announced tempo), not the tempo change to come: no
 action chosen once per episode can fit both a rise and a fall of the tempo, so its ceiling is below the per-context
@@ -28,6 +31,7 @@ import argparse
 import itertools
 import json
 import os
+from collections.abc import Mapping
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -39,7 +43,10 @@ import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.protocol import interval
+from rdmp_gym.envs.cycle_env import RhythmicCycleEnv
 from rdmp_gym.envs.registration import cycle_id
+from rdmp_gym.envs.tasks.description import TaskPlan
+from rdmp_gym.envs.tasks.drumming import DrumTask
 
 ROBOTS = {"armar3": "rdmp_gym/ArmarDrum-v1", "panda": "rdmp_gym/PandaDrum-v1"}
 RHYTHM = ("coupling", "phase_gain", "phase")
@@ -52,6 +59,62 @@ REACTIONS = {"proportional": ("phase", "proportional", 3.0), "accumulated": ("ph
 _LAST_ERROR = -3
 _BOOST_ERROR = 0.03
 FIGURE = Path(__file__).resolve().parent.parent / "docs" / "assets" / "drum_timing.png"
+#: the retuned follower's delays after the tempo change (beats at the new tempo)
+RETUNE_DELAYS = (0.0, 0.5, 1.0)
+
+
+class RetunedDrum(DrumTask):
+    """The drumming task with a fourth value of its own, ``tempo`` ``a``: a cycle that changes it sets the rhythm
+    follower's frequency to the announced tempo's times ``2^(a / 2)`` from its start. A prototype for this study (the
+    registered drumming envs have three values)."""
+
+    extras: Mapping[str, float] = {**DrumTask.extras, "tempo": 1.0}
+
+    def plan(self, dmp, theta, extras, context, times, table_origin) -> TaskPlan:
+        return super().plan(dmp, theta, extras[:3], context, times, table_origin)
+
+    def resume_plan(self, live, step, dmp, theta, extras, context, times, table_origin) -> TaskPlan:
+        if extras[3] == live.extras.get("tempo", 0.0):
+            return super().resume_plan(live, step, dmp, theta, extras[:3], context, times, table_origin)
+        params = dmp.with_params(theta, self.groups)
+        settings, signal = self._rhythm(extras[:3], self.metronome(context), times)
+        retune = settings["frequency"] * 2.0 ** (0.5 * extras[3])
+        schedule = live.extras["schedule"].resume(params, step, signal, retune=retune, **settings)
+        return TaskPlan(schedule.rollout(params)[:-1], live.origin, live.rotation,
+                        {**live.extras, "schedule": schedule, "tempo": extras[3]})
+
+
+def retuned(robot: str, best: np.ndarray, delay: float, contexts: int) -> dict:
+    """The best setting with the follower retuned to the new tempo at the first cycle starting ``delay`` beats
+    after the change (the oracle of :class:`RetunedDrum`), on the check contexts."""
+    env = RhythmicCycleEnv(task=RetunedDrum(), robot=robot, version=1)
+    results = []
+    for i in range(contexts):
+        env.reset(seed=CHECK_SEEDS + i)
+        context, action = env.face.context, _action(env, best)              # its tempo value (the last) 0
+        react_at = context.change_time + delay * 60.0 / context.new_tempo
+        for cycle in range(env.n_cycles):
+            if cycle > 0 and env.starts[cycle] >= react_at and action[-1] == 0.0:
+                action = action.copy()
+                action[-1] = np.clip(2.0 * np.log2(context.new_tempo / context.tempo), -1.0, 1.0) or 1e-9
+            _, _, terminated, _, info = env.step(action)
+            if terminated:
+                break
+        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
+                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+    env.close()
+    return _scored(results) | {"delay_beats": delay}
+
+
+def _scored(results: list[tuple[bool, float, float, list[str]]]) -> dict:
+    """Success (mean with its interval), mean timing error and jerk ratio, failure causes of a probe's episodes."""
+    causes: dict[str, int] = {}
+    for *_, failed in results:
+        for cause in failed:
+            causes[cause] = causes.get(cause, 0) + 1
+    return {"success": interval(np.array([r[0] for r in results], dtype=float), statistic="mean").to_dict(),
+            "timing_error": float(np.nanmean([r[1] for r in results])),
+            "jerk_ratio": float(np.mean([r[2] for r in results])), "failure_causes": causes}
 
 
 def _action(env, values: np.ndarray) -> np.ndarray:
@@ -149,14 +212,7 @@ def reaction(env_id: str, best: np.ndarray, name: str, contexts: int) -> dict:
         results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
                         float(info["jerk_ratio"]), list(info["failure_causes"])))
     env.close()
-    causes: dict[str, int] = {}
-    for *_, failed in results:
-        for cause in failed:
-            causes[cause] = causes.get(cause, 0) + 1
-    return {"rule": rule, "value": which, "gain": gain,
-            "success": interval(np.array([r[0] for r in results], dtype=float), statistic="mean").to_dict(),
-            "timing_error": float(np.nanmean([r[1] for r in results])),
-            "jerk_ratio": float(np.mean([r[2] for r in results])), "failure_causes": causes}
+    return {"rule": rule, "value": which, "gain": gain, **_scored(results)}
 
 
 def figure(results: dict, out: Path) -> None:
@@ -203,6 +259,7 @@ def main() -> None:
     parser.add_argument("--grid-contexts", type=int, default=12)
     parser.add_argument("--contexts", type=int, default=40)
     parser.add_argument("--reactions", nargs="*", choices=REACTIONS, default=list(REACTIONS))
+    parser.add_argument("--retune-delays", nargs="*", type=float, default=list(RETUNE_DELAYS))
     parser.add_argument("--workers", type=int, default=2)
     add_save_argument(parser)
     args = parser.parse_args()
@@ -213,7 +270,9 @@ def main() -> None:
         best = np.array(grid["best"])
         checked = one_setting(env_id, best, args.contexts)
         reacted = {name: reaction(env_id, best, name, args.contexts) for name in args.reactions}
-        results[robot] = {"env": env_id, "landscape": grid, "one_setting": checked, "reactions": reacted}
+        retunes = [retuned(robot, best, delay, args.contexts) for delay in args.retune_delays]
+        results[robot] = {"env": env_id, "landscape": grid, "one_setting": checked, "reactions": reacted,
+                          "retuned": retunes}
         rate = checked["success"]
         print(f"{env_id}: grid best {best.tolist()} ({grid['best_success']:.2f} of the grid contexts, imitation "
               f"{grid['zero_success']:.2f}); on {args.contexts} other contexts: success "
@@ -223,6 +282,10 @@ def main() -> None:
         for name, row in reacted.items():
             print(f"    reaction {name:>14}: success {row['success']['estimate']:.3f}, timing error "
                   f"{1000 * row['timing_error']:.1f} ms, jerk {row['jerk_ratio']:.2f}, "
+                  f"failures {row['failure_causes']}")
+        for row in retunes:
+            print(f"    retuned {row['delay_beats']:.1f} beats after the change: success "
+                  f"{row['success']['estimate']:.3f}, timing error {1000 * row['timing_error']:.1f} ms, "
                   f"failures {row['failure_causes']}")
     out = results_dir(args.save)
     (out / "drum_timing.json").write_text(json.dumps({"settings": vars(args), "robots": results}, indent=1))

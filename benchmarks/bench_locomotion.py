@@ -1,4 +1,5 @@
-"""Locomotion study of the rhythmic black-box wrapper: Swimmer-v5 and HalfCheetah-v5, rhythmic learners vs PPO/SAC.
+"""Locomotion study of the rhythmic black-box wrapper: Swimmer-v5 and HalfCheetah-v5 (and the other locomotion envs),
+rhythmic learners vs PPO/SAC.
 
 Rhythmic learners (``cmaes``, ``bbrl``, ``plain_prior`` = ``cpi2`` with ``gain_prior`` 10, and the random-return
 control ``random``) train through the package's own loop (:func:`rdmp_gym.agents.training.train`) on the black-box
@@ -34,6 +35,13 @@ raw env, so the wrapper's defaults do not touch them), the open-loop oscillator 
 the default pattern's ``a = 0`` return on the test contexts beside them:
 
     python benchmarks/bench_locomotion.py --feedback --seeds 10 --save
+
+``--other-envs``: the feedback study's best settings (``cmaes_near``, ``cmaes_feedback_near``) and the random-return
+control on Hopper-v5 and Walker2d-v5 (Ant-v5 with ``--envs``), whose default pattern comes from the MuJoCo model and
+whose episodes end on a fall (each run records the env steps it used, ``env_steps_used``), no SAC, the RL Zoo's
+1M-step returns beside them, written to ``locomotion_other.json``:
+
+    python benchmarks/bench_locomotion.py --other-envs --save
 """
 
 from __future__ import annotations
@@ -59,6 +67,9 @@ from rdmp_gym.agents.training import TrainConfig, environment_record, train
 
 ROOT = Path(__file__).resolve().parent.parent
 ENVS = ("Swimmer-v5", "HalfCheetah-v5")
+#: the envs of --other-envs: the terminating locomotion envs, whose default pattern comes from the MuJoCo model
+OTHER_ENVS = ("Hopper-v5", "Walker2d-v5", "Ant-v5")
+ALL_ENVS = (*ENVS, *OTHER_ENVS)
 #: label -> (agent, options, wrapper settings over the env's defaults) of the rhythmic learners
 LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "cmaes": ("cmaes", {}, {}),
@@ -79,6 +90,8 @@ LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
 }
 #: the learners of --feedback
 FEEDBACK_LEARNERS = ("cmaes", "cmaes_feedback")
+#: the learners of --other-envs: the best settings of the feedback study and the random-return control
+OTHER_LEARNERS = ("cmaes_near", "cmaes_feedback_near", "random")
 #: (learner, baseline) pairs compared seed by seed in the --feedback study, where both ran
 PAIRS = (("cmaes_feedback", "cmaes"), ("cmaes_feedback_near", "cmaes_near"), ("cmaes_near", "cmaes"),
          ("cmaes_feedback_near", "cmaes_feedback"))
@@ -89,7 +102,8 @@ SB3_ALGOS = ("ppo", "sac")
 #: ``a = 0``) -> (their algorithm with its RL Zoo settings, the residual's scale: a = +-1 adds that share of half the
 #: action range; 1.0 lets the residual command the whole range)
 RESIDUAL_LEARNERS = {"sac_residual": ("sac", 0.3), "sac_residual_full": ("sac", 1.0), "ppo_residual": ("ppo", 0.3)}
-EPISODE_STEPS = 1000   # both envs: 1000 env steps per episode, no early termination
+EPISODE_STEPS = 1000   # Swimmer, HalfCheetah: 1000 env steps per episode; the other envs end earlier on a fall, so
+                       # their rhythmic runs' env steps (episodes x 1000) are an upper bound
 
 #: Return thresholds: Mania et al. 2018 (Simple random search provides a competitive approach to reinforcement
 #: learning, arXiv 1803.07055, Table 1): Swimmer 325. HalfCheetah: 3000 as the study was specified, and 3430, the
@@ -140,6 +154,12 @@ ANCHORS: list[dict[str, Any]] = [
      "env_steps": 1_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
     {"env": "HalfCheetah-v5", "method": "RL Zoo ARS (HalfCheetah-v3)", "return": 4815.192, "std": 1340.752,
      "env_steps": 12_000_000, "source": _BENCHMARK_MD, "cite": _CITE_ZOO},
+    *({"env": env, "method": f"RL Zoo {algo} ({env.replace('v5', 'v3')})", "return": value, "std": None,
+       "env_steps": 1_000_000, "source": _BENCHMARK_MD + " (read from the project's anchor notes; std not kept)",
+       "cite": _CITE_ZOO}
+      for env, algo, value in (("Hopper-v5", "PPO", 2410.0), ("Hopper-v5", "SAC", 2326.0),
+                               ("Walker2d-v5", "PPO", 3479.0), ("Walker2d-v5", "SAC", 3863.0),
+                               ("Ant-v5", "PPO", 1327.0), ("Ant-v5", "SAC", 4616.0))),
     {"env": "Swimmer-v5", "method": "ARS V1 / V2-t (Swimmer-v1)", "return": None, "threshold": 325.0,
      "episodes_to_threshold": {"ARS V1": 100, "ARS V2-t": 427}, "env_steps_to_threshold": {"ARS V1": 100_000},
      "source": _ARS, "cite": _CITE_ARS},
@@ -159,7 +179,8 @@ ANCHORS: list[dict[str, Any]] = [
 # ---------------------------------------------------------------------------------------------------- arguments
 def _parse() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--envs", nargs="+", default=list(ENVS), choices=ENVS)
+    parser.add_argument("--envs", nargs="+", default=None, choices=ALL_ENVS,
+                        help=f"default: {' '.join(ENVS)}; with --other-envs {' '.join(OTHER_ENVS[:2])}")
     parser.add_argument("--learners", nargs="+", default=None, choices=[*LEARNERS, *SB3_ALGOS, *RESIDUAL_LEARNERS],
                         help="the learners of the main jobs (SAC runs after them, see --sac-seeds; default: "
                              f"{' '.join(MAIN_LEARNERS)}, with --feedback {' '.join(FEEDBACK_LEARNERS)}, "
@@ -182,6 +203,9 @@ def _parse() -> argparse.Namespace:
     study.add_argument("--residual", action="store_true",
                        help="the residual study: SAC on the DMP's residual env, no plain SAC, written to "
                             "locomotion_residual.json")
+    study.add_argument("--other-envs", action="store_true",
+                       help="the rhythmic learners of the feedback study on the other locomotion envs (Hopper, "
+                            "Walker2d; Ant with --envs), no SAC, written to locomotion_other.json")
     parser.add_argument("--summary-only", action="store_true", help="gather the finished runs; train nothing")
     parser.add_argument("--figures", action="store_true",
                         help="draw the study's curves (locomotion.png from locomotion.json, with --feedback "
@@ -189,10 +213,13 @@ def _parse() -> argparse.Namespace:
                              "final policy; train nothing")
     add_save_argument(parser)
     args = parser.parse_args()
-    args.study = "feedback" if args.feedback else "residual" if args.residual else "main"
+    args.study = ("feedback" if args.feedback else "residual" if args.residual else "other" if args.other_envs
+                  else "main")
+    if args.envs is None:
+        args.envs = list(OTHER_ENVS[:2] if args.other_envs else ENVS)
     if args.learners is None:
-        args.learners = list({"feedback": FEEDBACK_LEARNERS, "residual": ("sac_residual",)}.get(args.study,
-                                                                                               MAIN_LEARNERS))
+        args.learners = list({"feedback": FEEDBACK_LEARNERS, "residual": ("sac_residual",),
+                              "other": OTHER_LEARNERS}.get(args.study, MAIN_LEARNERS))
     if args.run_dir is None:
         args.run_dir = str(ROOT / "runs" / {"main": "locomotion"}.get(args.study, f"locomotion_{args.study}"))
     if args.study != "main":
@@ -226,13 +253,15 @@ def run_rhythmic(env_id: str, label: str, seed: int, args: argparse.Namespace, f
     records = run.read_log()
     curve = [{"env_steps": int(r["episodes"]) * EPISODE_STEPS, "return": float(r["eval_return_mean"])}
              for r in records if r.get("eval_return_mean") is not None]
+    # each update's mean episode length x its rollouts: the env steps the run took (the budget where none ends early)
+    used = sum(float(r.get("env_steps", 0.0)) * args.rollouts for r in records)
     seeds = final_test_seeds(args.test_episodes)
     with Evaluator(config.task, 1) as tester:
         observations = context_observations(tester.env, seeds)
         actions = trained_actions(run, config, "last", observations, tester.n_actions)
         batch = tester.run(actions, seeds)
     return {"curve": curve, "test_returns": batch.returns.tolist(), "options": config.options.to_dict(),
-            "seconds": round(time.perf_counter() - began, 1)}
+            "env_steps_used": round(used), "seconds": round(time.perf_counter() - began, 1)}
 
 
 # ---------------------------------------------------------------------------------------------------- SB3
@@ -413,14 +442,16 @@ def summarise(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
             group = sorted((r for r in runs if r["env"] == env_id and r["learner"] == label), key=lambda r: r["seed"])
             finals = [r["final_return"] for r in group]
             reach = {}
-            for threshold in THRESHOLDS[env_id]:
+            for threshold in THRESHOLDS.get(env_id, ()):
                 steps = [s for s in (steps_to(r["curve"], threshold) for r in group) if s is not None]
                 reach[f"{threshold:g}"] = {"reached": len(steps), "of": len(group),
                                           "median_env_steps": float(np.median(steps)) if steps else None}
             rows.append({"env": env_id, "learner": label, "seeds": [r["seed"] for r in group],
                          "env_steps": sorted({r["env_steps"] for r in group}),
                          "final_return": interval(np.asarray(finals)).to_dict(), "to_threshold": reach,
-                         "seconds_per_run": float(np.median([r["seconds"] for r in group]))})
+                         "seconds_per_run": float(np.median([r["seconds"] for r in group])),
+                         "env_steps_used_median": float(np.median([r.get("env_steps_used", r["env_steps"])
+                                                                   for r in group]))})
     return rows
 
 
@@ -443,11 +474,14 @@ def markdown(rows: list[dict[str, Any]], reference: list[dict[str, Any]]) -> str
         reach = "; ".join(f"{t}: {_thousands(e['median_env_steps'])} ({e['reached']}/{e['of']})"
                           for t, e in r["to_threshold"].items())
         steps = "/".join(f"{s / 1000:.0f}k" for s in r["env_steps"])
+        if r["env_steps_used_median"] < min(r["env_steps"]):         # episodes that end early: the steps taken
+            steps += f" (used {r['env_steps_used_median'] / 1000:.0f}k)"
         lines.append(f"| {r['env']} | `{r['learner']}` | {len(r['seeds'])} | {steps} | "
                      f"{f['estimate']:.1f} [{f['low']:.1f}, {f['high']:.1f}] | {reach} |")
     lines += ["", "| env | anchor | return | training env steps | source |", "|---|---|---|---|---|"]
     for a in reference:
-        value = "-" if a.get("return") is None else f"{a['return']:.1f}" + (f" +- {a['std']:.1f}" if "std" in a else "")
+        spread = f" +- {a['std']:.1f}" if a.get("std") is not None else ""
+        value = "-" if a.get("return") is None else f"{a['return']:.1f}{spread}"
         if "interval" in a:
             value = f"{a['return']:.1f} [{a['interval'][0]:.1f}, {a['interval'][1]:.1f}] ({a['n']} seeds)"
         if "episodes_to_threshold" in a:
@@ -529,6 +563,7 @@ def study_references(args: argparse.Namespace) -> list[dict[str, Any]]:
                              "return": f["estimate"], "interval": [f["low"], f["high"]], "n": f["n"],
                              "env_steps": row["env_steps"], "source": "benchmarks/results/open_loop_oscillator.json "
                              "(IQM over seeds, 95 % CI)", "cite": "open_loop_oscillator.json"})
+    rows += [anchor for anchor in ANCHORS if anchor["env"] in args.envs and anchor["env"] in OTHER_ENVS]
     seeds = final_test_seeds(args.test_episodes)
     rows += [zero_action_reference(env_id, seeds) for env_id in args.envs]
     return rows
@@ -552,7 +587,7 @@ def paired_differences(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
-    runs = [json.loads(p.read_text()) for env_id in ENVS for p in sorted((root / env_id).glob("*.json"))
+    runs = [json.loads(p.read_text()) for env_id in ALL_ENVS for p in sorted((root / env_id).glob("*.json"))
             if (root / env_id).is_dir()]
     anchors = study_references(args) if args.study != "main" else \
         [*ANCHORS, oscillator_anchor(final_test_seeds(args.test_episodes))]
@@ -567,7 +602,7 @@ def gather(args: argparse.Namespace, root: Path) -> dict[str, Any]:
             curves[f"{env_id}/{label}"] = [{"env_steps": int(m), **interval(values[:, i]).to_dict()}
                                           for i, m in enumerate(marks)]
     document = {"settings": settings, "summary": summarise(runs), "curves": curves, "anchors": anchors}
-    if args.feedback:
+    if args.study in ("feedback", "other"):
         document["paired"] = paired_differences(runs)
     return {**document, "runs": runs}
 
@@ -593,7 +628,7 @@ def plot_curves(document: dict[str, Any], path: Path) -> None:
             axis.plot(x, [p["estimate"] for p in points], color=colour, label=f"{label} ({n} seeds)",
                       marker="o" if len(x) < 5 else None, ms=3)
             axis.fill_between(x, [p["low"] for p in points], [p["high"] for p in points], color=colour, alpha=0.15)
-        for threshold, style in zip(THRESHOLDS[env_id], (":", "--"), strict=False):
+        for threshold, style in zip(THRESHOLDS.get(env_id, ()), (":", "--"), strict=False):
             axis.axhline(threshold, color="k", ls=style, lw=0.8, label=f"threshold {threshold:g}")
         axis.set_title(f"{env_id}: validation return (IQM over seeds, 95 % CI)", fontsize=9)
         axis.set_xlabel("env steps (thousands)")
@@ -606,7 +641,7 @@ def plot_curves(document: dict[str, Any], path: Path) -> None:
 
 
 #: the cameras of the films: both models' tracking camera
-CAMERAS: dict[str, dict[str, Any]] = {env_id: {"camera_name": "track"} for env_id in ENVS}
+CAMERAS: dict[str, dict[str, Any]] = {env_id: {"camera_name": "track"} for env_id in ALL_ENVS}
 FILM_SECONDS = 5.0        # the video: the episode's last 5 simulated seconds, in real time
 
 

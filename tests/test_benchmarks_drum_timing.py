@@ -4,7 +4,8 @@ counted from the tempo change, and one reaction's episode on the real env."""
 import gymnasium as gym
 import numpy as np
 import pytest
-from bench_drum_timing import REACTIONS, _action, _beats_since_change, _react, reaction
+from bench_drum_timing import REACTIONS, RetunedDrum, _action, _beats_since_change, _react, reaction, retuned
+from rdmp_gym.envs.cycle_env import RhythmicCycleEnv
 
 
 def test_the_reaction_rules_correct_from_the_setting_or_from_the_last_value():
@@ -25,3 +26,33 @@ def test_the_rhythm_values_alone_move_and_a_reaction_runs_on_the_cycle_face():
     result = reaction("rdmp_gym/PandaDrum-v1", np.array([0.5, 0.5, -0.5]), "proportional", 1)
     assert result["rule"] == REACTIONS["proportional"][1] and 0.0 <= result["success"]["estimate"] <= 1.0
     assert np.isfinite(result["timing_error"]) and result["jerk_ratio"] > 0
+
+
+def test_the_retuned_follower_changes_only_the_cycles_that_retune():
+    """RetunedDrum's tempo value at 0 in every cycle is the drumming cycle face's own episode; a retune at a cycle
+    sets the follower's frequency from that cycle's start."""
+    env = RhythmicCycleEnv(task=RetunedDrum(), robot="panda", version=1)
+    plain = gym.make("rdmp_gym/PandaDrumCycle-v1").unwrapped
+    returns = []
+    for face in (env, plain):
+        face.reset(seed=3)
+        for _ in range(face.n_cycles):
+            _, reward, terminated, _, _ = face.step(np.zeros(face.action_space.shape))
+            if terminated:
+                break
+        returns.append(reward)
+    assert returns[0] == returns[1] and env.action_space.shape[0] == plain.action_space.shape[0] + 1
+    env.reset(seed=3)
+    action = np.zeros(env.action_space.shape)
+    for cycle in range(env.n_cycles):
+        action[-1] = 0.0 if cycle < 4 else 0.4
+        if env.step(action)[2]:
+            break
+    schedule = env._plan.extras["schedule"]
+    step = int(env.start_steps[4])
+    assert schedule.since == step and schedule.states[step, 5] == pytest.approx(
+        env.face.task.metronome(env.face.context).omega * 2.0 ** 0.2)
+    result = retuned("panda", np.array([1.0, 0.0, -0.5]), 0.0, 1)
+    assert result["delay_beats"] == 0.0 and 0.0 <= result["success"]["estimate"] <= 1.0
+    env.close()
+    plain.close()

@@ -158,3 +158,17 @@ def test_resume_refuses_bad_input(drum):
     moved = dmp.with_params(dmp.get_params("initial:0") + np.array([0.2, 0.0]), "initial:0")
     with pytest.raises(ValueError, match="dmp"):
         schedule.resume(moved, 10, signal, **settings)
+
+
+def test_a_retuned_schedule_follows_the_new_frequency_from_its_step(drum):
+    task, dmp, theta, context = drum
+    plan, settings, signal = recorded(task, dmp, theta, np.zeros(3), context)
+    schedule = plan.extras["schedule"]
+    faster = 1.2 * settings["frequency"]
+    retuned = schedule.resume(dmp, 300, signal, retune=faster, **settings)
+    np.testing.assert_array_equal(retuned.s[:301], schedule.s[:301])
+    assert retuned.states[300, 3] == retuned.states[300, 5] == faster            # smoothed and oscillator frequency
+    assert retuned.s[400] - retuned.s[300] > schedule.s[400] - schedule.s[300]   # the DMP runs faster after it
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="retune"):
+            schedule.resume(dmp, 300, signal, retune=bad, **settings)

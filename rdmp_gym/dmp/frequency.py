@@ -313,10 +313,11 @@ def _state_of(stepper: AdaptiveFrequencyStepper) -> tuple[float, ...]:
             stepper.oscillator.omega)
 
 
-def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Mapping[str, Any]
-                      ) -> AdaptiveFrequencyStepper:
+def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Mapping[str, Any],
+                      retune: float | None = None) -> AdaptiveFrequencyStepper:
     """A stepper of ``dmp`` with ``settings`` in the canonical state that ``schedule`` recorded before step ``step``:
-    its state (:data:`_STATE`) and the oscillator's inputs so far (the last period's window is all it reads)."""
+    its state (:data:`_STATE`) and the oscillator's inputs so far (the last period's window is all it reads); with
+    ``retune`` (rad/s) its oscillator's frequency and the smoothed one the DMP follows set to it."""
     stepper = AdaptiveFrequencyStepper(dmp, schedule.dt, **settings)
     if _canonical_key(dmp, stepper.transient) != schedule.canonical:
         raise ValueError("dmp: its canonical system, damping or start phase differs from the recorded DMP's")
@@ -328,6 +329,8 @@ def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Map
         oscillator._history = np.empty((2 * oscillator._capacity, schedule.u.shape[1]))
         oscillator._history[: len(kept)] = kept
         oscillator._used = len(kept)
+    if retune is not None:
+        stepper.oscillator.omega = stepper.smoothed_frequency = check_positive(retune, "retune")
     return stepper
 
 
@@ -381,11 +384,14 @@ class CanonicalSchedule:
         stepper = AdaptiveFrequencyStepper(dmp, dt, **settings)
         return cls._run(stepper, samples, 0, None, stop_step, dict(settings), _canonical_key(dmp, stepper.transient))
 
-    def resume(self, dmp, step: int, u: np.ndarray, **settings: Any) -> CanonicalSchedule:
+    def resume(self, dmp, step: int, u: np.ndarray, retune: float | None = None, **settings: Any
+               ) -> CanonicalSchedule:
         """This schedule up to step ``step`` (in ``[0, T]``), then ``AdaptiveFrequencyStepper(dmp, dt, **settings)``
         going on from the recorded state there over the samples ``u [T]`` or ``[T, k]`` from ``step`` on (those
         before it are the recorded ones); ``dmp`` shares the recorded canonical system, and ``transient`` and
-        ``frequency`` stay as recorded. With the recorded settings and input it is this schedule, bit for bit."""
+        ``frequency`` stay as recorded. ``retune`` (rad/s, > 0): the follower's frequency from ``step`` on (the
+        oscillator's and the one the DMP follows; None: they go on as recorded). With the recorded settings and input
+        and no retune it is this schedule, bit for bit."""
         samples = _samples(u)
         n = self.ds.size
         if samples.shape != self.u.shape:
@@ -397,7 +403,7 @@ class CanonicalSchedule:
             if settings.get(key) != self.settings.get(key):
                 raise ValueError(f"settings: {key} is the schedule's start ({self.settings.get(key)!r}); a resumed "
                                  f"schedule cannot change it (got {settings.get(key)!r})")
-        stepper = _restored_stepper(self, dmp, int(step), settings)
+        stepper = _restored_stepper(self, dmp, int(step), settings, retune)
         joined = np.concatenate([self.u[:step], samples[step:]])
         return self._run(stepper, joined, int(step), self, self.stop_step, dict(settings), self.canonical)
 
