@@ -76,12 +76,9 @@ class RetunedDrum(DrumTask):
     def resume_plan(self, live, step, dmp, theta, extras, context, times, table_origin) -> TaskPlan:
         if extras[3] == live.extras.get("tempo", 0.0):
             return super().resume_plan(live, step, dmp, theta, extras[:3], context, times, table_origin)
-        params = dmp.with_params(theta, self.groups)
-        settings, signal = self._rhythm(extras[:3], self.metronome(context), times)
-        retune = settings["frequency"] * 2.0 ** (0.5 * extras[3])
-        schedule = live.extras["schedule"].resume(params, step, signal, retune=retune, **settings)
-        return TaskPlan(schedule.rollout(params)[:-1], live.origin, live.rotation,
-                        {**live.extras, "schedule": schedule, "tempo": extras[3]})
+        retune = self.metronome(context).omega * 2.0 ** (0.5 * extras[3])
+        plan = self._resumed(live, step, dmp, theta, extras[:3], context, times, retune)
+        return TaskPlan(plan.path, plan.origin, plan.rotation, {**plan.extras, "tempo": extras[3]})
 
 
 def retuned(robot: str, best: np.ndarray, delay: float, contexts: int) -> dict:

@@ -313,6 +313,12 @@ def _state_of(stepper: AdaptiveFrequencyStepper) -> tuple[float, ...]:
             stepper.oscillator.omega)
 
 
+def _set_state(stepper: AdaptiveFrequencyStepper, values: np.ndarray) -> None:
+    """Put the stepper in the canonical state ``values [6]`` (:data:`_STATE`, as :func:`_state_of` gives it)."""
+    (stepper.s, stepper.time, stepper.rate, stepper.smoothed_frequency, stepper.oscillator.phase,
+     stepper.oscillator.omega) = (float(value) for value in values)
+
+
 def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Mapping[str, Any],
                       retune: float | None = None) -> AdaptiveFrequencyStepper:
     """A stepper of ``dmp`` with ``settings`` in the canonical state that ``schedule`` recorded before step ``step``:
@@ -321,8 +327,7 @@ def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Map
     stepper = AdaptiveFrequencyStepper(dmp, schedule.dt, **settings)
     if _canonical_key(dmp, stepper.transient) != schedule.canonical:
         raise ValueError("dmp: its canonical system, damping or start phase differs from the recorded DMP's")
-    (stepper.s, stepper.time, stepper.rate, stepper.smoothed_frequency, stepper.oscillator.phase,
-     stepper.oscillator.omega) = (float(value) for value in schedule.states[step])
+    _set_state(stepper, schedule.states[step])
     oscillator = stepper.oscillator
     kept = schedule.u[max(0, step - oscillator._capacity): step]
     if len(kept):

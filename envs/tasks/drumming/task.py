@@ -204,11 +204,18 @@ class DrumTask(TaskDescription):
         state in the running plan ``live`` there with the new gains and beat shift (a change of them retunes the
         follower; replaying it from the start would jump its phase), the transformation system follows the resumed
         canonical time. The same gains and shift resume the running schedule itself."""
+        return self._resumed(live, step, dmp, theta, extras, context, times)
+
+    def _resumed(self, live: TaskPlan, step: int, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray,
+                 context: DrumContext, times: np.ndarray, retune: float | None = None) -> TaskPlan:
+        """:meth:`resume_plan`, the follower's frequency set to ``retune`` (rad/s) at ``step`` where given
+        (:meth:`~rdmp_gym.dmp.frequency.CanonicalSchedule.resume`)."""
         params = dmp.with_params(theta, self.groups)
         running = live.extras["schedule"]
         settings, signal = self._rhythm(extras, self.metronome(context), times)
-        same = settings == running.settings and np.array_equal(signal[step:], running.u[step:, 0])
-        schedule = running if same else running.resume(params, step, signal, **settings)
+        same = (retune is None and settings == running.settings
+                and np.array_equal(signal[step:], running.u[step:, 0]))
+        schedule = running if same else running.resume(params, step, signal, retune=retune, **settings)
         return TaskPlan(schedule.rollout(params)[:-1], live.origin, live.rotation, {**live.extras,
                                                                                     "schedule": schedule})
 
