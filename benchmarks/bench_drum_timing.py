@@ -13,9 +13,12 @@ phase gain ``k_phi``, the beat's phase shift; action units):
   the last played beat's timing error (proportional, ``shift = best - g e``, and accumulated, ``shift -= g e``), and
   the coupling raised for a cycle after an error above 30 ms; success, timing error and failure causes on the same
   contexts;
-- **a retuned follower** (an oracle, and a prototype of a fourth action value the task does not have): at the first
-  cycle that starts ``delay`` beats after the tempo change, the follower's frequency is set to the new tempo's
-  (``CanonicalSchedule.resume(..., retune=)``), the rest as the best setting; how early a reaction must come.
+- **a retuned follower** (an oracle, on the task's version 2 with its fourth value ``tempo``,
+  :mod:`rdmp_gym.envs.tasks.drumming.retuning`): at the first cycle that starts ``delay`` beats after the tempo
+  change, the follower's frequency is set to the new tempo's (``CanonicalSchedule.resume(..., retune=)``), the rest
+  as the best setting; how early a reaction must come;
+- **retuned by ear** (no oracle): every cycle's tempo value ``2 log2(heard / announced)`` from the version 2
+  cycle observation's heard tempo, the rest as the best setting.
 
 An episodic policy observes the context (the drum's pose, the announced tempo), not the tempo change to come: no
 action chosen once per episode can fit both a rise and a fall of the tempo, so its ceiling is below the per-context
@@ -31,7 +34,6 @@ import argparse
 import itertools
 import json
 import os
-from collections.abc import Mapping
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -43,10 +45,7 @@ import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.protocol import interval
-from rdmp_gym.envs.cycle_env import RhythmicCycleEnv
 from rdmp_gym.envs.registration import cycle_id
-from rdmp_gym.envs.tasks.description import TaskPlan
-from rdmp_gym.envs.tasks.drumming import DrumTask
 
 ROBOTS = {"armar3": "rdmp_gym/ArmarDrum-v1", "panda": "rdmp_gym/PandaDrum-v1"}
 RHYTHM = ("coupling", "phase_gain", "phase")
@@ -61,30 +60,18 @@ _BOOST_ERROR = 0.03
 FIGURE = Path(__file__).resolve().parent.parent / "docs" / "assets" / "drum_timing.png"
 #: the retuned follower's delays after the tempo change (beats at the new tempo)
 RETUNE_DELAYS = (0.0, 0.5, 1.0)
-
-
-class RetunedDrum(DrumTask):
-    """The drumming task with a fourth value of its own, ``tempo`` ``a``: a cycle that changes it sets the rhythm
-    follower's frequency to the announced tempo's times ``2^(a / 2)`` from its start. A prototype for this study (the
-    registered drumming envs have three values)."""
-
-    extras: Mapping[str, float] = {**DrumTask.extras, "tempo": 1.0}
-
-    def plan(self, dmp, theta, extras, context, times, table_origin) -> TaskPlan:
-        return super().plan(dmp, theta, extras[:3], context, times, table_origin)
-
-    def resume_plan(self, live, step, dmp, theta, extras, context, times, table_origin) -> TaskPlan:
-        if extras[3] == live.extras.get("tempo", 0.0):
-            return super().resume_plan(live, step, dmp, theta, extras[:3], context, times, table_origin)
-        retune = self.metronome(context).omega * 2.0 ** (0.5 * extras[3])
-        plan = self._resumed(live, step, dmp, theta, extras[:3], context, times, retune)
-        return TaskPlan(plan.path, plan.origin, plan.rotation, {**plan.extras, "tempo": extras[3]})
+#: the drumming task's version 2 (its tempo value and the heard tempo) on each robot
+RETUNING = {"armar3": "rdmp_gym/ArmarDrum-v2", "panda": "rdmp_gym/PandaDrum-v2"}
+#: the version 2 cycle observation's column of the heard tempo (before the cycle's place in the episode)
+_HEARD = -2
+#: the hand-made retune from the heard tempo: ``tempo = 2 log2(heard / announced)`` is the heard tempo's value
+HEARD_GAIN = 2.0
 
 
 def retuned(robot: str, best: np.ndarray, delay: float, contexts: int) -> dict:
     """The best setting with the follower retuned to the new tempo at the first cycle starting ``delay`` beats
-    after the change (the oracle of :class:`RetunedDrum`), on the check contexts."""
-    env = RhythmicCycleEnv(task=RetunedDrum(), robot=robot, version=1)
+    after the change (an oracle on the version 2 cycle face: its tempo value), on the check contexts."""
+    env = gym.make(cycle_id(RETUNING[robot])).unwrapped
     results = []
     for i in range(contexts):
         env.reset(seed=CHECK_SEEDS + i)
@@ -101,6 +88,26 @@ def retuned(robot: str, best: np.ndarray, delay: float, contexts: int) -> dict:
                         float(info["jerk_ratio"]), list(info["failure_causes"])))
     env.close()
     return _scored(results) | {"delay_beats": delay}
+
+
+def heard(robot: str, best: np.ndarray, gain: float, contexts: int) -> dict:
+    """The best setting with every cycle's tempo value ``gain`` times the heard tempo (the version 2 cycle
+    observation's last state entry, ``log2`` of the heard over the announced tempo), on the check contexts."""
+    env = gym.make(cycle_id(RETUNING[robot])).unwrapped
+    results = []
+    for i in range(contexts):
+        observation, _ = env.reset(seed=CHECK_SEEDS + i)
+        action = _action(env, best)
+        for _ in range(env.n_cycles):
+            action = action.copy()
+            action[-1] = np.clip(gain * observation[_HEARD], -1.0, 1.0)
+            observation, _, terminated, _, info = env.step(action)
+            if terminated:
+                break
+        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
+                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+    env.close()
+    return _scored(results) | {"gain": gain}
 
 
 def _scored(results: list[tuple[bool, float, float, list[str]]]) -> dict:
@@ -268,8 +275,9 @@ def main() -> None:
         checked = one_setting(env_id, best, args.contexts)
         reacted = {name: reaction(env_id, best, name, args.contexts) for name in args.reactions}
         retunes = [retuned(robot, best, delay, args.contexts) for delay in args.retune_delays]
+        by_ear = heard(robot, best, HEARD_GAIN, args.contexts)
         results[robot] = {"env": env_id, "landscape": grid, "one_setting": checked, "reactions": reacted,
-                          "retuned": retunes}
+                          "retuned": retunes, "heard": by_ear}
         rate = checked["success"]
         print(f"{env_id}: grid best {best.tolist()} ({grid['best_success']:.2f} of the grid contexts, imitation "
               f"{grid['zero_success']:.2f}); on {args.contexts} other contexts: success "
@@ -284,6 +292,8 @@ def main() -> None:
             print(f"    retuned {row['delay_beats']:.1f} beats after the change: success "
                   f"{row['success']['estimate']:.3f}, timing error {1000 * row['timing_error']:.1f} ms, "
                   f"failures {row['failure_causes']}")
+        print(f"    retuned every cycle to the heard tempo: success {by_ear['success']['estimate']:.3f}, timing "
+              f"error {1000 * by_ear['timing_error']:.1f} ms, failures {by_ear['failure_causes']}")
     out = results_dir(args.save)
     (out / "drum_timing.json").write_text(json.dumps({"settings": vars(args), "robots": results}, indent=1))
     figure(results, FIGURE if args.save else out / "drum_timing.png")

@@ -166,7 +166,8 @@ def task_ids(task: str, robot: str, version: int) -> tuple[str, str]:
 
 def cycle_id(episodic_id: str) -> str:
     """The cycle-level face's id of an episodic id of the rhythmic face (:mod:`rdmp_gym.envs.cycle_env`), e.g.
-    ``"rdmp_gym/ArmarDrumCycle-v1"`` for ``"rdmp_gym/ArmarDrum-v1"``; a task's current version has one."""
+    ``"rdmp_gym/ArmarDrumCycle-v1"`` for ``"rdmp_gym/ArmarDrum-v1"``; a task's current version has one, and so do
+    the versions its entry names (``TaskEntry.cycle_versions``)."""
     head, _, version = episodic_id.rpartition("-v")
     return f"{head}Cycle-v{version}"
 
@@ -196,8 +197,7 @@ def register_task_ids(task: str, robots: tuple[str, ...] = tuple(ROBOT_ID_NAMES)
             for env_id, (entry_point, face_kwargs) in zip((episodic, step), faces, strict=True):
                 if env_id not in gym.registry:
                     gym.register(id=env_id, entry_point=entry_point, kwargs=face_kwargs)
-            latest = version == max(entry.versions)               # the cycle face serves the current version
-            if latest and faces[0][0] == _RHYTHMIC and cycle_id(episodic) not in gym.registry:
+            if entry.has_cycle_face(version) and faces[0][0] == _RHYTHMIC and cycle_id(episodic) not in gym.registry:
                 gym.register(id=cycle_id(episodic), entry_point=_RHYTHMIC_CYCLE, kwargs=faces[0][1])
             ids.append(episodic)
     return ids

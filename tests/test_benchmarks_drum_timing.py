@@ -1,11 +1,10 @@
 """The drum timing study's pieces (``benchmarks/bench_drum_timing.py``): the hand-made reactions' rules, the beats
-counted from the tempo change, and one reaction's episode on the real env."""
+counted from the tempo change, and one episode of each reaction and retune on the real env."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from bench_drum_timing import REACTIONS, RetunedDrum, _action, _beats_since_change, _react, reaction, retuned
-from rdmp_gym.envs.cycle_env import RhythmicCycleEnv
+from bench_drum_timing import HEARD_GAIN, REACTIONS, _action, _beats_since_change, _react, heard, reaction, retuned
 
 
 def test_the_reaction_rules_correct_from_the_setting_or_from_the_last_value():
@@ -28,31 +27,8 @@ def test_the_rhythm_values_alone_move_and_a_reaction_runs_on_the_cycle_face():
     assert np.isfinite(result["timing_error"]) and result["jerk_ratio"] > 0
 
 
-def test_the_retuned_follower_changes_only_the_cycles_that_retune():
-    """RetunedDrum's tempo value at 0 in every cycle is the drumming cycle face's own episode; a retune at a cycle
-    sets the follower's frequency from that cycle's start."""
-    env = RhythmicCycleEnv(task=RetunedDrum(), robot="panda", version=1)
-    plain = gym.make("rdmp_gym/PandaDrumCycle-v1").unwrapped
-    returns = []
-    for face in (env, plain):
-        face.reset(seed=3)
-        for _ in range(face.n_cycles):
-            _, reward, terminated, _, _ = face.step(np.zeros(face.action_space.shape))
-            if terminated:
-                break
-        returns.append(reward)
-    assert returns[0] == returns[1] and env.action_space.shape[0] == plain.action_space.shape[0] + 1
-    env.reset(seed=3)
-    action = np.zeros(env.action_space.shape)
-    for cycle in range(env.n_cycles):
-        action[-1] = 0.0 if cycle < 4 else 0.4
-        if env.step(action)[2]:
-            break
-    schedule = env._plan.extras["schedule"]
-    step = int(env.start_steps[4])
-    assert schedule.since == step and schedule.states[step, 5] == pytest.approx(
-        env.face.task.metronome(env.face.context).omega * 2.0 ** 0.2)
-    result = retuned("panda", np.array([1.0, 0.0, -0.5]), 0.0, 1)
-    assert result["delay_beats"] == 0.0 and 0.0 <= result["success"]["estimate"] <= 1.0
-    env.close()
-    plain.close()
+def test_the_oracle_retune_and_the_retune_by_ear_run_on_the_version_2_cycle_face():
+    for result in (retuned("panda", np.array([1.0, 0.0, -0.5]), 0.0, 1),
+                   heard("panda", np.array([1.0, 0.0, -0.5]), HEARD_GAIN, 1)):
+        assert 0.0 <= result["success"]["estimate"] <= 1.0 and np.isfinite(result["timing_error"])
+        assert result["jerk_ratio"] > 0

@@ -29,12 +29,18 @@ class TaskEntry:
     ``faces`` (a ``"module:attribute"`` string or a callable; default None: the rhythmic face and its step twin)
     names the envs that serve a task's ids where they are its own: ``faces(robot, version)`` gives
     ``((episodic entry point, keywords), (step entry point, keywords))``, or None where the task has no ids.
+    ``cycle_versions`` (default None: the latest) are the versions with a cycle-level face.
     """
 
     id_name: str
     versions: tuple[int, ...]
     factory: Any
     faces: Any = None
+    cycle_versions: tuple[int, ...] | None = None
+
+    def has_cycle_face(self, version: int) -> bool:
+        """Whether ``version`` has a cycle-level id (on the generic episodic face)."""
+        return version in (self.cycle_versions or (max(self.versions),))
 
     def build(self, **settings: Any) -> TaskDescription:
         """The description with ``settings`` (a description class's :meth:`TaskDescription.build`)."""
@@ -92,7 +98,7 @@ def _load(target: Any) -> Any:
 TASKS: dict[str, TaskEntry] = {
     "wipe": TaskEntry("Wipe", (1, 2, 3), "rdmp_gym.envs.tasks.wiping.task:WipingTask",
                       faces="rdmp_gym.envs.tasks.wiping.faces:faces"),
-    "drum": TaskEntry("Drum", (1,), "rdmp_gym.envs.tasks.drumming:DrumTask"),
+    "drum": TaskEntry("Drum", (1, 2), "rdmp_gym.envs.tasks.drumming:DrumTask", cycle_versions=(1, 2)),
 }
 #: the names of the tasks this package brings, which :func:`register_task` replaces only when told to
 BUILT_IN = frozenset(TASKS)

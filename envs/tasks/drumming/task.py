@@ -105,6 +105,22 @@ class DrumTask(TaskDescription):
                              f"whose beat at the slowest tempo ({spec.tempo[0]:g} bpm) comes by the episode's last "
                              f"beat ({last_beat:g} s): the tempo would not change within the episode")
 
+    @classmethod
+    def build(cls, version: int | None = None, **settings: Any) -> DrumTask:
+        """The description of ``version`` (None: the latest) with ``settings``: this task for version 1,
+        :class:`~.retuning.RetuningDrumTask` for version 2."""
+        from .retuning import RetuningDrumTask
+
+        descriptions = {1: DrumTask, 2: RetuningDrumTask}
+        if version is not None and version not in descriptions:
+            raise ValueError(f"version: the drumming task has the versions {sorted(descriptions)}, got {version!r}")
+        return descriptions[max(descriptions) if version is None else version](**settings)
+
+    @classmethod
+    def face_settings(cls, robot: Any, version: int) -> dict[str, Any]:
+        """The version is the task's setting (the second adds a value and a state of its own)."""
+        return {"version": version}
+
     # ------------------------------------------------------------------ objects and context
     def compose(self, spec: mujoco.MjSpec, robot: RobotDescription, robot_prefix: str, tool_prefix: str) -> None:
         add_stick(spec, robot, robot_prefix, tool_prefix)
@@ -213,6 +229,7 @@ class DrumTask(TaskDescription):
         params = dmp.with_params(theta, self.groups)
         running = live.extras["schedule"]
         settings, signal = self._rhythm(extras, self.metronome(context), times)
+        settings["frequency"] = running.settings["frequency"]         # the follower's start stays the plan's
         same = (retune is None and settings == running.settings
                 and np.array_equal(signal[step:], running.u[step:, 0]))
         schedule = running if same else running.resume(params, step, signal, retune=retune, **settings)
