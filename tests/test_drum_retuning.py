@@ -35,7 +35,7 @@ def _play(env, actions) -> tuple[float, list[np.ndarray]]:
 
 def test_the_versions_build_their_descriptions_and_a_bad_version_is_named():
     assert type(get_task("drum")) is RetuningDrumTask and type(get_task("drum", version=1)) is DrumTask
-    assert RetuningDrumTask.extras["tempo"] == 1.0 and list(RetuningDrumTask.extras)[:3] == list(DrumTask.extras)
+    assert list(RetuningDrumTask.extras) == [*DrumTask.extras, "ear", "tempo"]
     with pytest.raises(ValueError, match="version"):
         get_task("drum", version=3)
     for robot in ("Armar", "Panda"):
@@ -65,6 +65,27 @@ def test_the_plans_tempo_value_starts_the_follower_at_its_frequency():
     announced = env.task.metronome(env.context).omega
     assert schedule.settings["frequency"] == pytest.approx(announced * 2.0 ** -0.25)
     assert env.solution.plan.extras["tempo"] == -0.5
+    env.close()
+
+
+def test_the_ear_takes_the_heard_tempo_a_beat_after_a_change_and_strikes_on_the_new_tempo():
+    """At gain 1 the follower's frequency is the new tempo's from the first beat after the change plus the hearing
+    span; the imitation's rhythm then keeps time through a large tempo fall where version 1's follower does not."""
+    env = gym.make("rdmp_gym/PandaDrum-v2").unwrapped
+    options = {"tempo": 110.0, "new_tempo": 90.0, "change_time": 4.0}
+    errors = {}
+    for gain in (0.0, 1.0):
+        env.reset(seed=SEED, options=options)
+        action = np.zeros(env.action_space.shape)
+        action[env.action_slices()["ear"]] = gain
+        info = env.step(action)[4]
+        errors[gain] = info["mean_abs_timing_error"]
+    schedule = env.solution.plan.extras["schedule"]
+    metronome = env.task.metronome(env.context)
+    after = np.searchsorted(env.times, metronome.change_time + HEARING)
+    assert after in schedule.retunes.steps and schedule.retunes.gain == 1.0
+    assert schedule.states[after, 5] == pytest.approx(2.0 * np.pi * 90.0 / 60.0)
+    assert errors[1.0] < 0.5 * errors[0.0]
     env.close()
 
 

@@ -43,7 +43,7 @@ from ..validation import as_finite_array, check_positive
 from .ending import StopPlan, StopRequest
 from .start import blend_shift
 
-__all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "CanonicalSchedule", "follow_rhythm"]
+__all__ = ["AdaptiveFrequencyStepper", "AdaptiveOscillator", "CanonicalSchedule", "Retunes", "follow_rhythm"]
 
 
 #: the 2x2 identity (read-only)
@@ -307,6 +307,11 @@ def _check_stop_step(stop_step: int | None, n: int) -> None:
         raise ValueError(f"stop_step: expected a step in [0, {n}) or None, got {stop_step!r}")
 
 
+def _check_retunes(retunes: Any) -> None:
+    if retunes is not None and not isinstance(retunes, Retunes):
+        raise TypeError(f"retunes: expected a Retunes or None, got {type(retunes).__name__}")
+
+
 def _state_of(stepper: AdaptiveFrequencyStepper) -> tuple[float, ...]:
     """The stepper's canonical state (:data:`_STATE`)."""
     return (stepper.s, stepper.time, stepper.rate, stepper.smoothed_frequency, stepper.oscillator.phase,
@@ -340,6 +345,53 @@ def _restored_stepper(schedule: CanonicalSchedule, dmp, step: int, settings: Map
 
 
 @dataclass(frozen=True, eq=False)
+class Retunes:
+    """Corrections of a follower's frequency at given steps: before step ``steps[j]`` the oscillator's frequency and
+    the smoothed one the DMP follows move the share ``gain`` of the way to ``targets[j]`` (rad/s), ``omega <- omega
+    + gain (target - omega)`` (a listener that hears the input's tempo and corrects its own by that share).
+
+    Attributes:
+        steps: ``[J]`` strictly increasing steps (>= 0).
+        targets: ``[J]`` the frequencies heard there (rad/s, > 0).
+        gain: the share in ``(0, 1]``.
+    """
+
+    steps: np.ndarray
+    targets: np.ndarray
+    gain: float
+
+    def __post_init__(self) -> None:
+        steps = np.asarray(self.steps)
+        if steps.ndim != 1 or not np.issubdtype(steps.dtype, np.integer) or np.any(steps < 0) \
+                or np.any(np.diff(steps) <= 0):
+            raise ValueError(f"steps: expected strictly increasing integer steps >= 0 [J], got {self.steps!r}")
+        targets = as_finite_array(self.targets, "targets", ndim=1)
+        if targets.shape != steps.shape or np.any(targets <= 0):
+            raise ValueError(f"targets: expected {steps.size} frequencies > 0 (rad/s), one per step, got "
+                             f"{self.targets!r}")
+        if not (np.isfinite(self.gain) and 0.0 < self.gain <= 1.0):
+            raise ValueError(f"gain: expected a share in (0, 1], got {self.gain!r}")
+        object.__setattr__(self, "steps", steps.astype(np.int64))
+        object.__setattr__(self, "targets", targets.astype(np.float64))
+
+    def __eq__(self, other: object) -> bool:
+        return (isinstance(other, Retunes) and self.gain == other.gain and np.array_equal(self.steps, other.steps)
+                and np.array_equal(self.targets, other.targets))
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def at(self) -> dict[int, float]:
+        """``{step: target}``."""
+        return dict(zip(self.steps.tolist(), self.targets.tolist(), strict=True))
+
+
+def _apply_retune(stepper: AdaptiveFrequencyStepper, target: float, gain: float) -> None:
+    """Move the stepper's oscillator frequency and smoothed frequency the share ``gain`` towards ``target``."""
+    stepper.oscillator.omega += gain * (target - stepper.oscillator.omega)
+    stepper.smoothed_frequency += gain * (target - stepper.smoothed_frequency)
+
+
+@dataclass(frozen=True, eq=False)
 class CanonicalSchedule:
     """The canonical time of one run of an :class:`AdaptiveFrequencyStepper` over an input recording, for the
     transformation system of other parameters to follow.
@@ -366,6 +418,7 @@ class CanonicalSchedule:
         states: ``[T + 1, 6]`` the canonical system's state before each step and after the last
             (:data:`_STATE`: what :meth:`resume` restores).
         since: the first step that ran with these settings and input (0, or the step :meth:`resume` went on from).
+        retunes: the follower's scheduled frequency corrections (:class:`Retunes`; None: none).
     """
 
     u: np.ndarray
@@ -378,25 +431,30 @@ class CanonicalSchedule:
     hold: tuple[np.ndarray, np.ndarray, np.ndarray]
     states: np.ndarray
     since: int = 0
+    retunes: Retunes | None = None
 
     @classmethod
-    def record(cls, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any
-               ) -> CanonicalSchedule:
+    def record(cls, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, retunes: Retunes | None = None,
+               **settings: Any) -> CanonicalSchedule:
         """The schedule of ``AdaptiveFrequencyStepper(dmp, dt, **settings)`` stepped over the samples ``u`` (``[T]``
-        or ``[T, k]``), its stop requested before step ``stop_step`` (in ``[0, T)``; ``None``: no stop)."""
+        or ``[T, k]``), its stop requested before step ``stop_step`` (in ``[0, T)``; ``None``: no stop), its
+        frequency corrected by ``retunes`` (:class:`Retunes`; None: never)."""
         samples = _samples(u)
         _check_stop_step(stop_step, len(samples))
+        _check_retunes(retunes)
         stepper = AdaptiveFrequencyStepper(dmp, dt, **settings)
-        return cls._run(stepper, samples, 0, None, stop_step, dict(settings), _canonical_key(dmp, stepper.transient))
+        return cls._run(stepper, samples, 0, None, stop_step, dict(settings), _canonical_key(dmp, stepper.transient),
+                        retunes)
 
-    def resume(self, dmp, step: int, u: np.ndarray, retune: float | None = None, **settings: Any
-               ) -> CanonicalSchedule:
+    def resume(self, dmp, step: int, u: np.ndarray, retune: float | None = None,
+               retunes: Retunes | str | None = "recorded", **settings: Any) -> CanonicalSchedule:
         """This schedule up to step ``step`` (in ``[0, T]``), then ``AdaptiveFrequencyStepper(dmp, dt, **settings)``
         going on from the recorded state there over the samples ``u [T]`` or ``[T, k]`` from ``step`` on (those
         before it are the recorded ones); ``dmp`` shares the recorded canonical system, and ``transient`` and
         ``frequency`` stay as recorded. ``retune`` (rad/s, > 0): the follower's frequency from ``step`` on (the
-        oscillator's and the one the DMP follows; None: they go on as recorded). With the recorded settings and input
-        and no retune it is this schedule, bit for bit."""
+        oscillator's and the one the DMP follows; None: they go on as recorded); ``retunes``: the corrections of the
+        steps after ``step`` (:class:`Retunes` or None; default the recorded ones). With the recorded settings,
+        input and corrections and no retune it is this schedule, bit for bit."""
         samples = _samples(u)
         n = self.ds.size
         if samples.shape != self.u.shape:
@@ -408,16 +466,18 @@ class CanonicalSchedule:
             if settings.get(key) != self.settings.get(key):
                 raise ValueError(f"settings: {key} is the schedule's start ({self.settings.get(key)!r}); a resumed "
                                  f"schedule cannot change it (got {settings.get(key)!r})")
+        retunes = self.retunes if isinstance(retunes, str) and retunes == "recorded" else retunes
+        _check_retunes(retunes)
         stepper = _restored_stepper(self, dmp, int(step), settings, retune)
         joined = np.concatenate([self.u[:step], samples[step:]])
-        return self._run(stepper, joined, int(step), self, self.stop_step, dict(settings), self.canonical)
+        return self._run(stepper, joined, int(step), self, self.stop_step, dict(settings), self.canonical, retunes)
 
     @classmethod
     def _run(cls, stepper: AdaptiveFrequencyStepper, samples: np.ndarray, start: int,
              before: CanonicalSchedule | None, stop_step: int | None, settings: dict[str, Any],
-             canonical: tuple[float, float, float, float]) -> CanonicalSchedule:
+             canonical: tuple[float, float, float, float], retunes: Retunes | None = None) -> CanonicalSchedule:
         """Step ``stepper`` over ``samples [T, k]`` from step ``start`` on, the steps before it copied from
-        ``before``; the schedule."""
+        ``before``, its frequency corrected before the steps of ``retunes`` from ``start`` on; the schedule."""
         n = len(samples)
         s, ds = np.empty(n + 1), np.zeros(n)
         phi, b0, b1 = np.zeros((n, 2, 2)), np.zeros((n, 2)), np.zeros((n, 2))
@@ -427,7 +487,10 @@ class CanonicalSchedule:
             for mine, theirs in zip((phi, b0, b1), before.hold, strict=True):
                 mine[:start] = theirs[:start]
         alpha_z = canonical[2]
+        corrections = {} if retunes is None else retunes.at()
         for k in range(start, n):
+            if k in corrections and (before is None or k > start):     # a resumed state holds its step's own
+                _apply_retune(stepper, corrections[k], retunes.gain)
             s[k], states[k] = stepper.s, _state_of(stepper)
             step = stepper._advance_canonical(samples[k])
             if step > 0.0:
@@ -438,15 +501,16 @@ class CanonicalSchedule:
         for array in arrays:
             array.flags.writeable = False
         return cls(arrays[0], stepper.dt, None if stop_step is None else int(stop_step), settings, canonical, s, ds,
-                   (phi, b0, b1), states, start)
+                   (phi, b0, b1), states, start, retunes)
 
-    def matches(self, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, **settings: Any) -> bool:
+    def matches(self, dmp, u: np.ndarray, dt: float, stop_step: int | None = None, retunes: Retunes | None = None,
+                **settings: Any) -> bool:
         """Whether :meth:`record` with these arguments would record this schedule (the same input, sample period,
-        stop step, settings and canonical system; ``dmp``'s weights, amplitude and ending may differ); a resumed
-        schedule is no record's."""
+        stop step, corrections, settings and canonical system; ``dmp``'s weights, amplitude and ending may differ); a
+        resumed schedule is no record's."""
         samples = np.asarray(u, dtype=np.float64)
         return (self.since == 0 and float(dt) == self.dt and stop_step == self.stop_step
-                and dict(settings) == self.settings
+                and retunes == self.retunes and dict(settings) == self.settings
                 and samples.size == self.u.size and np.array_equal(samples.reshape(self.u.shape), self.u)
                 and _canonical_key(dmp, settings.get("transient", 0)) == self.canonical)
 

@@ -6,8 +6,12 @@ tempo lags a fall (``benchmarks/bench_drum_timing.py``: one setting of the three
 contexts; with the follower set to the new tempo at the first cycle after the change, 1.00).
 :class:`RetuningDrumTask` (``rdmp_gym/ArmarDrum-v2``, ``rdmp_gym/PandaDrum-v2``) adds what that takes:
 
-- a fourth value of its own, ``tempo`` ``a``: the follower's frequency at the plan's start is the announced tempo's
-  times ``2^(a / 2)``; on the cycle-level face, a cycle whose ``tempo`` differs from the running one's sets the
+- a fourth value, ``ear`` ``a``: how much the follower listens to the tempo. Every beat, :data:`HEARING` seconds
+  after it, the follower's frequency moves the share ``g = max(a, 0)`` of the way to the beat signal's tempo heard
+  over those seconds (``g = 0``, the action 0: version 1's follower; ``g = 1``: it takes the heard tempo). A
+  learned feedback gain of the follower, chosen once per episode or per cycle;
+- a fifth value, ``tempo`` ``a``: the follower's frequency at the plan's start is the announced tempo's times
+  ``2^(a / 2)``; on the cycle-level face, a cycle whose ``tempo`` differs from the running one's sets the
   follower's frequency to that from its start (the follower adapts on from there), and an equal one leaves it as
   it is;
 - what a policy hears at a cycle's start: after version 1's state (the tip, the last two beats' timing errors, the
@@ -27,16 +31,19 @@ from typing import Any
 import numpy as np
 
 from rdmp_gym import RhythmicDMP
+from rdmp_gym.dmp.frequency import Retunes
 
 from ..description import TaskPlan
 from .context import DrumContext
 from .metronome import Metronome
 from .task import DrumTask
 
-__all__ = ["HEARING", "RetuningDrumTask"]
+__all__ = ["HEARING", "RetuningDrumTask", "heard_frequency"]
 
 #: the span (s) over which the policy hears the beat signal's tempo before a cycle's start
 HEARING = 0.1
+#: the task's values in the action's extras: the ear's gain and the tempo
+_EAR, _TEMPO = 3, 4
 #: the bound of the heard tempo's log2 ratio to the announced one (the context's changes stay within +-0.33)
 _HEARD_BOUND = 1.0
 
@@ -46,12 +53,12 @@ class RetuningDrumTask(DrumTask):
     :class:`DrumTask`'s."""
 
     versions = (2,)
-    extras: Mapping[str, float] = {**DrumTask.extras, "tempo": 1.0}
+    extras: Mapping[str, float] = {**DrumTask.extras, "ear": 1.0, "tempo": 1.0}
 
     def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: DrumContext,
              times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
         plan = super().plan(dmp, theta, extras, context, times, table_origin)
-        return TaskPlan(plan.path, plan.origin, plan.rotation, {**plan.extras, "tempo": float(extras[3])})
+        return TaskPlan(plan.path, plan.origin, plan.rotation, {**plan.extras, "tempo": float(extras[_TEMPO])})
 
     def resume_plan(self, live: TaskPlan, step: int, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray,
                     context: DrumContext, times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
@@ -60,7 +67,7 @@ class RetuningDrumTask(DrumTask):
         running plan goes on: the stop is under way."""
         if step >= np.searchsorted(times, live.extras["stop_at"]):
             return live
-        tempo = float(extras[3])
+        tempo = float(extras[_TEMPO])
         retune = None if tempo == live.extras["tempo"] else self._frequency(self.metronome(context), tempo)
         plan = self._resumed(live, step, dmp, theta, extras, context, times, retune)
         return TaskPlan(plan.path, plan.origin, plan.rotation, {**plan.extras, "tempo": tempo})
@@ -69,7 +76,18 @@ class RetuningDrumTask(DrumTask):
                 ) -> tuple[dict[str, float], np.ndarray]:
         """Version 1's settings of the first three values, the follower starting at the frequency of ``tempo``."""
         settings, signal = DrumTask._rhythm(extras[:3], metronome, times)
-        return {**settings, "frequency": self._frequency(metronome, float(extras[3]))}, signal
+        return {**settings, "frequency": self._frequency(metronome, float(extras[_TEMPO]))}, signal
+
+    @staticmethod
+    def _retunes(extras: np.ndarray, metronome: Metronome, times: np.ndarray) -> Retunes | None:
+        """The ear's corrections (see the module docstring) at the control times ``times [T]``: None at gain 0."""
+        gain = max(float(extras[_EAR]), 0.0)
+        if gain == 0.0:
+            return None
+        steps = np.unique(np.searchsorted(times, metronome.beats(float(times[-1])) + HEARING))
+        steps = steps[steps < times.size]
+        targets = [heard_frequency(metronome, float(times[k])) for k in steps]
+        return Retunes(steps, np.array(targets), min(gain, 1.0))
 
     @staticmethod
     def _frequency(metronome: Metronome, tempo: float) -> float:
@@ -86,10 +104,14 @@ class RetuningDrumTask(DrumTask):
         """Version 1's, then the beat signal's tempo over the :data:`HEARING` s before control step ``step``
         (``log2`` of its ratio to the announced tempo; 0 at rest before the first cycle)."""
         heard = 0.0
-        if step is not None:
-            metronome, now = self.metronome(face.context), step * face.dt
-            since = max(now - HEARING, 0.0)
-            if now > since:
-                rate = np.diff(metronome.phase(np.array([since, now])))[0] / (now - since)
-                heard = float(np.log2(rate / metronome.omega))
+        if step is not None and step > 0:
+            metronome = self.metronome(face.context)
+            heard = float(np.log2(heard_frequency(metronome, step * face.dt) / metronome.omega))
         return np.r_[super().cycle_state(face, step, overlay), heard]
+
+
+def heard_frequency(metronome: Metronome, now: float) -> float:
+    """The beat signal's frequency (rad/s) heard over the :data:`HEARING` s before ``now`` (s, > 0; from 0 where
+    the episode is younger)."""
+    since = max(now - HEARING, 0.0)
+    return float(np.diff(metronome.phase(np.array([since, now])))[0] / (now - since))

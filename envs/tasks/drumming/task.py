@@ -30,7 +30,7 @@ import mujoco
 import numpy as np
 
 from rdmp_gym import RhythmicDMP
-from rdmp_gym.dmp.frequency import CanonicalSchedule
+from rdmp_gym.dmp.frequency import CanonicalSchedule, Retunes
 from rdmp_gym.dmp.stopping import fit_ending
 from rdmp_gym.validation import SettingTypeError, check_number, check_pair
 
@@ -208,7 +208,8 @@ class DrumTask(TaskDescription):
         settings, signal = self._rhythm(extras, metronome, times)
         stop_at = self.stop_request(metronome, beats[-1]) if beats.size else times[-1]
         stopping = np.flatnonzero(times >= stop_at)
-        schedule = self._schedule(params, signal, dt, int(stopping[0]) if stopping.size else None, settings)
+        schedule = self._schedule(params, signal, dt, int(stopping[0]) if stopping.size else None, settings,
+                                  self._retunes(extras, metronome, times))
         path = schedule.rollout(params)[:-1]
         origin, rotation = self.frame(context, table_origin)
         return TaskPlan(path, origin, rotation, {"beats": beats, "counted": counted, "stop_at": stop_at,
@@ -228,11 +229,14 @@ class DrumTask(TaskDescription):
         (:meth:`~rdmp_gym.dmp.frequency.CanonicalSchedule.resume`)."""
         params = dmp.with_params(theta, self.groups)
         running = live.extras["schedule"]
-        settings, signal = self._rhythm(extras, self.metronome(context), times)
+        metronome = self.metronome(context)
+        settings, signal = self._rhythm(extras, metronome, times)
         settings["frequency"] = running.settings["frequency"]         # the follower's start stays the plan's
-        same = (retune is None and settings == running.settings
+        retunes = self._retunes(extras, metronome, times)
+        same = (retune is None and settings == running.settings and retunes == running.retunes
                 and np.array_equal(signal[step:], running.u[step:, 0]))
-        schedule = running if same else running.resume(params, step, signal, retune=retune, **settings)
+        schedule = running if same else running.resume(params, step, signal, retune=retune, retunes=retunes,
+                                                        **settings)
         return TaskPlan(schedule.rollout(params)[:-1], live.origin, live.rotation, {**live.extras,
                                                                                     "schedule": schedule})
 
@@ -244,15 +248,21 @@ class DrumTask(TaskDescription):
         settings = {"coupling": 2.0 * 4.0**coupling, "phase_gain": 2.0 * 4.0**phase_gain, "frequency": metronome.omega}
         return settings, metronome.signal(times, shift=shift)
 
+    @staticmethod
+    def _retunes(extras: np.ndarray, metronome: Metronome, times: np.ndarray) -> Retunes | None:
+        """The follower's scheduled frequency corrections of the task's values (none in this version)."""
+        return None
+
     def _schedule(self, dmp: RhythmicDMP, signal: np.ndarray, dt: float, stop_step: int | None,
-                  settings: Mapping[str, float]) -> CanonicalSchedule:
+                  settings: Mapping[str, float], retunes: Retunes | None = None) -> CanonicalSchedule:
         """The canonical schedule of the plan's stepper (:class:`~rdmp_gym.dmp.frequency.CanonicalSchedule`) over
-        the beat signal ``signal [T]``, its stop requested before step ``stop_step``: the last one recorded where it
-        matches (a plan of other weights, amplitude or stop weights in the same context with the same extras), else
-        a new recording."""
+        the beat signal ``signal [T]``, its stop requested before step ``stop_step``, its frequency corrected by
+        ``retunes``: the last one recorded where it matches (a plan of other weights, amplitude or stop weights in
+        the same context with the same extras), else a new recording."""
         schedule = self._last_schedule
-        if schedule is None or not schedule.matches(dmp, signal, dt, stop_step, **settings):
-            schedule = self._last_schedule = CanonicalSchedule.record(dmp, signal, dt, stop_step, **settings)
+        if schedule is None or not schedule.matches(dmp, signal, dt, stop_step, retunes, **settings):
+            schedule = self._last_schedule = CanonicalSchedule.record(dmp, signal, dt, stop_step, retunes,
+                                                                      **settings)
         return schedule
 
     # ------------------------------------------------------------------ the cycle-level face
