@@ -18,7 +18,9 @@ phase gain ``k_phi``, the beat's phase shift; action units):
   change, the follower's frequency is set to the new tempo's (``CanonicalSchedule.resume(..., retune=)``), the rest
   as the best setting; how early a reaction must come;
 - **retuned by ear** (no oracle): every cycle's tempo value ``2 log2(heard / announced)`` from the version 2
-  cycle observation's heard tempo, the rest as the best setting.
+  cycle observation's heard tempo, the rest as the best setting;
+- **the follower's ear** (version 2's ``ear`` value at 1, one episodic action): with the imitation's rhythm and
+  with the best setting.
 
 An episodic policy observes the context (the drum's pose, the announced tempo), not the tempo change to come: no
 action chosen once per episode can fit both a rise and a fall of the tempo, so its ceiling is below the per-context
@@ -26,6 +28,7 @@ search's (``bench_drum.py``, which knows each context's change through its retur
 
     python benchmarks/bench_drum_timing.py --save        # both robots, about 10 min on 2 cores
     python benchmarks/bench_drum_timing.py --robots armar3 --grid-contexts 4 --contexts 8 --reactions proportional
+    python benchmarks/bench_drum_timing.py --version-2-only --save     # add the version 2 probes to the saved study
 """
 
 from __future__ import annotations
@@ -108,6 +111,29 @@ def heard(robot: str, best: np.ndarray, gain: float, contexts: int) -> dict:
                         float(info["jerk_ratio"]), list(info["failure_causes"])))
     env.close()
     return _scored(results) | {"gain": gain}
+
+
+def ear(robot: str, rhythm: np.ndarray, gain: float, contexts: int) -> dict:
+    """The episodic action with the rhythm values ``rhythm [3]``, the version 2 ear at ``gain`` and every other
+    dimension at the imitation, on the check contexts."""
+    env = gym.make(RETUNING[robot])
+    action = _action(env, rhythm)
+    action[env.unwrapped.action_slices()["ear"]] = gain
+    results = []
+    for i in range(contexts):
+        env.reset(seed=CHECK_SEEDS + i)
+        info = env.step(action)[4]
+        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
+                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+    env.close()
+    return _scored(results) | {"rhythm": np.asarray(rhythm, dtype=float).tolist(), "gain": gain}
+
+
+def version_2(robot: str, best: np.ndarray, contexts: int) -> dict:
+    """The version 2 probes from the best setting ``best [3]``: the retune by ear on the cycle face, and the
+    episodic ear at gain 1 with the imitation's rhythm and with the best setting."""
+    return {"heard": heard(robot, best, HEARD_GAIN, contexts),
+            "ear": [ear(robot, np.zeros(3), 1.0, contexts), ear(robot, best, 1.0, contexts)]}
 
 
 def _scored(results: list[tuple[bool, float, float, list[str]]]) -> dict:
@@ -257,6 +283,26 @@ def figure(results: dict, out: Path) -> None:
     fig.savefig(out, dpi=110)
 
 
+def _print_version_2(result: dict) -> None:
+    rows = [("retuned every cycle to the heard tempo", result["heard"])]
+    rows += [(f"ear {row['gain']:.1f}, rhythm {row['rhythm']}", row) for row in result["ear"]]
+    for name, row in rows:
+        print(f"    {name}: success {row['success']['estimate']:.3f}, timing error "
+              f"{1000 * row['timing_error']:.1f} ms, failures {row['failure_causes']}")
+
+
+def _only_version_2(args: argparse.Namespace) -> None:
+    """Add the version 2 probes to the saved study (its best settings), without running the rest again."""
+    path = results_dir(args.save) / "drum_timing.json"
+    saved = json.loads(path.read_text())
+    for robot in args.robots:
+        result = saved["robots"][robot]
+        result.update(version_2(robot, np.array(result["landscape"]["best"]), len(result["one_setting"]["rows"])))
+        print(f"{result['env']}: best setting {result['landscape']['best']}")
+        _print_version_2(result)
+    path.write_text(json.dumps(saved, indent=1))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", nargs="+", choices=ROBOTS, default=list(ROBOTS))
@@ -265,8 +311,13 @@ def main() -> None:
     parser.add_argument("--reactions", nargs="*", choices=REACTIONS, default=list(REACTIONS))
     parser.add_argument("--retune-delays", nargs="*", type=float, default=list(RETUNE_DELAYS))
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--version-2-only", action="store_true",
+                        help="add the version 2 probes to the saved study (its best settings and context count)")
     add_save_argument(parser)
     args = parser.parse_args()
+    if args.version_2_only:
+        _only_version_2(args)
+        return
     results = {}
     for robot in args.robots:
         env_id = ROBOTS[robot]
@@ -275,9 +326,8 @@ def main() -> None:
         checked = one_setting(env_id, best, args.contexts)
         reacted = {name: reaction(env_id, best, name, args.contexts) for name in args.reactions}
         retunes = [retuned(robot, best, delay, args.contexts) for delay in args.retune_delays]
-        by_ear = heard(robot, best, HEARD_GAIN, args.contexts)
         results[robot] = {"env": env_id, "landscape": grid, "one_setting": checked, "reactions": reacted,
-                          "retuned": retunes, "heard": by_ear}
+                          "retuned": retunes, **version_2(robot, best, args.contexts)}
         rate = checked["success"]
         print(f"{env_id}: grid best {best.tolist()} ({grid['best_success']:.2f} of the grid contexts, imitation "
               f"{grid['zero_success']:.2f}); on {args.contexts} other contexts: success "
@@ -292,8 +342,7 @@ def main() -> None:
             print(f"    retuned {row['delay_beats']:.1f} beats after the change: success "
                   f"{row['success']['estimate']:.3f}, timing error {1000 * row['timing_error']:.1f} ms, "
                   f"failures {row['failure_causes']}")
-        print(f"    retuned every cycle to the heard tempo: success {by_ear['success']['estimate']:.3f}, timing "
-              f"error {1000 * by_ear['timing_error']:.1f} ms, failures {by_ear['failure_causes']}")
+        _print_version_2(results[robot])
     out = results_dir(args.save)
     (out / "drum_timing.json").write_text(json.dumps({"settings": vars(args), "robots": results}, indent=1))
     figure(results, FIGURE if args.save else out / "drum_timing.png")

@@ -4,7 +4,17 @@ counted from the tempo change, and one episode of each reaction and retune on th
 import gymnasium as gym
 import numpy as np
 import pytest
-from bench_drum_timing import HEARD_GAIN, REACTIONS, _action, _beats_since_change, _react, heard, reaction, retuned
+from bench_drum_timing import (
+    HEARD_GAIN,
+    REACTIONS,
+    _action,
+    _beats_since_change,
+    _react,
+    ear,
+    heard,
+    reaction,
+    retuned,
+)
 
 
 def test_the_reaction_rules_correct_from_the_setting_or_from_the_last_value():
@@ -27,8 +37,9 @@ def test_the_rhythm_values_alone_move_and_a_reaction_runs_on_the_cycle_face():
     assert np.isfinite(result["timing_error"]) and result["jerk_ratio"] > 0
 
 
-def test_the_oracle_retune_and_the_retune_by_ear_run_on_the_version_2_cycle_face():
+def test_the_oracle_retune_the_retune_by_ear_and_the_followers_ear_run_on_version_2():
     for result in (retuned("panda", np.array([1.0, 0.0, -0.5]), 0.0, 1),
-                   heard("panda", np.array([1.0, 0.0, -0.5]), HEARD_GAIN, 1)):
+                   heard("panda", np.array([1.0, 0.0, -0.5]), HEARD_GAIN, 1),
+                   ear("panda", np.zeros(3), 1.0, 1)):
         assert 0.0 <= result["success"]["estimate"] <= 1.0 and np.isfinite(result["timing_error"])
         assert result["jerk_ratio"] > 0

@@ -7,9 +7,10 @@ contexts; with the follower set to the new tempo at the first cycle after the ch
 :class:`RetuningDrumTask` (``rdmp_gym/ArmarDrum-v2``, ``rdmp_gym/PandaDrum-v2``) adds what that takes:
 
 - a fourth value, ``ear`` ``a``: how much the follower listens to the tempo. Every beat, :data:`HEARING` seconds
-  after it, the follower's frequency moves the share ``g = max(a, 0)`` of the way to the beat signal's tempo heard
-  over those seconds (``g = 0``, the action 0: version 1's follower; ``g = 1``: it takes the heard tempo). A
-  learned feedback gain of the follower, chosen once per episode or per cycle;
+  after it, the follower's frequency moves the share ``g = clip(4 a, 0, 1)`` of the way to the beat signal's tempo
+  heard over those seconds (``g = 0``, the action 0 and below: version 1's follower; ``g = 1`` from ``a = 0.25``:
+  it takes the heard tempo; the scale puts the whole range within a learner's first exploration). A learned
+  feedback gain of the follower, chosen once per episode or per cycle;
 - a fifth value, ``tempo`` ``a``: the follower's frequency at the plan's start is the announced tempo's times
   ``2^(a / 2)``; on the cycle-level face, a cycle whose ``tempo`` differs from the running one's sets the
   follower's frequency to that from its start (the follower adapts on from there), and an equal one leaves it as
@@ -53,7 +54,7 @@ class RetuningDrumTask(DrumTask):
     :class:`DrumTask`'s."""
 
     versions = (2,)
-    extras: Mapping[str, float] = {**DrumTask.extras, "ear": 1.0, "tempo": 1.0}
+    extras: Mapping[str, float] = {**DrumTask.extras, "ear": 4.0, "tempo": 1.0}
 
     def plan(self, dmp: RhythmicDMP, theta: np.ndarray, extras: np.ndarray, context: DrumContext,
              times: np.ndarray, table_origin: np.ndarray) -> TaskPlan:
@@ -81,13 +82,13 @@ class RetuningDrumTask(DrumTask):
     @staticmethod
     def _retunes(extras: np.ndarray, metronome: Metronome, times: np.ndarray) -> Retunes | None:
         """The ear's corrections (see the module docstring) at the control times ``times [T]``: None at gain 0."""
-        gain = max(float(extras[_EAR]), 0.0)
+        gain = float(np.clip(extras[_EAR], 0.0, 1.0))            # the action's a times the value's scale, 4
         if gain == 0.0:
             return None
         steps = np.unique(np.searchsorted(times, metronome.beats(float(times[-1])) + HEARING))
         steps = steps[steps < times.size]
         targets = [heard_frequency(metronome, float(times[k])) for k in steps]
-        return Retunes(steps, np.array(targets), min(gain, 1.0))
+        return Retunes(steps, np.array(targets), gain)
 
     @staticmethod
     def _frequency(metronome: Metronome, tempo: float) -> float:
