@@ -50,8 +50,8 @@ _HEARD_BOUND = 1.0
 
 
 class RetuningDrumTask(DrumTask):
-    """The drumming task with the ``tempo`` value and the heard tempo (see the module docstring); the settings are
-    :class:`DrumTask`'s."""
+    """The drumming task with the follower's ``ear`` and ``tempo`` values and the heard tempo (see the module
+    docstring); the settings are :class:`DrumTask`'s."""
 
     versions = (2,)
     extras: Mapping[str, float] = {**DrumTask.extras, "ear": 4.0, "tempo": 1.0}
