@@ -87,8 +87,7 @@ def retuned(robot: str, best: np.ndarray, delay: float, contexts: int) -> dict:
             _, _, terminated, _, info = env.step(action)
             if terminated:
                 break
-        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
-                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+        results.append(_outcome(info))
     env.close()
     return _scored(results) | {"delay_beats": delay}
 
@@ -107,8 +106,7 @@ def heard(robot: str, best: np.ndarray, gain: float, contexts: int) -> dict:
             observation, _, terminated, _, info = env.step(action)
             if terminated:
                 break
-        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
-                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+        results.append(_outcome(info))
     env.close()
     return _scored(results) | {"gain": gain}
 
@@ -123,8 +121,7 @@ def ear(robot: str, rhythm: np.ndarray, gain: float, contexts: int) -> dict:
     for i in range(contexts):
         env.reset(seed=CHECK_SEEDS + i)
         info = env.step(action)[4]
-        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
-                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+        results.append(_outcome(info))
     env.close()
     return _scored(results) | {"rhythm": np.asarray(rhythm, dtype=float).tolist(), "gain": gain}
 
@@ -134,6 +131,12 @@ def version_2(robot: str, best: np.ndarray, contexts: int) -> dict:
     episodic ear at gain 1 with the imitation's rhythm and with the best setting."""
     return {"heard": heard(robot, best, HEARD_GAIN, contexts),
             "ear": [ear(robot, np.zeros(3), 1.0, contexts), ear(robot, best, 1.0, contexts)]}
+
+
+def _outcome(info: dict) -> tuple[bool, float, float, list[str]]:
+    """What a probe keeps of an episode's last ``info``: success, mean timing error, jerk ratio, failure causes."""
+    return (bool(info["is_success"]), float(info["mean_abs_timing_error"]), float(info["jerk_ratio"]),
+            list(info["failure_causes"]))
 
 
 def _scored(results: list[tuple[bool, float, float, list[str]]]) -> dict:
@@ -239,8 +242,7 @@ def reaction(env_id: str, best: np.ndarray, name: str, contexts: int) -> dict:
             observation, _, terminated, _, info = env.step(_action(env, values))
             if terminated:
                 break
-        results.append((bool(info["is_success"]), float(info["mean_abs_timing_error"]),
-                        float(info["jerk_ratio"]), list(info["failure_causes"])))
+        results.append(_outcome(info))
     env.close()
     return {"rule": rule, "value": which, "gain": gain, **_scored(results)}
 

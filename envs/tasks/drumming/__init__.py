@@ -2,8 +2,8 @@
 
 :class:`DrumTask` is its description (:mod:`rdmp_gym.envs.tasks.description`); ``rdmp_gym/ArmarDrum-v1`` and
 ``rdmp_gym/PandaDrum-v1`` (and their step twins) run it. :class:`RetuningDrumTask` is its second version
-(``rdmp_gym/ArmarDrum-v2``, ``rdmp_gym/PandaDrum-v2``): a fourth value retunes the rhythm follower, and the
-cycle-level face hears the tempo.
+(``rdmp_gym/ArmarDrum-v2``, ``rdmp_gym/PandaDrum-v2``): the rhythm follower's ``ear`` and ``tempo`` values let a
+policy make it follow the tempo it hears, and the cycle-level face hears the tempo.
 """
 
 from .context import DrumContext, DrumContextSpec
