@@ -73,7 +73,7 @@ ALL_ENVS = (*ENVS, *OTHER_ENVS)
 #: label -> (agent, options, wrapper settings over the env's defaults) of the rhythmic learners
 LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     "cmaes": ("cmaes", {}, {}),
-    "bbrl": ("bbrl", {}, {}),
+    "bbrl": ("bbrl", {"epsilon": 0.2}, {}),          # the trust region the study was run with
     "plain_prior": ("cpi2", {"gain_prior": 10}, {}),
     "random": ("random", {}, {}),
     # the amplitude's action scale 1 instead of 0.5: a = +1 doubles the default amplitude (on Swimmer to the 1 rad of

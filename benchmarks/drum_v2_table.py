@@ -4,7 +4,7 @@ validation 0.8 / 0.9, the ear each learner ended with, failures.
 ``bench_agents.py`` keeps every run's directory (``--run-dir``); this reads them and scores each run's final policy
 on the same test contexts (:func:`rdmp_gym.agents.reacting.score_open_loop`: success, the strikes' mean absolute
 timing error, jerk, failure causes), reads its validation curve and its policy's ``ear`` value on the test
-contexts, and writes ``drum_v2_learners.json``:
+contexts, and writes ``drum_v2_learners.json`` (``--name``: another name):
 
     python benchmarks/bench_agents.py --env-id rdmp_gym/ArmarDrum-v2 --agents bbrl random --seeds 10 \\
         --agent-seeds random=3 --budget 300 --rollouts 10 --test-contexts 50 --val-contexts 10 --eval-every 3 \\
@@ -65,13 +65,20 @@ def score_run(folder: Path, test: int) -> dict:
             "ear": _ear(run, test), **{f"episodes_to_{t}": _first_reaching(log, t) for t in THRESHOLDS}}
 
 
+def _interval(values: np.ndarray) -> dict | None:
+    """The IQM and 95 % interval of the finite ``values [R]`` (``n`` of them), None where none is finite (a policy
+    whose episodes count no beat has no timing error)."""
+    finite = values[np.isfinite(values)]
+    return interval(finite).to_dict() if finite.size else None
+
+
 def summarise(rows: list[dict]) -> dict:
     """The IQM and 95 % interval of the learner's runs ``rows``, the runs reaching each threshold, the failures."""
     causes: dict[str, int] = {}
     for row in rows:
         for cause, count in row["failures"].items():
             causes[cause] = causes.get(cause, 0) + count
-    table = {key: interval(np.array([row[key] for row in rows])).to_dict()
+    table = {key: _interval(np.array([row[key] for row in rows], dtype=float))
              for key in ("success", "timing_error", "jerk_ratio", "ear")}
     for threshold in THRESHOLDS:
         reached = [row[f"episodes_to_{threshold}"] for row in rows if row[f"episodes_to_{threshold}"] is not None]
@@ -84,6 +91,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", nargs="+", required=True, metavar="ROBOT=DIR")
     parser.add_argument("--test", type=int, default=50)
+    parser.add_argument("--name", default="drum_v2_learners", help="output name (results/<name>.json)")
     add_save_argument(parser)
     args = parser.parse_args()
     results = {}
@@ -96,12 +104,13 @@ def main() -> None:
         results[robot] = {agent: {"summary": summarise(rows), "runs": rows} for agent, rows in by_agent.items()}
         for agent, entry in results[robot].items():
             row = entry["summary"]
+            timing = "-" if row["timing_error"] is None else f"{1000 * row['timing_error']['estimate']:.1f} ms"
+            jerk = "-" if row["jerk_ratio"] is None else f"{row['jerk_ratio']['estimate']:.2f}"
             print(f"{robot} {agent} ({row['runs']} runs): success {row['success']['estimate']:.3f} "
-                  f"[{row['success']['low']:.3f}, {row['success']['high']:.3f}], timing "
-                  f"{1000 * row['timing_error']['estimate']:.1f} ms, jerk {row['jerk_ratio']['estimate']:.2f}, ear "
+                  f"[{row['success']['low']:.3f}, {row['success']['high']:.3f}], timing {timing}, jerk {jerk}, ear "
                   f"{row['ear']['estimate']:.2f}, validation 0.8 in {row['episodes_to_0.8']}, 0.9 in "
                   f"{row['episodes_to_0.9']}, failures {row['failures']}")
-    (results_dir(args.save) / "drum_v2_learners.json").write_text(json.dumps({"test": args.test, "robots": results},
+    (results_dir(args.save) / f"{args.name}.json").write_text(json.dumps({"test": args.test, "robots": results},
                                                                             indent=1))
 
 

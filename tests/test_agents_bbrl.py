@@ -253,7 +253,7 @@ def _learn_segments(seed, credit, random_returns=False, updates=30):
     space = SearchSpace({"periodic": slice(0, SEGMENT_DIMS)}, 1, np.zeros(1), np.ones(1),
                         time_weights=np.eye(SEGMENT_DIMS))
     learner = make_learner("bbrl", np.zeros(SEGMENT_DIMS), 10, np.random.default_rng(seed),
-                           {"credit": credit, "rough": 0.5}, space=space)
+                           {"credit": credit, "rough": 0.5, "epsilon": 0.2}, space=space)
     rng = np.random.default_rng(1000 + seed)
     held_out = rng.uniform(-1, 1, (200, 1))
 

@@ -147,6 +147,18 @@ def test_cup_position_features_are_gated_by_presence_and_standardised_over_cup_c
     assert SearchSpace.from_env(_Declared({}), obs).context_gate is None         # no fields: no gate
 
 
+def test_a_state_without_a_context_policy_acts_with_its_mean_in_every_context():
+    """CMA-ES has no context policy: the policy of its state is its mean, as the learner's own policy_actions."""
+    from rdmp_gym.agents.learners import policy_from_state as any_policy_from_state
+
+    learner = make_learner("cmaes", np.full(N, 0.1), 10, np.random.default_rng(0))
+    learner.tell(EpisodeBatch(learner.ask(), -np.arange(10.0), np.zeros((10, 1)), np.ones(10, bool),
+                              np.arange(10)))
+    obs = np.random.default_rng(1).normal(size=(4, 3))
+    np.testing.assert_allclose(any_policy_from_state(learner.state_dict(), obs), learner.policy_actions(obs))
+    assert not np.allclose(learner.policy_actions(obs), 0.1)                     # the mean moved
+
+
 def test_contextual_learner_rejects_bad_input():
     learner = make_learner("creps", np.zeros(N), 10, np.random.default_rng(0), space=_space())
     with pytest.raises(ValueError, match="observations"):

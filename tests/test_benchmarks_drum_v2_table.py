@@ -23,3 +23,12 @@ def test_the_summary_gives_intervals_the_runs_reaching_and_the_summed_failures()
     assert table["success"]["low"] <= 0.75 <= table["success"]["high"]
     assert table["episodes_to_0.8"] == {"runs": 3, "median": 60.0}
     assert table["episodes_to_0.9"] == {"runs": 0, "median": None}
+
+
+def test_a_measure_no_run_has_is_none_and_the_finite_runs_alone_give_the_rest():
+    """A policy whose episodes count no beat has no timing error: its NaN leaves the other runs' interval."""
+    rows = [{"success": 0.0, "timing_error": t, "jerk_ratio": float("nan"), "ear": 0.0, "failures": {},
+             "episodes_to_0.8": None, "episodes_to_0.9": None} for t in (0.02, float("nan"), 0.04)]
+    table = summarise(rows)
+    assert table["jerk_ratio"] is None
+    assert table["timing_error"]["n"] == 2 and 0.02 <= table["timing_error"]["estimate"] <= 0.04

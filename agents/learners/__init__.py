@@ -77,7 +77,10 @@ def make_learner(agent: str, initial_mean: np.ndarray, rollouts: int, rng: np.ra
 
 
 def policy_from_state(state: Mapping[str, Any], observations: np.ndarray) -> np.ndarray:
-    """``[E, n]`` the policy actions of a contextual learner's state (``state_dict()``) for observations ``[E, o]``."""
+    """``[E, n]`` the policy actions of a learner's state (``state_dict()``) for observations ``[E, o]``: a learner
+    without a context policy (CMA-ES, PI²) acts with its mean in every context."""
+    if not agent_spec(state["name"]).uses_context:
+        return np.repeat(np.asarray(state["mean"], dtype=np.float64)[None], len(observations), axis=0)
     if state.get("name") in ("bbrl", "bbrl_segments"):
         from .bbrl import bbrl_policy_actions  # torch, only for a bbrl state
 
