@@ -107,9 +107,8 @@ class TaskConfig:
     """What the task is: its version, the imitation, the action, the episode's length, the dirt and the limits.
 
     Attributes:
-        version: the task version (:mod:`rdmp_gym.envs.tasks.wiping.versions`; default the current, 3; ``gym.make`` of
-        an id sets
-            its own).
+        version: the task version (:mod:`rdmp_gym.envs.tasks.wiping.versions`; default the current, 3;
+            ``gym.make`` of an id sets its own).
         style: synthetic demonstration style 1..4 (used when neither ``demonstration`` nor ``dmp`` is given).
         demonstration: a ``rdmp_gym.Demonstration`` with 3 dimensions (x, y, z in the table frame) to fit (not JSON).
         dmp: a ``dmp.json`` path (or a ``RhythmicDMP``, which is not JSON) used as the imitation without fitting.
@@ -327,9 +326,8 @@ class RewardConfig:
     """The reward's term weights, and when the per-step cost trace books the coverage.
 
     Attributes:
-        weights: ``{term: weight}`` overrides of :class:`~rdmp_gym.envs.tasks.wiping.reward.RewardWeights` (finite
-        numbers
-            >= 0), or None (the defaults).
+        weights: ``{term: weight}`` overrides of :class:`~rdmp_gym.envs.tasks.wiping.reward.RewardWeights`
+            (finite numbers >= 0), or None (the defaults).
         coverage_timing: where ``info["cost_trace"]`` books the coverage term: ``"end"`` (its whole value at the
             last step) or ``"wiped"`` (each step the dirt it removed, as the step twin rewards it). The return is
             the same either way (up to rounding); learners that credit time (PI², ``cpi2``, ``bbrl``,
