@@ -42,6 +42,7 @@ __all__ = [
     "Interval",
     "PolicyScores",
     "context_observations",
+    "defined_interval",
     "defined_mean",
     "evaluate_actions",
     "final_test_seeds",
@@ -248,3 +249,11 @@ def interval(values: np.ndarray, statistic: str = "iqm", seed: int = 0, resample
                              method="percentile", vectorized=True, rng=np.random.default_rng(seed))
     return Interval(estimate, float(result.confidence_interval.low), float(result.confidence_interval.high),
                     int(values.size))
+
+
+def defined_interval(values: np.ndarray, statistic: str = "iqm") -> dict[str, float | int] | None:
+    """:func:`interval` of the finite ``values [N]`` (``n`` of them) as a dict, None where none is finite (e.g. a
+    timing error where no beat was counted)."""
+    values = np.asarray(values, dtype=np.float64)
+    defined = values[np.isfinite(values)]
+    return interval(defined, statistic).to_dict() if defined.size else None

@@ -28,10 +28,10 @@ from .pool import Evaluator
 from .protocol import (
     PolicyScores,
     context_observations,
+    defined_interval,
     defined_mean,
     evaluate_actions,
     final_test_seeds,
-    interval,
     path_jerk,
 )
 from .runs import RunDirectory, write_atomic
@@ -111,13 +111,6 @@ def _clean(values: np.ndarray) -> list[float | None]:
     return [None if not np.isfinite(v) else float(v) for v in np.asarray(values, dtype=np.float64)]
 
 
-def _mean_interval(values: np.ndarray) -> dict[str, float | int] | None:
-    """The mean of ``values [E]`` over the contexts that have one, with its 95 % bootstrap interval (None: none has)."""
-    values = np.asarray(values, dtype=np.float64)
-    defined = values[np.isfinite(values)]
-    return interval(defined, "mean").to_dict() if defined.size else None
-
-
 def _summary(scores: PolicyScores) -> dict[str, Any]:
     """Means over the contexts, 95 % bootstrap intervals of the means over contexts, per-context lists: the return,
     success (None where the env reports none), the task's metrics by their keys (``<key>_mean`` and ``<key>``), the
@@ -125,7 +118,8 @@ def _summary(scores: PolicyScores) -> dict[str, Any]:
     rates = None if scores.success is None else scores.success.astype(np.float64)
     quantities = {"return": scores.returns, **({} if rates is None else {"success": rates}), **scores.metrics,
                   "jerk_ratio": scores.jerk_ratio}
-    intervals = {name: found for name, values in quantities.items() if (found := _mean_interval(values)) is not None}
+    intervals = {name: found for name, values in quantities.items()
+                 if (found := defined_interval(values, "mean")) is not None}
 
     def mean(values: np.ndarray) -> float | None:
         value = defined_mean(values)

@@ -6,9 +6,9 @@ on the same test contexts (:func:`rdmp_gym.agents.reacting.score_open_loop`: suc
 timing error, jerk, failure causes), reads its validation curve and its policy's ``ear`` value on the test
 contexts, and writes ``drum_v2_learners.json`` (``--name``: another name):
 
-    python benchmarks/bench_agents.py --env-id rdmp_gym/ArmarDrum-v2 --agents bbrl random --seeds 10 \\
-        --agent-seeds random=3 --budget 300 --rollouts 10 --test-contexts 50 --val-contexts 10 --eval-every 3 \\
-        --workers 1 --run-dir runs/drum_v2_agents_armar --name agents_drum_v2_armar --save
+    python benchmarks/bench_agents.py --env-id rdmp_gym/ArmarDrum-v2 --agents bbrl random --option bbrl.epsilon=0.2 \\
+        --seeds 10 --agent-seeds random=3 --budget 300 --rollouts 10 --test-contexts 50 --val-contexts 10 \\
+        --eval-every 3 --workers 1 --run-dir runs/drum_v2_agents_armar --name agents_drum_v2_armar --save
     # the Panda: rdmp_gym/PandaDrum-v2, runs/drum_v2_agents_panda, agents_drum_v2_panda
     python benchmarks/drum_v2_table.py --runs armar3=runs/drum_v2_agents_armar panda=runs/drum_v2_agents_panda --save
 """
@@ -27,7 +27,7 @@ import numpy as np
 import rdmp_gym.envs  # noqa: F401  (registers the ids)
 from output import add_save_argument, results_dir
 from rdmp_gym.agents.learners import policy_from_state
-from rdmp_gym.agents.protocol import context_observations, final_test_seeds, interval
+from rdmp_gym.agents.protocol import context_observations, defined_interval, final_test_seeds
 from rdmp_gym.agents.reacting import score_open_loop
 from rdmp_gym.agents.runs import RunDirectory
 from rdmp_gym.agents.training import load_run_config
@@ -65,20 +65,13 @@ def score_run(folder: Path, test: int) -> dict:
             "ear": _ear(run, test), **{f"episodes_to_{t}": _first_reaching(log, t) for t in THRESHOLDS}}
 
 
-def _interval(values: np.ndarray) -> dict | None:
-    """The IQM and 95 % interval of the finite ``values [R]`` (``n`` of them), None where none is finite (a policy
-    whose episodes count no beat has no timing error)."""
-    finite = values[np.isfinite(values)]
-    return interval(finite).to_dict() if finite.size else None
-
-
 def summarise(rows: list[dict]) -> dict:
     """The IQM and 95 % interval of the learner's runs ``rows``, the runs reaching each threshold, the failures."""
     causes: dict[str, int] = {}
     for row in rows:
         for cause, count in row["failures"].items():
             causes[cause] = causes.get(cause, 0) + count
-    table = {key: _interval(np.array([row[key] for row in rows], dtype=float))
+    table = {key: defined_interval(np.array([row[key] for row in rows], dtype=float))
              for key in ("success", "timing_error", "jerk_ratio", "ear")}
     for threshold in THRESHOLDS:
         reached = [row[f"episodes_to_{threshold}"] for row in rows if row[f"episodes_to_{threshold}"] is not None]

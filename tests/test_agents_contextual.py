@@ -10,7 +10,7 @@ import pytest
 from rdmp_gym.agents.learners import EpisodeBatch, SearchSpace, make_learner
 from rdmp_gym.agents.learners.contextual import policy_from_state
 from rdmp_gym.agents.learners.smooth_exploration import SmoothNoise, block_layout, squash, unsquash
-from rdmp_gym.agents.protocol import final_test_seeds, interval, iqm, success, validation_seeds
+from rdmp_gym.agents.protocol import defined_interval, final_test_seeds, interval, iqm, success, validation_seeds
 from rdmp_gym.agents.training import TRAIN_SEED_LIMIT, TrainConfig, train
 from rdmp_gym.envs.contract import TaskContract
 from rdmp_gym.envs.registration import TRACKING_ID
@@ -194,6 +194,8 @@ def test_bootstrap_intervals_cover_the_true_value():
     assert iqm(np.array([0.0, 1.0, 2.0, 3.0, 100.0, -100.0, 1.5, 2.5])) == pytest.approx(1.75)
     with pytest.raises(ValueError, match="values"):
         interval(np.array([1.0, np.nan]))
+    assert defined_interval(np.array([1.0, np.nan, 3.0]), "mean") == interval(np.array([1.0, 3.0]), "mean").to_dict()
+    assert defined_interval(np.array([np.nan, np.inf])) is None                  # no finite value: no interval
 
 
 def test_protocol_context_sets_are_disjoint_and_success_is_the_envs_own():
