@@ -74,8 +74,7 @@ def _run_seed(args: argparse.Namespace, seed: int, path: Path) -> None:
         from rdmp_gym.agents.cycle_sb3 import train_cycle_sb3
 
         run = train_cycle_sb3(args.env, args.agent, episodes=args.episodes, seed=seed, rollouts=args.rollouts or 16,
-                              validation=args.validation, test=args.test, residual=_settings(RESIDUAL, args.set),
-                             progress=progress)
+                              validation=args.validation, test=args.test, progress=progress)
     run.save(path)
     causes = failure_counts(run.test["failures"])
     print(f"seed {seed}: test success {run.test['success_rate']:.2f} (best after {run.best_episodes} episodes), "
