@@ -87,6 +87,9 @@ LEARNERS: dict[str, tuple[str, dict[str, Any], dict[str, Any]]] = {
     # default pattern it starts from; opt-in, open loop and with the feedback
     "cmaes_near": ("cmaes", {"sigma": 0.2}, {}),
     "cmaes_feedback_near": ("cmaes", {"sigma": 0.2}, {"feedback": "linear"}),
+    # a sixth of the default: on Swimmer, whose default pattern is the published optimum, the search keeps it; on the
+    # envs whose pattern is derived from the model it moves too little; opt-in
+    "cmaes_closer": ("cmaes", {"sigma": 0.1}, {}),
 }
 #: the learners of --feedback
 FEEDBACK_LEARNERS = ("cmaes", "cmaes_feedback")
@@ -94,7 +97,7 @@ FEEDBACK_LEARNERS = ("cmaes", "cmaes_feedback")
 OTHER_LEARNERS = ("cmaes_near", "cmaes_feedback_near", "random")
 #: (learner, baseline) pairs compared seed by seed in the --feedback study, where both ran
 PAIRS = (("cmaes_feedback", "cmaes"), ("cmaes_feedback_near", "cmaes_near"), ("cmaes_near", "cmaes"),
-         ("cmaes_feedback_near", "cmaes_feedback"))
+         ("cmaes_feedback_near", "cmaes_feedback"), ("cmaes_closer", "cmaes_near"))
 #: the learners run when --learners is not given
 MAIN_LEARNERS = ("cmaes", "bbrl", "plain_prior", "random", "ppo")
 SB3_ALGOS = ("ppo", "sac")
