@@ -127,6 +127,9 @@ def main() -> None:
                         help="print the table over the seeds in --run-dir and write it as the JSON file NAME")
     add_save_argument(parser)
     args = parser.parse_args()
+    if args.agent in ("sac", "ppo") and (args.set or args.random_returns):
+        parser.error(f"--set and --random-returns are settings of the cycle search; --agent {args.agent} takes "
+                     "neither")
     if args.gather is not None:
         _gather(args.run_dir, results_dir(args.save) / args.gather)
         return

@@ -1,5 +1,6 @@
 """The cycle-face benchmark (``benchmarks/bench_cycle_search.py``): every ``--agent`` reaches its trainer with
-arguments the trainer accepts (fake trainers bound to the real signatures, so no learning runs here)."""
+arguments the trainer accepts (fake trainers bound to the real signatures, so no learning runs here), and the
+cycle search's settings are refused by name where the learner has none."""
 
 import argparse
 import inspect
@@ -43,3 +44,12 @@ def test_each_agent_calls_its_trainer_with_arguments_it_accepts(agent, tmp_path,
     assert bound["episodes"] == 20 and bound["seed"] == 4 and bound["test"] == 3
     if agent in ("sac", "ppo"):
         assert bound["algorithm"] == agent
+
+
+@pytest.mark.parametrize("flags", [["--set", "pooled=false"], ["--random-returns"]])
+def test_sac_and_ppo_refuse_the_cycle_searchs_settings_by_name(flags, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr("sys.argv", ["bench_cycle_search.py", "--agent", "sac", "--run-dir", str(tmp_path), *flags])
+    with pytest.raises(SystemExit):
+        bench_cycle_search.main()
+    assert "--set and --random-returns" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())                                   # nothing trained
